@@ -1,0 +1,75 @@
+/* raycache/shared/language.h: lets the files in raycache/shared/ compile as both C++17 (with GLM) and GLSL 4.50.
+ *
+ * Shared files use only the common subset of the two languages: vec3/uvec2/uint/int/float/bool,
+ * if/else, ?:, bit operations, floatBitsToUint/uintBitsToFloat, abs/floor/min/max/clamp/sqrt/dot.
+ * Functions are declared RAYCACHE_FN; out-parameters are avoided (return values or structs instead).
+ */
+#ifndef RAYCACHE_SHARED_LANGUAGE_H
+#define RAYCACHE_SHARED_LANGUAGE_H
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <cmath>
+#include <algorithm>
+#include <glm/glm.hpp>
+
+namespace raycache {
+namespace shared {
+using glm::vec2;
+using glm::vec3;
+using glm::ivec3;
+using glm::uvec2;
+using uint = std::uint32_t;
+using glm::floatBitsToUint;
+using glm::uintBitsToFloat;
+using std::abs;
+using std::floor;
+using std::sqrt;
+using glm::abs;
+using glm::floor;
+using glm::dot;
+using glm::length;
+using glm::normalize;
+/* GLSL's scalar min/max/clamp; std::min would take (int, uint) mixes silently wrong, these do not. */
+inline int min(int a, int b) { return a < b ? a : b; }
+inline int max(int a, int b) { return a > b ? a : b; }
+inline uint min(uint a, uint b) { return a < b ? a : b; }
+inline uint max(uint a, uint b) { return a > b ? a : b; }
+inline float min(float a, float b) { return b < a ? b : a; }
+inline float max(float a, float b) { return a < b ? b : a; }
+inline int clamp(int x, int lo, int hi) { return min(max(x, lo), hi); }
+inline float clamp(float x, float lo, float hi) { return min(max(x, lo), hi); }
+
+/* Returns x unchanged, but opaque to the optimiser, so that the product that produced x is rounded
+ * on its own and never fused with a following addition into an FMA (which GCC does under
+ * -ffp-contract=fast, its default for GNU C++ on FMA targets). GLSL gets the same from `precise`. */
+inline float raycache_no_fma(float x) {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    __asm__("" : "+x"(x));
+#elif defined(__GNUC__) && defined(__aarch64__)
+    __asm__("" : "+w"(x));
+#else
+    volatile float opaque = x;
+    x = opaque;
+#endif
+    return x;
+}
+} // namespace shared
+} // namespace raycache
+
+#define RAYCACHE_FN inline
+/* GLSL `precise` keeps the compiler from fusing a*b+c into an FMA. C++ has no such qualifier:
+ * see RAYCACHE_NO_FMA below, applied to the one product where it matters. */
+#define RAYCACHE_PRECISE
+#define RAYCACHE_CONST constexpr
+
+#else /* GLSL */
+
+#define RAYCACHE_FN
+#define RAYCACHE_PRECISE precise
+#define RAYCACHE_CONST const
+#define raycache_no_fma(x) (x)
+
+#endif /* __cplusplus */
+
+#endif /* RAYCACHE_SHARED_LANGUAGE_H */
