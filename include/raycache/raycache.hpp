@@ -1,0 +1,11 @@
+// raycache/raycache.hpp: the whole core library (everything but the opt-in adapters).
+#pragma once
+
+#include "raycache/version.hpp"
+#include "raycache/assert.hpp"
+#include "raycache/cube_face.hpp"
+#include "raycache/texel.hpp"
+#include "raycache/statistics.hpp"
+#include "raycache/cache_cube.hpp"
+#include "raycache/cached_trace.hpp"
+#include "raycache/cdct.hpp"

@@ -1,0 +1,64 @@
+// raycache/statistics.hpp: per-cube counters of lookups, hits, misses and stores, cheap to bump from many threads.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+namespace raycache {
+
+// A snapshot of one cube's counters since they were last reset (begin_frame() resets them).
+struct CubeStatistics {
+    std::uint64_t lookups = 0;          // hits + misses
+    std::uint64_t hits = 0;             // lookups answered by a visible, valid texel
+    std::uint64_t misses = 0;           // lookups that found nothing usable (the caller traced the ray)
+    std::uint64_t stores = 0;           // stores that wrote a texel
+    std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie
+    std::size_t valid_texels = 0;       // texels holding a value now (including this frame's stores)
+    std::size_t texel_count = 0;        // 6 * N * N
+
+    double valid_fraction() const noexcept {
+        return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
+    }
+    double hit_rate() const noexcept {
+        return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
+    }
+};
+
+namespace detail {
+
+// CounterCount counters spread over cache-line-sized slots, one per thread (modulo the slot count), so
+// that threads bumping them on the lookup path do not fight over one cache line. Sums are exact; a
+// snapshot taken while other threads count is a moment's approximation.
+template <std::size_t CounterCount>
+class StripedCounters {
+public:
+    void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
+        slots_[this_thread_slot()].values[counter].fetch_add(amount, std::memory_order_relaxed);
+    }
+    std::uint64_t sum(std::size_t counter) const noexcept {
+        std::uint64_t total = 0;
+        for (const Slot& slot : slots_) total += slot.values[counter].load(std::memory_order_relaxed);
+        return total;
+    }
+    void reset() noexcept {
+        for (Slot& slot : slots_)
+            for (auto& value : slot.values) value.store(0, std::memory_order_relaxed);
+    }
+
+private:
+    static constexpr std::size_t slot_count = 16;
+    struct alignas(64) Slot {
+        std::array<std::atomic<std::uint64_t>, CounterCount> values{};
+    };
+    static std::size_t this_thread_slot() noexcept {
+        static std::atomic<std::size_t> next_slot{0};
+        thread_local const std::size_t slot = next_slot.fetch_add(1, std::memory_order_relaxed) % slot_count;
+        return slot;
+    }
+    std::array<Slot, slot_count> slots_{};
+};
+
+} // namespace detail
+} // namespace raycache
