@@ -1,0 +1,235 @@
+// raycache/embree/scene_cache.hpp: RayCache for an existing Embree 3 tracer. Maps Embree geometry (and
+// instance) ids to caching cubes and wraps Algorithm 1 around the tracer's own secondary-ray trace.
+//
+// Adopting it, in a Whitted shader, where a ray hit object `hit` and leaves it at `p` in direction `r`:
+//
+//     raycache::embree::SceneCache caches(raycache::embree::Technique::cct);
+//     caches.attach(scene, {mirror_geom_id}, 256);                     // once, after rtcCommitScene
+//     ...
+//     glm::vec3 reflected = caches.leaving_ray({hit.geomID, hit.instID[0]}, p, r, [&] {
+//         return trace_leaving(p, r, depth + 1);  // your trace: TracedRay{colour, hit distance or inf}
+//     });
+//     ...
+//     caches.begin_frame();                                              // between frames
+//
+// For refraction, trace the entry and internal bounces as usual and pass the ray that finally leaves
+// the object: that is the ray the cube caches (SPEC section 2).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <glm/glm.hpp>
+
+#include "raycache/raycache.hpp"
+
+namespace raycache {
+namespace embree {
+
+// Which technique a SceneCache's cubes use.
+enum class Technique { cct, cdct };
+
+// An object as Embree reports it in a hit: geomID, and instID[0] when it was reached through an instance.
+struct ObjectId {
+    unsigned geom_id = RTC_INVALID_GEOMETRY_ID;
+    unsigned inst_id = RTC_INVALID_GEOMETRY_ID;
+};
+
+// Counters summed over every cube of a SceneCache, for one frame.
+struct SceneCacheStatistics {
+    std::uint64_t lookups = 0;
+    std::uint64_t hits = 0;
+    std::uint64_t misses = 0;
+    std::uint64_t stores = 0;
+    std::uint64_t texels_read = 0; // CDCT searches only
+    std::size_t valid_texels = 0;
+    std::size_t texel_count = 0;
+    std::size_t texel_bytes = 0;
+
+    double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
+    double valid_fraction() const noexcept {
+        return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
+    }
+    double texels_per_lookup() const noexcept {
+        return lookups ? static_cast<double>(texels_read) / static_cast<double>(lookups) : 0.0;
+    }
+};
+
+// The cube placement of a geometry of a committed scene: centre of its bounds, half-size = the largest
+// half-extent (so the cube's box encloses it). For an instance id, the bounds of the whole instance.
+// `id` must be one that rtcAttachGeometry returned for `scene` (Embree has no way to ask how many ids a
+// scene has, and its debug builds abort on one past the end). Throws std::invalid_argument when that
+// geometry was detached, or its bounds are empty or infinite.
+inline CubeBounds bounds_of(RTCScene scene, ObjectId id) {
+    const unsigned outer = id.inst_id != RTC_INVALID_GEOMETRY_ID ? id.inst_id : id.geom_id;
+    RTCGeometry geometry = scene ? rtcGetGeometry(scene, outer) : nullptr;
+    if (!geometry)
+        throw std::invalid_argument("RayCache: the Embree scene has no geometry with id " + std::to_string(outer) +
+                                    " (attach after rtcCommitScene, with the id rtcAttachGeometry returned)");
+    // Embree gives bounds per scene only: measure a scene holding just this geometry.
+    RTCScene alone = rtcNewScene(rtcGetSceneDevice(scene));
+    rtcAttachGeometry(alone, geometry);
+    rtcCommitScene(alone);
+    RTCBounds b;
+    rtcGetSceneBounds(alone, &b);
+    rtcReleaseScene(alone);
+    const glm::vec3 lower(b.lower_x, b.lower_y, b.lower_z), upper(b.upper_x, b.upper_y, b.upper_z);
+    const glm::vec3 half = 0.5f * (upper - lower);
+    const float half_size = glm::max(half.x, glm::max(half.y, half.z));
+    if (!(half_size > 0.0f) || !std::isfinite(half_size))
+        throw std::invalid_argument("RayCache: geometry " + std::to_string(outer) + " has empty or infinite bounds");
+    return CubeBounds{0.5f * (lower + upper), half_size};
+}
+
+// The caching cubes of one Embree scene, one per attached object, all of one technique.
+// Threads: leaving_ray() from any number of threads at once; attach(), begin_frame() and clear()
+// between frames, on one thread.
+class SceneCache {
+public:
+    // Throws std::invalid_argument for bad relief parameters (used by the CDCT only).
+    explicit SceneCache(Technique technique, ReliefParameters relief = {}) : technique_(technique), relief_(relief) {
+        validate(relief_);
+    }
+
+    Technique technique() const noexcept { return technique_; }
+    const ReliefParameters& relief() const noexcept { return relief_; }
+
+    // Gives object `id` of the committed `scene` a cube of face_size texels per edge, placed by bounds_of().
+    // Throws std::invalid_argument for a bad face size, an unknown geometry, or an id attached twice.
+    void attach(RTCScene scene, ObjectId id, int face_size) { attach(id, face_size, bounds_of(scene, id)); }
+
+    // Gives object `id` a cube of face_size texels per edge around `bounds`.
+    void attach(ObjectId id, int face_size, CubeBounds bounds) {
+        if (id.geom_id == RTC_INVALID_GEOMETRY_ID)
+            throw std::invalid_argument("RayCache: cannot attach a cube to RTC_INVALID_GEOMETRY_ID");
+        if (!detail::is_usable(bounds))
+            throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
+        if (has_cache(id))
+            throw std::invalid_argument("RayCache: geometry " + std::to_string(id.geom_id) + " already has a cube");
+        Entry entry{id, bounds, nullptr, nullptr};
+        if (technique_ == Technique::cct)
+            entry.cct = std::make_unique<CctCube>(face_size);
+        else
+            entry.cdct = std::make_unique<CdctCube>(face_size);
+        const int index = static_cast<int>(entries_.size());
+        entries_.push_back(std::move(entry));
+        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) {
+            if (direct_.size() <= id.geom_id) direct_.resize(id.geom_id + std::size_t{1}, -1);
+            direct_[id.geom_id] = index;
+        } else {
+            instanced_[{id.inst_id, id.geom_id}] = index;
+        }
+    }
+
+    bool has_cache(ObjectId id) const noexcept { return find(id) >= 0; }
+    std::size_t object_count() const noexcept { return entries_.size(); }
+
+    // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
+    // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
+    // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
+    // infinity when it escaped; the CCT uses only the colour). It runs on a miss; its colour is returned
+    // unchanged. Objects without a cube: returns trace().color. Thread-safe.
+    template <class Trace>
+    glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
+        static_assert(std::is_invocable_r_v<TracedRay, Trace&>,
+                      "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()`");
+        const int index = find(id);
+        if (index < 0) return std::forward<Trace>(trace)().color;
+        Entry& e = entries_[static_cast<std::size_t>(index)];
+        if (technique_ == Technique::cct) return cached_trace(*e.cct, direction, [&] { return trace().color; });
+        int read = 0;
+        const glm::vec3 color = cdct_cached_trace(*e.cdct, e.bounds, origin, direction, relief_, trace, &read);
+        texels_read_.add(0, static_cast<std::uint64_t>(read));
+        return color;
+    }
+
+    // Ends a frame on every cube (this frame's stores become visible) and returns the frame's totals.
+    SceneCacheStatistics begin_frame() {
+        SceneCacheStatistics total;
+        for (Entry& e : entries_) add(total, e.cct ? e.cct->begin_frame() : e.cdct->begin_frame());
+        total.texels_read = texels_read_.sum(0);
+        total.texel_bytes = texel_bytes();
+        texels_read_.reset();
+        return total;
+    }
+
+    // The current frame's totals so far, without ending it.
+    SceneCacheStatistics statistics() const {
+        SceneCacheStatistics total;
+        for (const Entry& e : entries_) add(total, e.cct ? e.cct->statistics() : e.cdct->statistics());
+        total.texels_read = texels_read_.sum(0);
+        total.texel_bytes = texel_bytes();
+        return total;
+    }
+
+    // One object's cube counters; std::nullopt when it has none.
+    std::optional<CubeStatistics> object_statistics(ObjectId id) const {
+        const int index = find(id);
+        if (index < 0) return std::nullopt;
+        const Entry& e = entries_[static_cast<std::size_t>(index)];
+        return e.cct ? e.cct->statistics() : e.cdct->statistics();
+    }
+
+    // Where object `id`'s cube sits; std::nullopt when it has none.
+    std::optional<CubeBounds> object_bounds(ObjectId id) const {
+        const int index = find(id);
+        if (index < 0) return std::nullopt;
+        return entries_[static_cast<std::size_t>(index)].bounds;
+    }
+
+    // Empties every cube (the objects keep their cubes).
+    void clear() {
+        for (Entry& e : entries_) e.cct ? e.cct->clear() : e.cdct->clear();
+        texels_read_.reset();
+    }
+
+    // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
+    std::size_t texel_bytes() const noexcept {
+        std::size_t bytes = 0;
+        for (const Entry& e : entries_) bytes += e.cct ? e.cct->texel_bytes() : e.cdct->texel_bytes();
+        return bytes;
+    }
+
+private:
+    struct Entry {
+        ObjectId id;
+        CubeBounds bounds;
+        std::unique_ptr<CctCube> cct;
+        std::unique_ptr<CdctCube> cdct;
+    };
+
+    int find(ObjectId id) const noexcept {
+        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return id.geom_id < direct_.size() ? direct_[id.geom_id] : -1;
+        const auto it = instanced_.find({id.inst_id, id.geom_id});
+        return it == instanced_.end() ? -1 : it->second;
+    }
+
+    static void add(SceneCacheStatistics& total, const CubeStatistics& s) {
+        total.lookups += s.lookups;
+        total.hits += s.hits;
+        total.misses += s.misses;
+        total.stores += s.stores;
+        total.valid_texels += s.valid_texels;
+        total.texel_count += s.texel_count;
+    }
+
+    Technique technique_;
+    ReliefParameters relief_;
+    std::vector<Entry> entries_;
+    std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
+    std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> entry
+    detail::StripedCounters<1> texels_read_;
+};
+
+} // namespace embree
+} // namespace raycache
