@@ -1,0 +1,377 @@
+// Many threads on one cube (SPEC.md 4: "many threads looking up and storing into one cube at once must be
+// free of data races"). Runs under ThreadSanitizer in CI (CTest label "concurrency"); sized to take a few
+// seconds there on two cores.
+//
+// What the frame rule promises (cache_cube.hpp) and these tests check under real contention:
+//  - the cube's content after a frame does not depend on how the stores were split over threads or ordered;
+//  - a lookup never sees a value stored in the same frame;
+//  - the counters add up exactly to the operations issued.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "raycache/raycache.hpp"
+
+namespace {
+
+using raycache::CctCube;
+using raycache::CctTexel;
+using raycache::CubeStatistics;
+using raycache::TexelAddress;
+
+constexpr int face_size = 64;
+constexpr int texel_count = 6 * face_size * face_size;
+constexpr int thread_count = 4;
+
+std::uint32_t bits_of(float x) {
+    std::uint32_t u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+bool same_bits(const glm::vec3& a, const glm::vec3& b) {
+    return bits_of(a.x) == bits_of(b.x) && bits_of(a.y) == bits_of(b.y) && bits_of(a.z) == bits_of(b.z);
+}
+
+struct Lcg {
+    std::uint64_t state;
+    std::uint32_t next() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<std::uint32_t>(state >> 32);
+    }
+    float uniform() { return static_cast<float>(next() >> 8) * (1.0f / 16777216.0f); } // [0, 1)
+    float signed_uniform() { return 2.0f * uniform() - 1.0f; }
+};
+
+// The direction through the centre of texel (face, column, row), from the spec's face table:
+// sc = 2 (column + 0.5) / N - 1 is t'u / |m|, tc likewise t'v / |m|, with |m| = 1.
+glm::vec3 centre_direction(int face, int column, int row) {
+    const float sc = 2.0f * (static_cast<float>(column) + 0.5f) / face_size - 1.0f;
+    const float tc = 2.0f * (static_cast<float>(row) + 0.5f) / face_size - 1.0f;
+    switch (face) {
+    case 0: return glm::vec3(1.0f, -tc, -sc);  // +X: t'u = -z, t'v = -y
+    case 1: return glm::vec3(-1.0f, -tc, sc);  // -X: t'u = +z, t'v = -y
+    case 2: return glm::vec3(sc, 1.0f, tc);    // +Y: t'u = +x, t'v = +z
+    case 3: return glm::vec3(sc, -1.0f, -tc);  // -Y: t'u = +x, t'v = -z
+    case 4: return glm::vec3(sc, -tc, 1.0f);   // +Z: t'u = +x, t'v = -y
+    default: return glm::vec3(-sc, -tc, -1.0f); // -Z: t'u = -x, t'v = -y
+    }
+}
+
+TexelAddress address_of(int linear) {
+    return TexelAddress{linear / (face_size * face_size), linear % face_size, (linear / face_size) % face_size};
+}
+
+// Runs body(thread_index) on `threads` threads that start together.
+void run_threads(int threads, const std::function<void(int)>& body) {
+    std::atomic<int> ready{0};
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t) {
+        pool.emplace_back([&, t] {
+            ready.fetch_add(1);
+            while (ready.load() < threads) std::this_thread::yield();
+            body(t);
+        });
+    }
+    for (std::thread& th : pool) th.join();
+}
+
+// Every texel's content as a word (CctTexel::invalid when empty), read with load().
+std::vector<std::uint32_t> snapshot(const CctCube& cube) {
+    std::vector<std::uint32_t> words(texel_count, CctTexel::invalid);
+    for (int i = 0; i < texel_count; ++i)
+        if (const std::optional<glm::vec3> v = cube.load(address_of(i))) words[i] = CctTexel::encode(*v);
+    return words;
+}
+
+struct StoreItem {
+    glm::vec3 direction;
+    glm::vec3 colour;
+};
+
+std::vector<StoreItem> make_store_list(int count) {
+    Lcg rng{2024};
+    std::vector<StoreItem> items;
+    items.reserve(static_cast<std::size_t>(count));
+    while (static_cast<int>(items.size()) < count) {
+        const glm::vec3 d(rng.signed_uniform(), rng.signed_uniform(), rng.signed_uniform());
+        if (std::max(std::fabs(d.x), std::max(std::fabs(d.y), std::fabs(d.z))) < 1e-3f) continue;
+        const float scale = std::ldexp(1.0f, static_cast<int>(rng.next() % 16u) - 5);
+        const glm::vec3 colour = glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * scale;
+        items.push_back(StoreItem{d, colour});
+    }
+    return items;
+}
+
+// One cold frame of stores (each followed by a lookup of another item's direction), split over threads
+// by `order(thread, threads, n)`, which lists the item indices that thread handles, in its order.
+struct FrameResult {
+    std::vector<std::uint32_t> content;
+    CubeStatistics frame;
+    std::uint64_t lookups_issued = 0;
+    std::uint64_t same_frame_hits = 0;
+    std::uint64_t stores_issued = 0;
+};
+
+using Order = std::function<std::vector<int>(int thread, int threads, int n)>;
+
+FrameResult store_frame(const std::vector<StoreItem>& items, int threads, const Order& order) {
+    CctCube cube(face_size);
+    const int n = static_cast<int>(items.size());
+    std::vector<std::uint64_t> lookups(threads, 0), hits(threads, 0), stores(threads, 0);
+    run_threads(threads, [&](int t) {
+        for (int i : order(t, threads, n)) {
+            cube.store(items[i].direction, items[i].colour);
+            ++stores[t];
+            if (cube.lookup(items[(i * 7 + 3) % n].direction)) ++hits[t];
+            ++lookups[t];
+        }
+    });
+    FrameResult result;
+    for (int t = 0; t < threads; ++t) {
+        result.lookups_issued += lookups[t];
+        result.same_frame_hits += hits[t];
+        result.stores_issued += stores[t];
+    }
+    result.frame = cube.begin_frame();
+    result.content = snapshot(cube);
+    return result;
+}
+
+std::vector<int> in_order(int, int, int n) {
+    std::vector<int> all(n);
+    for (int i = 0; i < n; ++i) all[i] = i;
+    return all;
+}
+
+std::vector<int> interleaved(int t, int threads, int n) {
+    std::vector<int> mine;
+    for (int i = t; i < n; i += threads) mine.push_back(i);
+    return mine;
+}
+
+std::vector<int> reversed_chunks(int t, int threads, int n) {
+    // Thread t takes chunk (threads - 1 - t) and walks it backwards.
+    const int chunk = (n + threads - 1) / threads;
+    const int begin = (threads - 1 - t) * chunk;
+    const int end = std::min(n, begin + chunk);
+    std::vector<int> mine;
+    for (int i = end - 1; i >= begin; --i) mine.push_back(i);
+    return mine;
+}
+
+// A pure function of the direction's ray (the same for d and 2^k d): a colour spanning several exponents.
+glm::vec3 trace_colour(const glm::vec3& d) {
+    const float m = std::max(std::fabs(d.x), std::max(std::fabs(d.y), std::fabs(d.z)));
+    const glm::vec3 u = d / m; // exact for power-of-two scalings of d
+    const float brightness = std::ldexp(1.0f, static_cast<int>(std::floor((u.x + 1.0f) * 6.0f)) - 4);
+    return brightness * glm::vec3(0.25f + 0.75f * u.y * u.y, 0.5f + 0.5f * u.z, 1.0f / (1.0f + u.x * u.x));
+}
+
+} // namespace
+
+TEST_CASE("a frame's stores give the same cube whether made by 1 thread or split over 4") {
+    const std::vector<StoreItem> items = make_store_list(60000); // about 2.4 stores per texel of N = 64
+    const FrameResult one = store_frame(items, 1, in_order);
+    const FrameResult interleaved4 = store_frame(items, thread_count, interleaved);
+    const FrameResult reversed4 = store_frame(items, thread_count, reversed_chunks);
+
+    std::size_t filled = 0;
+    for (std::uint32_t w : one.content) filled += CctTexel::is_valid(w) ? 1u : 0u;
+    CHECK(filled > static_cast<std::size_t>(texel_count) / 2);
+    CHECK(one.frame.valid_texels == filled);
+
+    std::size_t differ_interleaved = 0, differ_reversed = 0;
+    for (int i = 0; i < texel_count; ++i) {
+        differ_interleaved += one.content[i] != interleaved4.content[i] ? 1u : 0u;
+        differ_reversed += one.content[i] != reversed4.content[i] ? 1u : 0u;
+    }
+    CHECK(differ_interleaved == 0u);
+    CHECK(differ_reversed == 0u);
+    CHECK(interleaved4.frame.valid_texels == filled);
+    CHECK(reversed4.frame.valid_texels == filled);
+
+    { // Each texel holds the smallest word stored into it.
+        std::vector<std::uint32_t> smallest(texel_count, CctTexel::invalid);
+        std::size_t no_texel = 0;
+        for (const StoreItem& item : items) {
+            const std::optional<TexelAddress> t = raycache::texel_of(item.direction, face_size);
+            if (!t) {
+                ++no_texel;
+                continue;
+            }
+            const std::size_t i = raycache::texel_linear_index(*t, face_size);
+            smallest[i] = std::min(smallest[i], CctTexel::encode(item.colour));
+        }
+        std::size_t differ = 0;
+        for (int i = 0; i < texel_count; ++i) differ += smallest[i] != one.content[i] ? 1u : 0u;
+        CHECK(no_texel == 0u);
+        CHECK(differ == 0u);
+    }
+    { // Every run's counters add up to the operations it issued.
+        for (const FrameResult* r : {&one, &interleaved4, &reversed4}) {
+            CHECK(r->stores_issued == items.size());
+            CHECK(r->frame.stores + r->frame.refused_stores == r->stores_issued);
+            CHECK(r->frame.stores >= filled);
+            CHECK(r->lookups_issued == items.size());
+            CHECK(r->frame.lookups == r->lookups_issued);
+            CHECK(r->frame.hits + r->frame.misses == r->lookups_issued);
+            // A cold frame: nothing stored in it is visible to its lookups.
+            CHECK(r->same_frame_hits == 0u);
+            CHECK(r->frame.hits == 0u);
+        }
+    }
+}
+
+TEST_CASE("concurrent lookups never see a value stored in the same frame, and the counters add up exactly") {
+    CctCube cube(face_size);
+    const glm::vec3 old_colour(1.0f);          // word 0x84020100
+    const glm::vec3 new_colour(0.25f, 0, 0);    // word 0x70000100: smaller, yet it must not replace a visible texel
+    // Frame 0: every even texel gets old_colour.
+    int refused = 0;
+    for (int i = 0; i < texel_count; i += 2) refused += cube.store_at(address_of(i), old_colour) ? 0 : 1;
+    REQUIRE(refused == 0);
+    cube.begin_frame();
+    REQUIRE(cube.valid_texels() == static_cast<std::size_t>(texel_count / 2));
+
+    // Frame 1: two writers store new_colour everywhere (forwards and backwards); two readers look up every
+    // texel, pass after pass, while the writers run.
+    std::atomic<int> writers_left{2};
+    std::uint64_t lookups[2] = {0, 0}, hits[2] = {0, 0}, expected_hits[2] = {0, 0};
+    std::uint64_t wrong[2] = {0, 0}, store_calls[2] = {0, 0};
+    run_threads(4, [&](int t) {
+        if (t < 2) {
+            for (int k = 0; k < texel_count; ++k) {
+                const int i = t == 0 ? k : texel_count - 1 - k;
+                const TexelAddress a = address_of(i);
+                cube.store(centre_direction(a.face, a.column, a.row), new_colour);
+                ++store_calls[t];
+            }
+            writers_left.fetch_sub(1);
+            return;
+        }
+        const int r = t - 2;
+        for (int pass = 0; pass < 12 && (pass < 2 || writers_left.load() > 0); ++pass) {
+            for (int k = 0; k < texel_count; ++k) {
+                const int i = r == 0 ? k : texel_count - 1 - k;
+                const TexelAddress a = address_of(i);
+                const std::optional<glm::vec3> v = cube.lookup(centre_direction(a.face, a.column, a.row));
+                ++lookups[r];
+                if (v) ++hits[r];
+                if (i % 2 == 0) {
+                    ++expected_hits[r];
+                    if (!v || !same_bits(*v, old_colour)) ++wrong[r];
+                } else if (v) {
+                    ++wrong[r]; // a value stored this frame was visible
+                }
+            }
+        }
+    });
+    CHECK(wrong[0] + wrong[1] == 0u);
+    const CubeStatistics frame = cube.begin_frame();
+    CHECK(frame.lookups == lookups[0] + lookups[1]);
+    CHECK(frame.hits == hits[0] + hits[1]);
+    CHECK(frame.hits == expected_hits[0] + expected_hits[1]);
+    CHECK(frame.misses == frame.lookups - frame.hits);
+    // Odd texels: the first writer to arrive stores, the second writes an equal word and is refused.
+    // Even texels: visible, so both writers are refused.
+    CHECK(frame.stores == static_cast<std::uint64_t>(texel_count / 2));
+    CHECK(frame.refused_stores == store_calls[0] + store_calls[1] - texel_count / 2);
+    CHECK(frame.valid_texels == static_cast<std::size_t>(texel_count));
+
+    // Frame 2: every texel visible, old colour on even texels, new on odd, seen alike by 4 threads.
+    std::uint64_t wrong2[4] = {0, 0, 0, 0};
+    run_threads(4, [&](int t) {
+        for (int k = 0; k < texel_count; ++k) {
+            const int i = (k * 4 + t) % texel_count;
+            const TexelAddress a = address_of(i);
+            const std::optional<glm::vec3> v = cube.lookup(centre_direction(a.face, a.column, a.row));
+            if (!v || !same_bits(*v, i % 2 == 0 ? old_colour : new_colour)) ++wrong2[t];
+        }
+    });
+    CHECK(wrong2[0] + wrong2[1] + wrong2[2] + wrong2[3] == 0u);
+    const CubeStatistics frame2 = cube.statistics();
+    CHECK(frame2.hits == static_cast<std::uint64_t>(4 * texel_count));
+    CHECK(frame2.misses == 0u);
+}
+
+TEST_CASE("cached_trace from many threads: a cold frame returns trace's exact values, a warm one values within the bound") {
+    CctCube cube(face_size);
+    // Every third texel, each reached by 4 scalings of its centre direction (powers of two, so the ray and
+    // hence trace_colour are the same for all four).
+    // The colours are computed once, so that trace and the check read the very same floats.
+    struct Call {
+        glm::vec3 direction;
+        glm::vec3 colour;
+    };
+    std::vector<Call> calls;
+    int texels_used = 0;
+    for (int i = 0; i < texel_count; i += 3, ++texels_used) {
+        const TexelAddress a = address_of(i);
+        const glm::vec3 d = centre_direction(a.face, a.column, a.row);
+        for (float s : {1.0f, 2.0f, 0.5f, 4.0f}) calls.push_back(Call{d * s, trace_colour(d * s)});
+    }
+    const int n = static_cast<int>(calls.size());
+    std::atomic<std::uint64_t> traces{0};
+    auto frame = [&](std::uint64_t* mismatches, bool cold) {
+        run_threads(thread_count, [&](int t) {
+            for (int k = 0; k < n; ++k) {
+                // Each thread walks every call, starting at a different place; odd threads go backwards.
+                const int j = (t % 2 == 0 ? k : n - 1 - k);
+                const Call& call = calls[(j + t * (n / thread_count)) % n];
+                const glm::vec3 got = raycache::cached_trace(cube, call.direction, [&] {
+                    traces.fetch_add(1, std::memory_order_relaxed);
+                    return call.colour;
+                });
+                const glm::vec3& want = call.colour;
+                if (cold) {
+                    if (!same_bits(got, want)) ++mismatches[t];
+                } else {
+                    // Documented bound: 2^-9 of the brightest channel (or 2^-25 absolute below 2^-16).
+                    const float brightest = std::max(want.x, std::max(want.y, want.z));
+                    const float bound = std::max(brightest * (1.0f / 512.0f), std::ldexp(1.0f, -25));
+                    for (int c = 0; c < 3; ++c)
+                        if (!(std::fabs(got[c] - want[c]) <= bound)) {
+                            ++mismatches[t];
+                            break;
+                        }
+                }
+            }
+        });
+    };
+
+    std::uint64_t cold_mismatches[thread_count] = {};
+    frame(cold_mismatches, true);
+    std::uint64_t total = 0;
+    for (std::uint64_t m : cold_mismatches) total += m;
+    CHECK(total == 0u);
+    const std::uint64_t calls_per_frame = static_cast<std::uint64_t>(thread_count) * static_cast<std::uint64_t>(n);
+    CHECK(traces.load() == calls_per_frame);
+    const CubeStatistics cold = cube.begin_frame();
+    CHECK(cold.misses == calls_per_frame);
+    CHECK(cold.hits == 0u);
+    // Every call into a texel stores the same word: the first one wins, the rest are refused as equal.
+    CHECK(cold.stores == static_cast<std::uint64_t>(texels_used));
+    CHECK(cold.refused_stores == calls_per_frame - static_cast<std::uint64_t>(texels_used));
+    CHECK(cold.valid_texels == static_cast<std::size_t>(texels_used));
+
+    traces.store(0);
+    std::uint64_t warm_mismatches[thread_count] = {};
+    frame(warm_mismatches, false);
+    total = 0;
+    for (std::uint64_t m : warm_mismatches) total += m;
+    CHECK(total == 0u);
+    CHECK(traces.load() == 0u);
+    const CubeStatistics warm = cube.begin_frame();
+    CHECK(warm.hits == calls_per_frame);
+    CHECK(warm.misses == 0u);
+    CHECK(warm.stores + warm.refused_stores == 0u);
+}
