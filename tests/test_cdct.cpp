@@ -257,6 +257,122 @@ TEST_CASE("relief parameters are validated with a message naming the field") {
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.0f, 0.02f, 10, 100.0f}), doctest::Contains("step"), std::invalid_argument);
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, -1.0f, 10, 100.0f}), doctest::Contains("epsilon"), std::invalid_argument);
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, 0.02f, 0, 100.0f}), doctest::Contains("max_steps"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, 0.02f, 10, 100.0f, 0.0f}), doctest::Contains("max_gap"), std::invalid_argument);
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, 0.02f, 10, std::numeric_limits<float>::infinity()}),
                          doctest::Contains("max_depth"), std::invalid_argument);
+}
+
+TEST_CASE("with a depth pyramid the search finds the same sphere hits within epsilon and reads fewer texels") {
+    const float radius = 5.0f;
+    CdctCube cube(64);
+    fill(cube, [&](const glm::vec3&) { return radius; });
+    DepthPyramid pyramid(64);
+    pyramid.rebuild(cube);
+    std::mt19937 rng(3);
+    for (ReliefParameters p : {ReliefParameters{0.2f, 0.02f, 1024, 100.0f}, ReliefParameters{0.02f, 0.002f, 1024, 100.0f}}) {
+        CAPTURE(p.step);
+        long linear_reads = 0, pyramid_reads = 0;
+        for (int i = 0; i < 300; ++i) {
+            const glm::vec3 o = random_origin(rng);
+            const glm::vec3 d = random_direction(rng);
+            const glm::vec3 oc = o - centre;
+            const float b = glm::dot(d, oc);
+            const float t_exact = -b + std::sqrt(b * b - (glm::dot(oc, oc) - radius * radius));
+            const ReliefResult r = relief_search(cube, bounds, o, d, p, &pyramid);
+            REQUIRE(r.hit);
+            CHECK(std::abs(r.distance - t_exact) <= p.epsilon + 1e-4f);
+            pyramid_reads += r.texels_read;
+            linear_reads += relief_search(cube, bounds, o, d, p).texels_read;
+        }
+        MESSAGE("texels read per search: linear " << linear_reads / 300.0 << ", pyramid " << pyramid_reads / 300.0);
+        CHECK(pyramid_reads * 2 < linear_reads);
+    }
+}
+
+TEST_CASE("with a depth pyramid the search finds the hits on a plane and misses through unfilled texels") {
+    const float height = 2.0f;
+    const ReliefParameters p{0.05f, 0.005f, 4096, 100.0f};
+    CdctCube cube(512);
+    fill(cube, [&](const glm::vec3& d) { return d.y < 0 ? std::min(height / -d.y, p.max_depth) : p.max_depth; });
+    DepthPyramid pyramid(512);
+    pyramid.rebuild(cube);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+    float worst = 0.0f;
+    for (int i = 0; i < 400; ++i) {
+        const glm::vec3 o = centre + glm::vec3(u(rng), u(rng), u(rng));
+        glm::vec3 d = random_direction(rng);
+        d.y = -std::abs(d.y);
+        if (-d.y < std::cos(glm::radians(45.0f))) continue;
+        const ReliefResult r = relief_search(cube, bounds, o, d, p, &pyramid);
+        REQUIRE(r.hit);
+        worst = std::max(worst, glm::length(r.point - (o + (centre.y - height - o.y) / d.y * d)));
+    }
+    // At N = 512 a texel spans twice the angle of the linear test's N = 1024: the same bound, doubled.
+    CHECK(worst <= p.epsilon + 0.02f);
+    // Rays upwards meet the environment, stored at max_depth, in a few pyramid steps.
+    const ReliefResult up = relief_search(cube, bounds, centre, glm::vec3(0.1f, 1.0f, 0.2f), p, &pyramid);
+    REQUIRE(up.hit);
+    CHECK(glm::length(up.point - centre) == doctest::Approx(p.max_depth).epsilon(1e-3));
+    CHECK(up.texels_read < 64);
+
+    // Empty the +Y face: the pyramid, rebuilt, sends the search down to the empty texels: a miss.
+    for (int row = 0; row < 512; ++row)
+        for (int column = 0; column < 512; ++column) cube.invalidate({2, column, row});
+    pyramid.rebuild(cube);
+    CHECK_FALSE(relief_search(cube, bounds, centre, glm::vec3(0.1f, 1.0f, 0.2f), p, &pyramid).hit);
+    CHECK(relief_search(cube, bounds, centre, glm::vec3(0.1f, -1.0f, 0.2f), p, &pyramid).hit);
+}
+
+TEST_CASE("a depth pyramid updated from each frame's stores holds the minimum of every block") {
+    const int n = 13; // not a power of two: edge blocks are partial
+    CdctCube cube(n);
+    DepthPyramid pyramid(n);
+    CHECK(pyramid.levels() == 4); // 13 -> 7 -> 4 -> 2 -> 1
+    std::mt19937 rng(9);
+    std::uniform_int_distribution<int> face(0, 5), coordinate(0, n - 1);
+    std::uniform_real_distribution<float> depth(1.0f, 50.0f);
+    for (int frame = 0; frame < 6; ++frame) {
+        for (int i = 0; i < 150; ++i)
+            cube.store_at({face(rng), coordinate(rng), coordinate(rng)}, DepthSample{glm::vec3(1.0f), depth(rng)});
+        pyramid.update(cube);
+        cube.begin_frame();
+        // Brute force: the minimum over each block's texels, empty texels counting as 0.
+        for (int level = 1; level <= pyramid.levels(); ++level)
+            for (int f = 0; f < 6; ++f)
+                for (int br = 0; br < pyramid.blocks(level); ++br)
+                    for (int bc = 0; bc < pyramid.blocks(level); ++bc) {
+                        float expected = 1e30f;
+                        for (int r = br << level; r < std::min((br + 1) << level, n); ++r)
+                            for (int c = bc << level; c < std::min((bc + 1) << level, n); ++c) {
+                                const auto s = cube.load({f, c, r});
+                                expected = std::min(expected, s ? s->distance : 0.0f);
+                            }
+                        REQUIRE(pyramid.min_distance(f, level, bc, br) == expected);
+                    }
+    }
+}
+
+TEST_CASE("with max_gap, a ray that passes behind a foreground edge misses instead of taking the wrong surface") {
+    // Foreground: a narrow cone around +X (unit x > 0.97, half-angle 14 degrees) at distance 2;
+    // background everywhere else at distance 10.
+    CdctCube cube(128);
+    fill(cube, [](const glm::vec3& d) { return d.x > 0.97f ? 2.0f : 10.0f; });
+    DepthPyramid pyramid(128);
+    pyramid.rebuild(cube);
+    // From 0.9 above the centre along (1, -0.1, 0): Q - C = (s, 0.9 - 0.1 s, 0) enters the cone
+    // (y/x < tan 14 deg = 0.25) at s = 2.57, |Q - C| = 2.65: behind the foreground, a 0.65 gap.
+    const glm::vec3 o = centre + glm::vec3(0.0f, 0.9f, 0.0f), d(1.0f, -0.1f, 0.0f);
+    ReliefParameters thesis{0.05f, 0.005f, 4096, 100.0f};
+    ReliefParameters gap = thesis;
+    gap.max_gap = 0.5f;
+    const ReliefResult accepted = relief_search(cube, bounds, o, d, thesis);
+    REQUIRE(accepted.hit); // the thesis takes the foreground's colour, though the ray passes behind it
+    CHECK(glm::length(accepted.point - centre) > 2.5f);
+    CHECK_FALSE(relief_search(cube, bounds, o, d, gap).hit);
+    CHECK_FALSE(relief_search(cube, bounds, o, d, gap, &pyramid).hit);
+    // A ray that meets the foreground head-on is still a hit with max_gap.
+    const ReliefResult head_on = relief_search(cube, bounds, centre, glm::vec3(1, 0.05f, 0), gap, &pyramid);
+    REQUIRE(head_on.hit);
+    CHECK(glm::length(head_on.point - centre) == doctest::Approx(2.0f).epsilon(0.01));
 }

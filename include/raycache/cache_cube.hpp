@@ -138,6 +138,23 @@ public:
 
     void reset_statistics() noexcept { state_->counters.reset(); }
 
+    // Calls f(address) for every texel stored during the current frame, in linear-index order
+    // (for structures derived from the cube, updated before begin_frame()). Between frames only.
+    template <class F>
+    void for_each_written_texel(F&& f) const {
+        if (!state_->written_this_frame.load(std::memory_order_relaxed)) return;
+        const std::size_t n = static_cast<std::size_t>(face_size_);
+        for (std::size_t w = 0; w < bit_word_count(); ++w) {
+            std::uint64_t bits = state_->written[w].load(std::memory_order_relaxed);
+            while (bits) {
+                const std::size_t index = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
+                bits &= bits - 1;
+                f(TexelAddress{static_cast<int>(index / (n * n)), static_cast<int>(index % n),
+                               static_cast<int>(index / n % n)});
+            }
+        }
+    }
+
     // Texels holding a value, visible or written this frame.
     std::size_t valid_texels() const noexcept {
         return static_cast<std::size_t>(state_->valid_texels.load(std::memory_order_relaxed));
@@ -177,6 +194,15 @@ private:
     }
 
     std::size_t bit_word_count() const noexcept { return (texel_count() + 63) / 64; }
+
+    static int count_trailing_zeros(std::uint64_t bits) noexcept {
+        int n = 0;
+        while (!(bits & 1u)) {
+            bits >>= 1;
+            ++n;
+        }
+        return n;
+    }
 
     bool written_this_frame(std::size_t index) const noexcept {
         return (state_->written[index / 64].load(std::memory_order_relaxed) >> (index % 64)) & 1u;

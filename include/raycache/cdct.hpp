@@ -12,6 +12,7 @@
 #include <glm/glm.hpp>
 
 #include "raycache/cache_cube.hpp"
+#include "raycache/depth_pyramid.hpp"
 
 namespace raycache {
 
@@ -23,10 +24,14 @@ struct CubeBounds {
 
 // Tuning of the relief search; the defaults are one of the thesis's (delta, epsilon) pairs.
 struct ReliefParameters {
-    float step = 0.2f;        // delta: length of a linear step along the ray, world units
+    float step = 0.2f;        // delta: length of a linear step along the ray, world units (linear walk only)
     float epsilon = 0.02f;    // binary refinement stops when the bracket is shorter than this
-    int max_steps = 1024;     // linear steps before giving up (a miss)
+    int max_steps = 1024;     // linear steps, or pyramid nodes read, before giving up (a miss)
     float max_depth = 100.0f; // distance at which rays that escaped to the environment are stored
+    // A crossing where the ray ends up more than max_gap beyond the cached surface (|Q - C| - d, after
+    // refinement) is a depth discontinuity: the ray passed behind an edge, where the cube saw nothing.
+    // Such a crossing is a miss instead of the wrong surface. Infinity (the thesis) accepts every crossing.
+    float max_gap = std::numeric_limits<float>::infinity();
 };
 
 // Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive.
@@ -39,6 +44,7 @@ inline void validate(const ReliefParameters& p) {
     if (!(p.epsilon > 0.0f) || !std::isfinite(p.epsilon)) bad("epsilon", p.epsilon);
     if (!(p.max_depth > 0.0f) || !std::isfinite(p.max_depth)) bad("max_depth", p.max_depth);
     if (p.max_steps < 1) bad("max_steps", static_cast<float>(p.max_steps));
+    if (!(p.max_gap > 0.0f)) bad("max_gap", p.max_gap);
 }
 
 // Outcome of a relief search. On a hit, `point` is within `epsilon` (along the ray) past the first
@@ -81,59 +87,39 @@ inline float box_exit_distance(const glm::vec3& o, const glm::vec3& d, const Cub
 
 } // namespace detail
 
-// Thesis Algorithm 4 on a perspective depth cube: walk the ray origin + t * unit(direction) from where it
-// leaves the cube's box in steps of p.step; at each point Q read the texel in direction Q - centre and
-// compare |Q - centre| with its distance; at the first crossing, bisect the last step down to p.epsilon.
-// A texel that is empty or written this frame, on the way, makes the search a miss; so do running out
-// of p.max_steps, and a bad origin, direction or box. Counts one lookup on the cube (hit or miss).
-// Thread-safe as CacheCube::lookup; reads at most 1 + p.max_steps + 64 texels.
-inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
-                                  const glm::vec3& direction, const ReliefParameters& p) noexcept {
-    ReliefResult result;
-    if (!is_direction(direction) || !detail::is_finite(origin) || !detail::is_usable(bounds) || !(p.step > 0.0f) ||
-        !(p.epsilon > 0.0f)) {
-        cube.record_lookup(false);
-        return result;
-    }
-    const glm::vec3 d = detail::unit(direction);
+namespace detail {
 
-    // Samples the depth image at distance t along the ray; false when the texel is unusable (a miss).
-    DepthSample sample;
-    bool crossed = false;
-    auto sample_at = [&](float t) {
-        const glm::vec3 from_centre = origin + t * d - bounds.centre;
+// The relief search's state along one ray origin + t * d (d unit), shared by the linear and the pyramid walk.
+class ReliefWalk {
+public:
+    ReliefWalk(const CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin, const glm::vec3& d,
+               const ReliefParameters& p)
+        : cube_(cube), bounds_(bounds), origin_(origin), d_(d), p_(p) {}
+
+    ReliefResult result;
+    DepthSample sample; // the texel read last
+    bool crossed = false; // whether the ray at the last read is at or beyond that texel's surface
+
+    glm::vec3 from_centre(float t) const { return origin_ + t * d_ - bounds_.centre; }
+
+    // Reads the texel in the direction of the ray's point at t; false when it is empty or not yet visible.
+    bool read(float t) {
+        const glm::vec3 v = from_centre(t);
         ++result.texels_read;
-        const std::optional<DepthSample> texel = cube.peek(from_centre);
+        const std::optional<DepthSample> texel = cube_.peek(v);
         if (!texel) return false;
         sample = *texel;
-        crossed = sample.distance <= glm::length(from_centre);
+        crossed = sample.distance <= glm::length(v);
         return true;
-    };
-    auto finish = [&](float t, bool hit) {
-        result.hit = hit;
-        if (hit) {
-            result.distance = t;
-            result.point = origin + t * d;
-            result.color = sample.color;
-        }
-        cube.record_lookup(hit);
-        return result;
-    };
+    }
 
-    float t = detail::box_exit_distance(origin, d, bounds);
-    if (!sample_at(t)) return finish(t, false);
-    if (crossed) return finish(t, true); // the cached surface lies inside the box: nothing to refine
-    for (int i = 0; i < p.max_steps; ++i) {
-        const float previous = t;
-        t += p.step;
-        if (!sample_at(t)) return finish(t, false);
-        if (!crossed) continue;
-        // Bisect [previous, t], keeping the crossed end (and its sample) at `hi`.
-        float lo = previous, hi = t;
+    // Bisects [lo, hi] (lo before the crossing, hi at or past it, `sample` read at hi) down to epsilon,
+    // then accepts the crossing unless it is a depth discontinuity.
+    ReliefResult refine(float lo, float hi) {
         DepthSample at_hi = sample;
-        for (int k = 0; k < 64 && hi - lo > p.epsilon; ++k) {
+        for (int k = 0; k < 64 && hi - lo > p_.epsilon; ++k) {
             const float mid = 0.5f * (lo + hi);
-            if (!sample_at(mid)) return finish(mid, false);
+            if (!read(mid)) return miss();
             if (crossed) {
                 hi = mid;
                 at_hi = sample;
@@ -141,10 +127,154 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
                 lo = mid;
             }
         }
+        if (glm::length(from_centre(hi)) - at_hi.distance > p_.max_gap) return miss();
         sample = at_hi;
-        return finish(hi, true);
+        return hit(hi);
     }
-    return finish(t, false);
+
+    ReliefResult hit(float t) {
+        result.hit = true;
+        result.distance = t;
+        result.point = origin_ + t * d_;
+        result.color = sample.color;
+        return result;
+    }
+    ReliefResult miss() {
+        result.hit = false;
+        return result;
+    }
+
+    // Linear walk (thesis Algorithm 4): steps of p.step from t until the first crossing.
+    ReliefResult linear(float t) {
+        for (int i = 0; i < p_.max_steps; ++i) {
+            const float previous = t;
+            t += p_.step;
+            if (!read(t)) return miss();
+            if (crossed) return refine(previous, t);
+        }
+        return miss();
+    }
+
+    // Pyramid walk: at the ray's point, look at the block around its texel at some level; when the whole
+    // block lies beyond the point, jump to where the ray leaves the block or reaches the block's nearest
+    // distance and go up a level; otherwise go down one; at level 0, a crossing is refined as usual.
+    ReliefResult hierarchical(float t, const DepthPyramid& pyramid) {
+        const int n = cube_.face_size();
+        float safe = t; // the ray is before every surface on [start, safe]
+        int level = std::min(1, pyramid.levels());
+        for (int visits = 0; visits < p_.max_steps; ++visits) {
+            const glm::vec3 v = from_centre(t);
+            const float distance_to_centre = glm::length(v);
+            const shared::raycache_texel_address a = shared::raycache_texel_of(v, n);
+            if (a.face == RAYCACHE_NO_FACE) return miss();
+            float nearest;
+            if (level == 0) {
+                if (!read(t)) return miss();
+                if (crossed) return refine(safe, t);
+                nearest = sample.distance;
+            } else {
+                ++result.texels_read;
+                nearest = pyramid.min_distance(a.face, level, a.column >> level, a.row >> level);
+                if (!(distance_to_centre < nearest)) {
+                    --level;
+                    continue;
+                }
+            }
+            // Safe up to where the ray leaves this block or comes within `nearest` of the centre.
+            const float next = std::min(block_exit(t, a, level), reach(nearest));
+            safe = std::max(safe, next);
+            t = std::max(next, t) + std::max(1e-3f * p_.epsilon, 1e-6f * (1.0f + t));
+            level = std::min(level + 1, pyramid.levels());
+        }
+        return miss();
+    }
+
+private:
+    // Where |from_centre(t)| reaches `radius` going outwards (the far root; the ray is inside that sphere).
+    float reach(float radius) const {
+        const glm::vec3 v0 = origin_ - bounds_.centre;
+        const float b = glm::dot(v0, d_);
+        const float c = glm::dot(v0, v0) - radius * radius;
+        return -b + std::sqrt(std::max(b * b - c, 0.0f));
+    }
+
+    // Where the ray, now at t inside block (a.column >> level, a.row >> level) of face a.face, leaves the
+    // block's cone from the centre. The block spans face coordinates sc/m in [u0, u1] and tc/m in [v0, v1];
+    // each bound is a plane through the centre, so along the ray each test is linear in t.
+    float block_exit(float t, const shared::raycache_texel_address& a, int level) const {
+        const int n = cube_.face_size();
+        const int first_column = (a.column >> level) << level, first_row = (a.row >> level) << level;
+        const float u0 = 2.0f * first_column / n - 1.0f, u1 = 2.0f * std::min(first_column + (1 << level), n) / n - 1.0f;
+        const float v0 = 2.0f * first_row / n - 1.0f, v1 = 2.0f * std::min(first_row + (1 << level), n) / n - 1.0f;
+        const glm::vec3 p = from_centre(t);
+        // sc, tc and m as linear forms of the vector from the centre (the face table).
+        const glm::vec3 m_axis = face_axis(a.face, 0), u_axis = face_axis(a.face, 1), v_axis = face_axis(a.face, 2);
+        float exit = std::numeric_limits<float>::infinity();
+        auto leave = [&](const glm::vec3& normal) { // the ray stays where dot(normal, p) >= 0
+            const float rate = glm::dot(normal, d_);
+            if (rate < 0.0f) exit = std::min(exit, t + std::max(glm::dot(normal, p), 0.0f) / -rate);
+        };
+        leave(u_axis - u0 * m_axis);
+        leave(u1 * m_axis - u_axis);
+        leave(v_axis - v0 * m_axis);
+        leave(v1 * m_axis - v_axis);
+        return exit;
+    }
+
+    // For face f: which = 0 gives the vector whose dot with v is the major coordinate m, 1 gives sc, 2 gives tc.
+    static glm::vec3 face_axis(int face, int which) {
+        static const float table[6][3][3] = {
+            {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},  // +X: m = x, sc = -z, tc = -y
+            {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},  // -X: m = -x, sc = z, tc = -y
+            {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},    // +Y: m = y, sc = x, tc = z
+            {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},  // -Y: m = -y, sc = x, tc = -z
+            {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},   // +Z: m = z, sc = x, tc = -y
+            {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}}, // -Z: m = -z, sc = -x, tc = -y
+        };
+        const float* e = table[face][which];
+        return glm::vec3(e[0], e[1], e[2]);
+    }
+
+    const CacheCube<CdctTexel>& cube_;
+    const CubeBounds& bounds_;
+    glm::vec3 origin_;
+    glm::vec3 d_;
+    const ReliefParameters& p_;
+};
+
+} // namespace detail
+
+// Thesis Algorithm 4 on a perspective depth cube: walk the ray origin + t * unit(direction) from where it
+// leaves the cube's box; at each point Q read the texel in direction Q - centre and compare |Q - centre|
+// with its distance; at the first crossing, bisect down to p.epsilon. Without a pyramid the walk takes
+// steps of p.step (the thesis); with one (kept up to date for this cube) it skips blocks of texels that
+// lie beyond the ray. An empty or not-yet-visible texel read on the way makes the search a miss; so do
+// running out of p.max_steps, a crossing more than p.max_gap behind the surface, and a bad origin,
+// direction or box. Counts one lookup on the cube (hit or miss); texels_read counts pyramid nodes too.
+// Thread-safe as CacheCube::lookup.
+inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
+                                  const glm::vec3& direction, const ReliefParameters& p,
+                                  const DepthPyramid* pyramid = nullptr) noexcept {
+    if (!is_direction(direction) || !detail::is_finite(origin) || !detail::is_usable(bounds) || !(p.step > 0.0f) ||
+        !(p.epsilon > 0.0f)) {
+        cube.record_lookup(false);
+        return ReliefResult{};
+    }
+    RAYCACHE_ASSERT(!pyramid || pyramid->face_size() == cube.face_size());
+    const glm::vec3 d = detail::unit(direction);
+    detail::ReliefWalk walk(cube, bounds, origin, d, p);
+    const float start = detail::box_exit_distance(origin, d, bounds);
+    ReliefResult result;
+    if (!walk.read(start))
+        result = walk.miss();
+    else if (walk.crossed)
+        result = walk.hit(start); // the cached surface lies inside the box: nothing to refine
+    else if (pyramid && pyramid->face_size() == cube.face_size())
+        result = walk.hierarchical(start, *pyramid);
+    else
+        result = walk.linear(start);
+    cube.record_lookup(result.hit);
+    return result;
 }
 
 // Stores what a traced ray hit at `hit_point` under the key normalize(hit_point - centre), with distance
@@ -173,12 +303,13 @@ struct TracedRay {
 // Algorithm 1 with the CDCT: the relief search answers when it can; otherwise trace() runs, its hit is
 // stored (store_hit, or store_escape when it escaped) and its colour returned unchanged.
 // trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
+// `pyramid`, when given, speeds up the search (see relief_search).
 template <class Trace>
 glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                             const glm::vec3& direction, const ReliefParameters& p, Trace&& trace,
-                            int* texels_read = nullptr) {
+                            int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr) {
     static_assert(std::is_invocable_r_v<TracedRay, Trace&>, "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()`");
-    const ReliefResult found = relief_search(cube, bounds, origin, direction, p);
+    const ReliefResult found = relief_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
     const TracedRay traced = std::forward<Trace>(trace)();

@@ -8,4 +8,5 @@
 #include "raycache/statistics.hpp"
 #include "raycache/cache_cube.hpp"
 #include "raycache/cached_trace.hpp"
+#include "raycache/depth_pyramid.hpp"
 #include "raycache/cdct.hpp"
