@@ -139,9 +139,10 @@ TEST_CASE("a reflected ray traced with rtcIntersect1 is cached: traced in the co
     CHECK(traces == 3);
 }
 
-TEST_CASE("the CDCT stores a traced hit at its distance, so a ray from elsewhere towards that point finds it") {
+namespace {
+void check_cdct_finds_stored_hit(bool pyramid) {
     World w;
-    SceneCache caches(Technique::cdct, raycache::ReliefParameters{0.05f, 0.005f, 2000, 100.0f});
+    SceneCache caches(Technique::cdct, raycache::ReliefParameters{0.05f, 0.005f, 2000, 100.0f}, pyramid);
     caches.attach(w.scene, {w.mirror}, 64);
     // Fill: rays leaving the sphere's bottom half downwards hit the floor (colour by x of the hit).
     int traces = 0;
@@ -171,4 +172,10 @@ TEST_CASE("the CDCT stores a traced hit at its distance, so a ray from elsewhere
     const auto s = caches.begin_frame();
     CHECK(s.hits == 1);
     CHECK(s.texels_read > 1);
+}
+} // namespace
+
+TEST_CASE("the CDCT stores a traced hit at its distance, so a ray from elsewhere towards that point finds it") {
+    SUBCASE("with the thesis's linear search") { check_cdct_finds_stored_hit(false); }
+    SUBCASE("with the depth pyramid") { check_cdct_finds_stored_hit(true); }
 }

@@ -55,6 +55,7 @@ struct SceneCacheStatistics {
     std::size_t valid_texels = 0;
     std::size_t texel_count = 0;
     std::size_t texel_bytes = 0;
+    std::size_t pyramid_bytes = 0; // CDCT depth pyramids
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -96,8 +97,11 @@ inline CubeBounds bounds_of(RTCScene scene, ObjectId id) {
 // between frames, on one thread.
 class SceneCache {
 public:
-    // Throws std::invalid_argument for bad relief parameters (used by the CDCT only).
-    explicit SceneCache(Technique technique, ReliefParameters relief = {}) : technique_(technique), relief_(relief) {
+    // Throws std::invalid_argument for bad relief parameters (used by the CDCT only). With depth_pyramid
+    // (the default), each CDCT cube keeps a DepthPyramid so its searches skip empty space; without, the
+    // search is the thesis's fixed-step walk.
+    explicit SceneCache(Technique technique, ReliefParameters relief = {}, bool depth_pyramid = true)
+        : technique_(technique), relief_(relief), use_pyramid_(depth_pyramid) {
         validate(relief_);
     }
 
@@ -116,11 +120,13 @@ public:
             throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
         if (has_cache(id))
             throw std::invalid_argument("RayCache: geometry " + std::to_string(id.geom_id) + " already has a cube");
-        Entry entry{id, bounds, nullptr, nullptr};
-        if (technique_ == Technique::cct)
+        Entry entry{id, bounds, nullptr, nullptr, nullptr};
+        if (technique_ == Technique::cct) {
             entry.cct = std::make_unique<CctCube>(face_size);
-        else
+        } else {
             entry.cdct = std::make_unique<CdctCube>(face_size);
+            if (use_pyramid_) entry.pyramid = std::make_unique<DepthPyramid>(face_size);
+        }
         const int index = static_cast<int>(entries_.size());
         entries_.push_back(std::move(entry));
         if (id.inst_id == RTC_INVALID_GEOMETRY_ID) {
@@ -148,7 +154,8 @@ public:
         Entry& e = entries_[static_cast<std::size_t>(index)];
         if (technique_ == Technique::cct) return cached_trace(*e.cct, direction, [&] { return trace().color; });
         int read = 0;
-        const glm::vec3 color = cdct_cached_trace(*e.cdct, e.bounds, origin, direction, relief_, trace, &read);
+        const glm::vec3 color =
+            cdct_cached_trace(*e.cdct, e.bounds, origin, direction, relief_, trace, &read, e.pyramid.get());
         texels_read_.add(0, static_cast<std::uint64_t>(read));
         return color;
     }
@@ -156,9 +163,13 @@ public:
     // Ends a frame on every cube (this frame's stores become visible) and returns the frame's totals.
     SceneCacheStatistics begin_frame() {
         SceneCacheStatistics total;
-        for (Entry& e : entries_) add(total, e.cct ? e.cct->begin_frame() : e.cdct->begin_frame());
+        for (Entry& e : entries_) {
+            if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
+            add(total, e.cct ? e.cct->begin_frame() : e.cdct->begin_frame());
+        }
         total.texels_read = texels_read_.sum(0);
         total.texel_bytes = texel_bytes();
+        total.pyramid_bytes = pyramid_bytes();
         texels_read_.reset();
         return total;
     }
@@ -169,6 +180,7 @@ public:
         for (const Entry& e : entries_) add(total, e.cct ? e.cct->statistics() : e.cdct->statistics());
         total.texels_read = texels_read_.sum(0);
         total.texel_bytes = texel_bytes();
+        total.pyramid_bytes = pyramid_bytes();
         return total;
     }
 
@@ -189,7 +201,10 @@ public:
 
     // Empties every cube (the objects keep their cubes).
     void clear() {
-        for (Entry& e : entries_) e.cct ? e.cct->clear() : e.cdct->clear();
+        for (Entry& e : entries_) {
+            e.cct ? e.cct->clear() : e.cdct->clear();
+            if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+        }
         texels_read_.reset();
     }
 
@@ -200,12 +215,20 @@ public:
         return bytes;
     }
 
+    // Memory of the CDCT depth pyramids (about a third of a float per texel).
+    std::size_t pyramid_bytes() const noexcept {
+        std::size_t bytes = 0;
+        for (const Entry& e : entries_) bytes += e.pyramid ? e.pyramid->bytes() : 0;
+        return bytes;
+    }
+
 private:
     struct Entry {
         ObjectId id;
         CubeBounds bounds;
         std::unique_ptr<CctCube> cct;
         std::unique_ptr<CdctCube> cdct;
+        std::unique_ptr<DepthPyramid> pyramid; // CDCT with depth_pyramid only
     };
 
     int find(ObjectId id) const noexcept {
@@ -225,6 +248,7 @@ private:
 
     Technique technique_;
     ReliefParameters relief_;
+    bool use_pyramid_;
     std::vector<Entry> entries_;
     std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
     std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> entry
