@@ -376,3 +376,36 @@ TEST_CASE("with max_gap, a ray that passes behind a foreground edge misses inste
     REQUIRE(head_on.hit);
     CHECK(glm::length(head_on.point - centre) == doctest::Approx(2.0f).epsilon(0.01));
 }
+
+TEST_CASE("pre-filling traces every empty texel from the box surface and stores what it hit") {
+    // The world: a sphere of radius 6 around the centre, except below y = centre.y - 2 (a floor).
+    auto trace = [](glm::vec3 o, glm::vec3 d) {
+        const float floor_t = d.y < 0 ? (centre.y - 2.0f - o.y) / d.y : std::numeric_limits<float>::infinity();
+        const glm::vec3 oc = o - centre;
+        const float b = glm::dot(oc, d);
+        const float sphere_t = -b + std::sqrt(b * b - (glm::dot(oc, oc) - 36.0f));
+        return floor_t < sphere_t ? TracedRay{glm::vec3(0.25f), floor_t} : TracedRay{glm::vec3(0.75f), sphere_t};
+    };
+    CdctCube cube(32);
+    cube.store_at({2, 0, 0}, DepthSample{glm::vec3(1.0f), 3.0f}); // already filled: left alone
+    const ReliefParameters p{0.1f, 0.01f, 1000, 100.0f};
+    CHECK(prefill(cube, bounds, p, trace) == 6 * 32 * 32 - 1);
+    CHECK(cube.valid_fraction() == 1.0);
+    CHECK(cube.load({2, 0, 0})->distance == 3.0f);
+    // Straight down: the floor, 2 below the centre (-Y face centre texel (3, 16, 16) looks almost straight down).
+    const auto down = cube.load({3, 16, 16});
+    REQUIRE(down.has_value());
+    CHECK(down->distance == doctest::Approx(2.0f).epsilon(0.001));
+    CHECK(down->color.x == doctest::Approx(0.25f));
+    // Sideways: the sphere, at 6.
+    CHECK(cube.load({0, 16, 16})->distance == doctest::Approx(6.0f).epsilon(0.001));
+    // After begin_frame, a search from anywhere in the box finds the floor at its analytic place.
+    cube.begin_frame();
+    const ReliefResult r = relief_search(cube, bounds, centre + glm::vec3(0.5f, 0.5f, 0.0f), glm::vec3(0.3f, -1.0f, 0.1f), p);
+    REQUIRE(r.hit);
+    CHECK(r.point.y == doctest::Approx(centre.y - 2.0f).epsilon(0.01));
+    // The CCT stores colours only.
+    CctCube colours(8);
+    CHECK(prefill(colours, bounds, p, trace) == 6 * 8 * 8);
+    CHECK(colours.load({3, 4, 4})->x == doctest::Approx(0.25f));
+}

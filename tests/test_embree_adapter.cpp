@@ -172,10 +172,40 @@ void check_cdct_finds_stored_hit(bool pyramid) {
     const auto s = caches.begin_frame();
     CHECK(s.hits == 1);
     CHECK(s.texels_read > 1);
+    CHECK(s.max_texels_read == s.texels_read); // one search: the most is the total
 }
 } // namespace
 
 TEST_CASE("the CDCT stores a traced hit at its distance, so a ray from elsewhere towards that point finds it") {
     SUBCASE("with the thesis's linear search") { check_cdct_finds_stored_hit(false); }
     SUBCASE("with the depth pyramid") { check_cdct_finds_stored_hit(true); }
+}
+
+TEST_CASE("pre-filling an object's cube through the adapter traces every texel once, from the box outwards") {
+    World w;
+    SceneCache caches(Technique::cdct, raycache::ReliefParameters{0.05f, 0.005f, 2000, 100.0f});
+    caches.attach(w.scene, {w.mirror}, 16);
+    CHECK(caches.objects().size() == 1);
+    CHECK(caches.face_size({w.mirror}) == 16);
+    CHECK(caches.face_size({w.floor}) == 0);
+    std::size_t stored = 0;
+    int mirror_hits = 0;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 16; ++row)
+            stored += caches.prefill_row({w.mirror}, face, row, [&](glm::vec3 o, glm::vec3 d) {
+                const auto [t, id] = w.intersect(o, d);
+                mirror_hits += id == w.mirror; // rays start outside the box: never the object itself
+                return TracedRay{id == w.floor ? glm::vec3(0.5f) : glm::vec3(0.1f), t};
+            });
+    CHECK(stored == 6 * 16 * 16);
+    CHECK(mirror_hits == 0);
+    const auto s = caches.begin_frame();
+    CHECK(s.valid_texels == 6 * 16 * 16);
+    // A second pre-fill finds nothing empty.
+    CHECK(caches.prefill_row({w.mirror}, 3, 0, [&](glm::vec3, glm::vec3) { return TracedRay{}; }) == 0);
+    // Every search now answers: straight down from the sphere's bottom, the floor's colour.
+    int traces = 0;
+    const glm::vec3 c = caches.leaving_ray({w.mirror}, {1, 1.5f, 3}, {0.1f, -1, 0}, [&] { ++traces; return TracedRay{}; });
+    CHECK(traces == 0);
+    CHECK(c.x == doctest::Approx(0.5f).epsilon(0.01));
 }

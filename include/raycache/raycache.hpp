@@ -10,3 +10,4 @@
 #include "raycache/cached_trace.hpp"
 #include "raycache/depth_pyramid.hpp"
 #include "raycache/cdct.hpp"
+#include "raycache/prefill.hpp"

@@ -16,6 +16,7 @@
 // the object: that is the ray the cube caches (SPEC section 2).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cmath>
@@ -51,7 +52,8 @@ struct SceneCacheStatistics {
     std::uint64_t hits = 0;
     std::uint64_t misses = 0;
     std::uint64_t stores = 0;
-    std::uint64_t texels_read = 0; // CDCT searches only
+    std::uint64_t texels_read = 0;     // CDCT searches only
+    std::uint64_t max_texels_read = 0; // the most one CDCT search read
     std::size_t valid_texels = 0;
     std::size_t texel_count = 0;
     std::size_t texel_bytes = 0;
@@ -140,6 +142,33 @@ public:
     bool has_cache(ObjectId id) const noexcept { return find(id) >= 0; }
     std::size_t object_count() const noexcept { return entries_.size(); }
 
+    // The objects with cubes, in attach order.
+    std::vector<ObjectId> objects() const {
+        std::vector<ObjectId> ids;
+        for (const Entry& e : entries_) ids.push_back(e.id);
+        return ids;
+    }
+
+    // Face size of object `id`'s cube; 0 when it has none.
+    int face_size(ObjectId id) const noexcept {
+        const int index = find(id);
+        if (index < 0) return 0;
+        const Entry& e = entries_[static_cast<std::size_t>(index)];
+        return e.cct ? e.cct->face_size() : e.cdct->face_size();
+    }
+
+    // Pre-fills one row of one face of object `id`'s cube (see raycache/prefill.hpp): every empty texel is
+    // traced from the cube's box outwards. trace: `TracedRay trace(glm::vec3 origin, glm::vec3 direction)`.
+    // Rows may be filled from many threads at once; the stores become visible at the next begin_frame().
+    // Returns the texels stored (0 for an object without a cube).
+    template <class Trace>
+    std::size_t prefill_row(ObjectId id, int face, int row, Trace&& trace) {
+        const int index = find(id);
+        if (index < 0) return 0;
+        Entry& e = entries_[static_cast<std::size_t>(index)];
+        return e.cct ? prefill_row_impl(*e.cct, e.bounds, face, row, trace) : prefill_row_impl(*e.cdct, e.bounds, face, row, trace);
+    }
+
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
     // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
     // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
@@ -157,6 +186,11 @@ public:
         const glm::vec3 color =
             cdct_cached_trace(*e.cdct, e.bounds, origin, direction, relief_, trace, &read, e.pyramid.get());
         texels_read_.add(0, static_cast<std::uint64_t>(read));
+        // A rarely-taken CAS: only a search that reads more than every one before it writes.
+        std::uint64_t most = max_texels_read_.load(std::memory_order_relaxed);
+        while (static_cast<std::uint64_t>(read) > most &&
+               !max_texels_read_.compare_exchange_weak(most, static_cast<std::uint64_t>(read), std::memory_order_relaxed)) {
+        }
         return color;
     }
 
@@ -168,6 +202,7 @@ public:
             add(total, e.cct ? e.cct->begin_frame() : e.cdct->begin_frame());
         }
         total.texels_read = texels_read_.sum(0);
+        total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
         total.pyramid_bytes = pyramid_bytes();
         texels_read_.reset();
@@ -179,6 +214,7 @@ public:
         SceneCacheStatistics total;
         for (const Entry& e : entries_) add(total, e.cct ? e.cct->statistics() : e.cdct->statistics());
         total.texels_read = texels_read_.sum(0);
+        total.max_texels_read = max_texels_read_.load(std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
         total.pyramid_bytes = pyramid_bytes();
         return total;
@@ -206,6 +242,7 @@ public:
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
         }
         texels_read_.reset();
+        max_texels_read_.store(0, std::memory_order_relaxed);
     }
 
     // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
@@ -231,6 +268,11 @@ private:
         std::unique_ptr<DepthPyramid> pyramid; // CDCT with depth_pyramid only
     };
 
+    template <class Texel, class Trace>
+    std::size_t prefill_row_impl(CacheCube<Texel>& cube, const CubeBounds& bounds, int face, int row, Trace& trace) {
+        return raycache::prefill_row(cube, bounds, relief_, face, row, trace);
+    }
+
     int find(ObjectId id) const noexcept {
         if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return id.geom_id < direct_.size() ? direct_[id.geom_id] : -1;
         const auto it = instanced_.find({id.inst_id, id.geom_id});
@@ -253,6 +295,7 @@ private:
     std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
     std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> entry
     detail::StripedCounters<1> texels_read_;
+    std::atomic<std::uint64_t> max_texels_read_{0};
 };
 
 } // namespace embree
