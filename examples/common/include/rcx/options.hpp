@@ -1,0 +1,71 @@
+// rcx/options.hpp: the command line shared by the example tracers (same options, same meaning, whatever
+// the renderer), its help text, and the checks that turn bad input into messages a user can act on.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "rcx/scene.hpp"
+
+namespace rcx {
+
+// How secondary rays leaving a cached object are answered.
+enum class CacheMode {
+    off,     // never touch a cache: every ray is traced
+    cct,     // colour caching cube (thesis ch. 3)
+    cdct,    // colour and depth caching cube with the relief search (thesis ch. 4)
+    ceiling, // every cached leaving ray answered by a constant colour, no tracing: no cache can beat it
+};
+
+// "off", "cct", "cdct", "ceiling"; parse_cache_mode throws UsageError for anything else.
+const char* to_string(CacheMode mode);
+CacheMode parse_cache_mode(const std::string& text);
+
+// A command line that cannot be run as given; what() says what to change. main() prints it and exits 2.
+class UsageError : public std::invalid_argument {
+public:
+    using std::invalid_argument::invalid_argument;
+};
+
+struct Options {
+    std::string scene = "behind-32";
+    std::string mesh;                 // the concave object of scene "concave"; empty: SceneParams' default
+    int width = 512;
+    int height = 512;
+    CacheMode cache = CacheMode::cct;
+    int face_size = 512;              // texels per cube face side (the thesis's 512 x 512)
+    float delta = 0.2f;               // CDCT relief search step, world units
+    float epsilon = 0.02f;            // CDCT binary refinement threshold
+    int max_steps = 1024;             // CDCT linear steps before a miss
+    std::optional<int> frames;        // unset: the scene's camera path decides
+    std::optional<float> step_degrees;
+    std::optional<CameraPath::Kind> path;
+    std::optional<int> depth;         // max recursion depth; unset: the scene's (5)
+    int threads = 0;                  // 0 = all cores
+    std::string out = "out";          // folder for the PNGs
+    bool compare = false;             // also render each frame uncached: speed-up, PSNR, difference PNG
+    bool quiet = false;               // no progress bar, no per-frame lines (summary only)
+    bool progress = false;            // force the progress bar even when stderr is not a terminal
+    bool help = false;
+};
+
+// Parses argv[1..argc-1]; accepts "--name value" and "--name=value". Validates ranges, not the scene
+// name (make_scene does) nor the output folder (ensure_writable_directory does).
+// Throws UsageError naming the option for unknown options, missing values, bad numbers, out of range.
+Options parse_options(int argc, const char* const argv[]);
+
+// The --help text; `program` is argv[0]'s file name.
+std::string help_text(const std::string& program);
+
+// The SceneParams the options ask for (--mesh).
+SceneParams scene_params(const Options& options);
+
+// Applies --frames/--step/--path/--depth to a scene built by make_scene.
+void apply_options(Scene& scene, const Options& options);
+
+// Creates `path` (and parents) when missing and checks a file can be written there.
+// Throws std::runtime_error with the path and the reason otherwise.
+void ensure_writable_directory(const std::string& path);
+
+} // namespace rcx

@@ -1,0 +1,112 @@
+// rcx/scene.hpp: the example scenes (after Ruff's thesis, ch. 5), their cameras and camera paths, shared by
+// every example tracer (Embree on the CPU, Vulkan compute); plain data, nothing renderer-specific.
+//
+// Conventions: world units, +Y up, the checkerboard floor is a large quad at y = floor_height; colours are
+// linear RGB; a direction need not be normalised unless stated.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace rcx {
+
+// How a surface shades (Whitted): local Phong term weighted by 1 - reflectivity - transparency, plus a
+// perfect mirror term and a refracted term split by Fresnel.
+struct Material {
+    glm::vec3 diffuse{0.8f};          // diffuse albedo (the first colour of a checkerboard)
+    float specular = 0.0f;            // Phong highlight weight, added on top (0 = none)
+    float shininess = 32.0f;          // Phong exponent
+    float reflectivity = 0.0f;        // weight of the perfect mirror ray, 0..1
+    float transparency = 0.0f;        // weight of the refracted part (split by Fresnel), 0..1
+    float ior = 1.5f;                 // index of refraction inside the object (outside is 1)
+    bool checker = false;             // checkerboard in world x/z: diffuse and checker_color alternate
+    glm::vec3 checker_color{0.1f};    // the second checkerboard colour
+    float checker_scale = 1.0f;       // side of one checkerboard square, world units
+    bool cached = false;              // this object gets a caching cube (its leaving rays may be cached)
+};
+
+struct Sphere {
+    glm::vec3 centre{0.0f};
+    float radius = 1.0f;
+    Material material;
+};
+
+// An indexed triangle mesh with one normal per vertex (normals.size() == positions.size()).
+struct Mesh {
+    std::string name;
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;
+    std::vector<glm::uvec3> triangles;
+    Material material;
+};
+
+struct PointLight {
+    glm::vec3 position{0.0f, 10.0f, 0.0f};
+    glm::vec3 intensity{1.0f};        // no fall-off with distance
+};
+
+// A pinhole camera; the image's aspect ratio comes from the image size.
+struct Camera {
+    glm::vec3 eye{0.0f, 0.0f, 5.0f};
+    glm::vec3 target{0.0f};
+    glm::vec3 up{0.0f, 1.0f, 0.0f};
+    float fov_y_degrees = 45.0f;      // vertical field of view
+};
+
+// How the camera moves from frame to frame, starting at the scene's camera (frame 0).
+struct CameraPath {
+    enum class Kind { fixed, orbit, pan };
+    Kind kind = Kind::fixed;
+    int frames = 1;                   // frames rendered by default
+    float step_degrees = 0.0f;        // rotation per frame
+    // The camera of `frame` (0 = start): orbit turns the eye about the +Y axis through the target (keeps
+    // the distance to the target); pan turns the view direction about +Y around the eye (keeps the eye).
+    Camera at(const Camera& start, int frame) const;
+};
+
+// "fixed", "orbit", "pan"; parse_path_kind throws std::invalid_argument for anything else.
+const char* to_string(CameraPath::Kind kind);
+CameraPath::Kind parse_path_kind(const std::string& text);
+
+struct Scene {
+    std::string name;
+    std::vector<Sphere> spheres;
+    std::vector<Mesh> meshes;         // the checkerboard floor is meshes[0] in every built-in scene
+    PointLight light;
+    glm::vec3 environment{0.0f};      // colour of rays that escape
+    float ambient = 0.1f;             // ambient light, times the diffuse colour
+    Camera camera;                    // the camera of frame 0
+    CameraPath path;
+    int max_depth = 5;                // recursion limit: primary rays are depth 0, a hit at depth max_depth
+                                      // spawns no reflected/refracted ray (shadow rays do not count)
+
+    Camera camera_at(int frame) const { return path.at(camera, frame); }
+    int cached_object_count() const;  // spheres and meshes whose material is cached
+};
+
+// What varies beyond the name.
+struct SceneParams {
+    std::string mesh_path = "/usr/share/assimp/models/PLY/Wuson.ply"; // the concave object of "concave"
+    // behind-N: the thesis caches only the main sphere (its extra spheres use plain ray tracing); the
+    // default caches them too. Set false to reproduce the thesis's setup.
+    bool cache_behind_spheres = true;
+};
+
+inline constexpr int max_behind_spheres = 32;
+inline constexpr float floor_height = -1.0f;
+
+// Builds a scene by name: "behind-N" (N = 0..32), "grid-32", "diffuse-31", "reflective-32",
+// "cone-cylinder", "concave", "glass". Throws std::invalid_argument listing the valid names for an
+// unknown name, std::runtime_error when a mesh file cannot be read (naming the Debian package).
+Scene make_scene(const std::string& name, const SceneParams& params = {});
+
+// One buildable name per scene, behind-N for N = 0, 1, 2, 4, 8, 16, 32 (the thesis's Table 5.1 rows).
+std::vector<std::string> scene_names();
+
+// The checkerboard floor of every built-in scene: a quad of side 2 * half_extent at y = height.
+Material checkerboard_material();
+Mesh checkerboard_floor(float height = floor_height, float half_extent = 100.0f);
+
+} // namespace rcx

@@ -1,0 +1,194 @@
+// Command-line parsing shared by the example tracers.
+#include "rcx/options.hpp"
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <system_error>
+
+namespace rcx {
+
+const char* to_string(CacheMode mode) {
+    switch (mode) {
+    case CacheMode::off: return "off";
+    case CacheMode::cct: return "cct";
+    case CacheMode::cdct: return "cdct";
+    case CacheMode::ceiling: return "ceiling";
+    }
+    return "?";
+}
+
+CacheMode parse_cache_mode(const std::string& text) {
+    if (text == "off") return CacheMode::off;
+    if (text == "cct") return CacheMode::cct;
+    if (text == "cdct") return CacheMode::cdct;
+    if (text == "ceiling") return CacheMode::ceiling;
+    throw UsageError("--cache: unknown mode '" + text + "'; use off, cct, cdct or ceiling");
+}
+
+namespace {
+
+long parse_int(const std::string& option, const std::string& text, long min, long max) {
+    errno = 0;
+    char* end = nullptr;
+    const long v = std::strtol(text.c_str(), &end, 10);
+    if (text.empty() || *end != '\0' || errno == ERANGE)
+        throw UsageError(option + ": '" + text + "' is not an integer");
+    if (v < min || v > max)
+        throw UsageError(option + ": " + text + " is out of range " + std::to_string(min) + ".." + std::to_string(max));
+    return v;
+}
+
+// A finite float; `positive` additionally requires > 0.
+float parse_float(const std::string& option, const std::string& text, bool positive) {
+    errno = 0;
+    char* end = nullptr;
+    const float v = std::strtof(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+        throw UsageError(option + ": '" + text + "' is not a finite number");
+    if (positive && !(v > 0.0f)) throw UsageError(option + ": must be > 0, got " + text);
+    return v;
+}
+
+constexpr long max_image_side = 16384;
+
+void parse_size(const std::string& text, Options& o) {
+    const std::size_t x = text.find_first_of("xX");
+    if (x == std::string::npos) throw UsageError("--size: '" + text + "' is not WIDTHxHEIGHT (for example 512x512)");
+    o.width = static_cast<int>(parse_int("--size (width)", text.substr(0, x), 1, max_image_side));
+    o.height = static_cast<int>(parse_int("--size (height)", text.substr(x + 1), 1, max_image_side));
+}
+
+} // namespace
+
+Options parse_options(int argc, const char* const argv[]) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        std::string arg = argv[i];
+        std::string value;
+        bool has_inline_value = false;
+        if (arg.rfind("--", 0) == 0) {
+            const std::size_t eq = arg.find('=');
+            if (eq != std::string::npos) {
+                value = arg.substr(eq + 1);
+                arg = arg.substr(0, eq);
+                has_inline_value = true;
+            }
+        }
+        auto flag = [&]() {
+            if (has_inline_value) throw UsageError(arg + " takes no value");
+        };
+        auto next = [&]() -> std::string {
+            if (has_inline_value) return value;
+            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
+            return argv[++i];
+        };
+        if (arg == "--help" || arg == "-h") { flag(); o.help = true; }
+        else if (arg == "--scene") o.scene = next();
+        else if (arg == "--mesh") {
+            o.mesh = next();
+            if (o.mesh.empty()) throw UsageError("--mesh: the file name is empty");
+        }
+        else if (arg == "--size") parse_size(next(), o);
+        else if (arg == "--width") o.width = static_cast<int>(parse_int(arg, next(), 1, max_image_side));
+        else if (arg == "--height") o.height = static_cast<int>(parse_int(arg, next(), 1, max_image_side));
+        else if (arg == "--cache") o.cache = parse_cache_mode(next());
+        else if (arg == "--face-size") o.face_size = static_cast<int>(parse_int(arg, next(), 1, 4096));
+        else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
+        else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
+        else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
+        else if (arg == "--frames") o.frames = static_cast<int>(parse_int(arg, next(), 1, 1000000));
+        else if (arg == "--step") o.step_degrees = parse_float(arg, next(), false);
+        else if (arg == "--path") {
+            const std::string v = next();
+            try {
+                o.path = parse_path_kind(v);
+            } catch (const std::invalid_argument&) {
+                throw UsageError("--path: unknown path '" + v + "'; use orbit, pan or fixed");
+            }
+        }
+        else if (arg == "--depth") o.depth = static_cast<int>(parse_int(arg, next(), 0, 64));
+        else if (arg == "--threads") o.threads = static_cast<int>(parse_int(arg, next(), 0, 4096));
+        else if (arg == "--out") {
+            o.out = next();
+            if (o.out.empty()) throw UsageError("--out: the folder name is empty");
+        }
+        else if (arg == "--compare") { flag(); o.compare = true; }
+        else if (arg == "--quiet" || arg == "-q") { flag(); o.quiet = true; }
+        else if (arg == "--progress") { flag(); o.progress = true; }
+        else throw UsageError("unknown option '" + std::string(argv[i]) + "' (see --help)");
+    }
+    return o;
+}
+
+std::string help_text(const std::string& program) {
+    return "Usage: " + program + " [options]\n"
+        "Renders a scene's camera path frame by frame, one PNG per frame, caching the rays that leave\n"
+        "reflective and refractive objects in per-object caching cubes (Ruff 2013).\n"
+        "\n"
+        "Scene and camera\n"
+        "  --scene NAME        behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder,\n"
+        "                      concave, glass                                        [behind-32]\n"
+        "  --mesh FILE         the concave object of scene concave (any format Assimp reads)\n"
+        "                      [/usr/share/assimp/models/PLY/Wuson.ply, Debian: assimp-testmodels]\n"
+        "  --size WxH          image size (or --width W --height H)                  [512x512]\n"
+        "  --frames N          frames to render                      [the scene's path: 10]\n"
+        "  --step DEGREES      camera rotation per frame             [the scene's path: 1]\n"
+        "  --path KIND         orbit (eye around the target), pan (view around the eye), fixed\n"
+        "  --depth N           maximum recursion depth (primary rays are depth 0)     [5]\n"
+        "Cache\n"
+        "  --cache MODE        off, cct (colour), cdct (colour + depth), ceiling (constant colour,\n"
+        "                      no tracing: the best any cache could do)               [cct]\n"
+        "  --face-size N       texels per cube face side, 1..4096                     [512]\n"
+        "  --delta F           CDCT relief search step, world units                   [0.2]\n"
+        "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
+        "  --max-steps N       CDCT linear steps before giving up                     [1024]\n"
+        "Run\n"
+        "  --threads N         worker threads, 0 = all cores                          [0]\n"
+        "  --out DIR           folder for the PNGs (created when missing)             [out]\n"
+        "  --compare           also render every frame with the cache off: speed-up, PSNR, mean/max\n"
+        "                      error, and a difference PNG (blue = equal ... red = different)\n"
+        "  --quiet             only the summary; no progress bar\n"
+        "  --progress          draw the progress bar even when stderr is not a terminal\n"
+        "  --help              this text\n"
+        "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input.\n";
+}
+
+SceneParams scene_params(const Options& options) {
+    SceneParams p;
+    if (!options.mesh.empty()) p.mesh_path = options.mesh;
+    return p;
+}
+
+void apply_options(Scene& scene, const Options& options) {
+    if (options.frames) scene.path.frames = *options.frames;
+    if (options.step_degrees) scene.path.step_degrees = *options.step_degrees;
+    if (options.path) scene.path.kind = *options.path;
+    if (options.depth) scene.max_depth = *options.depth;
+}
+
+void ensure_writable_directory(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::exists(path, ec) && !fs::is_directory(path, ec))
+        throw std::runtime_error("output folder '" + path + "' is a file, not a folder; choose another --out");
+    fs::create_directories(path, ec);
+    if (ec) throw std::runtime_error("cannot create output folder '" + path + "': " + ec.message() + "; choose another --out");
+    // Probe with a real file: permissions alone do not tell (read-only mounts, ACLs, root).
+    const fs::path probe = fs::path(path) / (".rcx-write-test-" + std::to_string(
+        std::chrono::steady_clock::now().time_since_epoch().count()));
+    {
+        std::ofstream f(probe);
+        if (!f || !(f << "x") || !f.flush())
+            throw std::runtime_error("cannot write into output folder '" + path + "': " + std::strerror(errno) +
+                                     "; choose another --out");
+    }
+    fs::remove(probe, ec);
+}
+
+} // namespace rcx

@@ -1,0 +1,298 @@
+// The example scenes. Layout notes per scene are next to their builders; every scene stands on the
+// checkerboard floor (meshes[0], y = floor_height) and is lit by one point light.
+#include "rcx/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "rcx/meshes.hpp"
+
+namespace rcx {
+
+namespace {
+
+constexpr float pi = 3.14159265358979323846f;
+
+glm::vec3 rotate_y(const glm::vec3& v, float degrees) {
+    const float a = degrees * pi / 180.0f;
+    const float c = std::cos(a), s = std::sin(a);
+    return {c * v.x + s * v.z, v.y, -s * v.x + c * v.z};
+}
+
+// Distinct, saturated colours for the coloured balls; index wraps around.
+glm::vec3 palette(std::size_t i) {
+    static const glm::vec3 colors[] = {
+        {0.85f, 0.15f, 0.12f}, {0.15f, 0.65f, 0.20f}, {0.15f, 0.30f, 0.85f}, {0.90f, 0.75f, 0.10f},
+        {0.70f, 0.20f, 0.75f}, {0.10f, 0.70f, 0.75f}, {0.95f, 0.45f, 0.10f}, {0.55f, 0.80f, 0.25f},
+    };
+    return colors[i % (sizeof colors / sizeof colors[0])];
+}
+
+Material mirror(float reflectivity, glm::vec3 tint = glm::vec3(0.9f)) {
+    Material m;
+    m.diffuse = tint;
+    m.reflectivity = reflectivity;
+    m.specular = 0.6f;
+    m.shininess = 96.0f;
+    m.cached = true;
+    return m;
+}
+
+Material matte(glm::vec3 color) {
+    Material m;
+    m.diffuse = color;
+    m.specular = 0.3f;
+    m.shininess = 32.0f;
+    return m;
+}
+
+// The parts every scene shares: floor, light, sky, depth; the camera orbits 1 degree a frame, 10 frames.
+Scene base_scene(const std::string& name) {
+    Scene s;
+    s.name = name;
+    s.meshes.push_back(checkerboard_floor());
+    s.light.position = {-5.0f, 9.0f, 1.0f};
+    s.light.intensity = glm::vec3(1.0f);
+    s.environment = {0.40f, 0.55f, 0.75f};
+    s.ambient = 0.1f;
+    s.max_depth = 5;
+    s.path.kind = CameraPath::Kind::orbit;
+    s.path.frames = 10;
+    s.path.step_degrees = 1.0f;
+    return s;
+}
+
+Sphere on_floor(float x, float z, float radius, const Material& m) {
+    return Sphere{{x, floor_height + radius, z}, radius, m};
+}
+
+// Figure 5.2 / Table 5.1: the main mirror sphere (r = 1 at the origin) faces the camera, which is 3.2 away
+// and sees it fill about 80% of a square image; n extra mirror spheres stand behind the camera in a curved
+// wall of 8 x 4 slots (filled nearest to the wall's centre first), visible only in the main sphere.
+Scene behind(int n, const SceneParams& params) {
+    Scene s = base_scene("behind-" + std::to_string(n));
+    s.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f, mirror(0.85f)});
+
+    struct Slot { glm::vec3 centre; float key; };
+    std::vector<Slot> slots;
+    const float r = 0.7f;
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 8; ++col) {
+            const float x = (static_cast<float>(col) - 3.5f) * 1.5f;
+            const float y = floor_height + r + 1.5f * static_cast<float>(row);
+            const float z = 4.5f + 0.06f * x * x; // curved towards the main sphere
+            const glm::vec3 c(x, y, z);
+            slots.push_back({c, glm::length(c - glm::vec3(0.0f, 1.0f, 4.5f))});
+        }
+    std::stable_sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) { return a.key < b.key; });
+    for (int i = 0; i < n; ++i) {
+        Material m = mirror(0.7f, palette(static_cast<std::size_t>(i)));
+        m.cached = params.cache_behind_spheres;
+        s.spheres.push_back(Sphere{slots[static_cast<std::size_t>(i)].centre, r, m});
+    }
+    s.camera.eye = {0.0f, 0.35f, 3.2f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y_degrees = 45.0f;
+    return s;
+}
+
+// Figure 1.1 / 3.4 / Table 5.2: an 8 x 4 grid of tinted mirror spheres on the floor, in front of the camera.
+Scene grid32() {
+    Scene s = base_scene("grid-32");
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 8; ++col) {
+            const float x = (static_cast<float>(col) - 3.5f) * 1.4f;
+            const float z = -1.4f * static_cast<float>(row);
+            s.spheres.push_back(on_floor(x, z, 0.5f, mirror(0.8f, palette(static_cast<std::size_t>(row * 8 + col)))));
+        }
+    s.camera.eye = {0.0f, 3.0f, 7.0f};
+    s.camera.target = {0.0f, -0.6f, -2.1f};
+    s.camera.fov_y_degrees = 50.0f;
+    return s;
+}
+
+// Table 5.3 (Figure 5.6): a mirror sphere (r = 1 at the origin) inside two rings of 11 + 20 balls.
+Scene ring_scene(const std::string& name, bool reflective) {
+    Scene s = base_scene(name);
+    s.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f, mirror(0.9f)});
+    auto ring = [&](int count, float radius, float ball, std::size_t colour0) {
+        for (int i = 0; i < count; ++i) {
+            // Half a step off the +Z axis, so no ball sits between the camera and the main sphere.
+            const float a = (static_cast<float>(i) + 0.5f) * 2.0f * pi / static_cast<float>(count);
+            const glm::vec3 colour = palette(colour0 + static_cast<std::size_t>(i));
+            const Material m = reflective ? mirror(0.75f, colour) : matte(colour);
+            s.spheres.push_back(on_floor(radius * std::sin(a), radius * std::cos(a), ball, m));
+        }
+    };
+    ring(11, 2.3f, 0.4f, 0);
+    ring(20, 3.7f, 0.45f, 3);
+    s.camera.eye = {0.0f, 3.6f, 7.5f};
+    s.camera.target = {0.0f, -0.4f, 0.0f};
+    s.camera.fov_y_degrees = 42.0f;
+    return s;
+}
+
+// Figure 5.10: a mirror cone and a mirror cylinder (triangle meshes, cached), coloured balls around.
+Scene cone_cylinder() {
+    Scene s = base_scene("cone-cylinder");
+    Mesh cone = make_cone(0.9f, 2.2f, 96);
+    translate_mesh(cone, {-1.2f, floor_height, 0.0f});
+    cone.material = mirror(0.85f);
+    Mesh cylinder = make_cylinder(0.8f, 1.8f, 96);
+    translate_mesh(cylinder, {1.2f, floor_height, 0.0f});
+    cylinder.material = mirror(0.85f);
+    s.meshes.push_back(std::move(cone));
+    s.meshes.push_back(std::move(cylinder));
+    const glm::vec2 balls[] = {{-3.0f, -1.5f}, {0.0f, -2.5f}, {3.0f, -1.5f}, {-2.6f, 1.8f}, {2.8f, 1.6f}};
+    for (std::size_t i = 0; i < 5; ++i) s.spheres.push_back(on_floor(balls[i].x, balls[i].y, 0.5f, matte(palette(i))));
+    s.camera.eye = {0.0f, 1.6f, 6.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y_degrees = 45.0f;
+    return s;
+}
+
+// Figure 5.11: a concave mirror object (the Wuson, from assimp-testmodels) and a mirror torus, both cached.
+Scene concave(const SceneParams& params) {
+    Scene s = base_scene("concave");
+    Mesh wuson;
+    try {
+        wuson = load_mesh(params.mesh_path);
+    } catch (const std::exception& e) {
+        if (params.mesh_path != SceneParams{}.mesh_path) throw;
+        throw std::runtime_error(std::string(e.what()) +
+                                 " (scene 'concave' needs the Wuson model; on Debian/Ubuntu: "
+                                 "apt-get install assimp-testmodels)");
+    }
+    wuson.name = "wuson";
+    rotate_mesh(wuson, {0.0f, 1.0f, 0.0f}, -55.0f); // Y-up, body along Z: turn it three-quarters to the camera
+    fit_mesh(wuson, {0.0f, 0.0f, 0.0f}, 2.4f);
+    const Bounds b = mesh_bounds(wuson);
+    translate_mesh(wuson, {-1.2f, floor_height - b.min.y, 0.0f});
+    wuson.material = mirror(0.85f);
+    Mesh torus = make_torus(0.7f, 0.25f, 96, 48);
+    rotate_mesh(torus, {1.0f, 0.0f, 0.0f}, 70.0f); // nearly upright, its hole facing the camera
+    translate_mesh(torus, {1.7f, floor_height + 0.97f, -0.5f});
+    torus.material = mirror(0.85f);
+    s.meshes.push_back(std::move(wuson));
+    s.meshes.push_back(std::move(torus));
+    const glm::vec2 balls[] = {{-3.0f, -1.8f}, {0.4f, -2.4f}, {3.4f, -1.4f}, {2.8f, 2.2f}};
+    for (std::size_t i = 0; i < 4; ++i) s.spheres.push_back(on_floor(balls[i].x, balls[i].y, 0.5f, matte(palette(i))));
+    s.camera.eye = {0.0f, 1.6f, 5.0f};
+    s.camera.target = {0.0f, -0.2f, 0.0f};
+    s.camera.fov_y_degrees = 45.0f;
+    return s;
+}
+
+// A glass ball (refraction with Fresnel, cached) over the checkerboard, coloured balls behind it.
+Scene glass() {
+    Scene s = base_scene("glass");
+    Material g;
+    g.diffuse = glm::vec3(1.0f);
+    g.transparency = 1.0f;
+    g.ior = 1.5f;
+    g.specular = 0.6f;
+    g.shininess = 128.0f;
+    g.cached = true;
+    s.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f, g});
+    const glm::vec2 balls[] = {{-1.8f, -2.5f}, {0.0f, -3.5f}, {1.9f, -2.2f}, {-0.9f, -5.0f}};
+    for (std::size_t i = 0; i < 4; ++i) s.spheres.push_back(on_floor(balls[i].x, balls[i].y, 0.6f, matte(palette(i))));
+    s.camera.eye = {0.0f, 0.8f, 4.5f};
+    s.camera.target = {0.0f, -0.1f, 0.0f};
+    s.camera.fov_y_degrees = 42.0f;
+    return s;
+}
+
+const char* const valid_names =
+    "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, glass";
+
+} // namespace
+
+Camera CameraPath::at(const Camera& start, int frame) const {
+    Camera c = start;
+    const float angle = step_degrees * static_cast<float>(frame);
+    switch (kind) {
+    case Kind::fixed: break;
+    case Kind::orbit:
+        c.eye = start.target + rotate_y(start.eye - start.target, angle);
+        c.up = rotate_y(start.up, angle);
+        break;
+    case Kind::pan:
+        c.target = start.eye + rotate_y(start.target - start.eye, angle);
+        c.up = rotate_y(start.up, angle);
+        break;
+    }
+    return c;
+}
+
+const char* to_string(CameraPath::Kind kind) {
+    switch (kind) {
+    case CameraPath::Kind::fixed: return "fixed";
+    case CameraPath::Kind::orbit: return "orbit";
+    case CameraPath::Kind::pan: return "pan";
+    }
+    return "?";
+}
+
+CameraPath::Kind parse_path_kind(const std::string& text) {
+    if (text == "fixed") return CameraPath::Kind::fixed;
+    if (text == "orbit") return CameraPath::Kind::orbit;
+    if (text == "pan") return CameraPath::Kind::pan;
+    throw std::invalid_argument("unknown camera path '" + text + "'; valid paths: orbit, pan, fixed");
+}
+
+int Scene::cached_object_count() const {
+    int n = 0;
+    for (const Sphere& s : spheres) n += s.material.cached ? 1 : 0;
+    for (const Mesh& m : meshes) n += m.material.cached ? 1 : 0;
+    return n;
+}
+
+Material checkerboard_material() {
+    Material m;
+    m.diffuse = glm::vec3(0.85f);
+    m.checker = true;
+    m.checker_color = glm::vec3(0.12f);
+    m.checker_scale = 1.0f;
+    return m;
+}
+
+Mesh checkerboard_floor(float height, float half_extent) {
+    Mesh m;
+    m.name = "floor";
+    const float e = half_extent;
+    m.positions = {{-e, height, -e}, {e, height, -e}, {e, height, e}, {-e, height, e}};
+    m.normals.assign(4, glm::vec3(0.0f, 1.0f, 0.0f));
+    m.triangles = {{0, 2, 1}, {0, 3, 2}}; // counter-clockwise seen from above
+    m.material = checkerboard_material();
+    return m;
+}
+
+Scene make_scene(const std::string& name, const SceneParams& params) {
+    const std::string prefix = "behind-";
+    if (name.compare(0, prefix.size(), prefix) == 0) {
+        const std::string digits = name.substr(prefix.size());
+        const bool all_digits = !digits.empty() && digits.size() <= 3 &&
+                                std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+        const int n = all_digits ? std::stoi(digits) : -1;
+        if (n < 0 || n > max_behind_spheres)
+            throw std::invalid_argument("scene '" + name + "': behind-N takes N = 0.." +
+                                        std::to_string(max_behind_spheres) + "; valid scenes: " + valid_names);
+        return behind(n, params);
+    }
+    if (name == "grid-32") return grid32();
+    if (name == "diffuse-31") return ring_scene(name, false);
+    if (name == "reflective-32") return ring_scene(name, true);
+    if (name == "cone-cylinder") return cone_cylinder();
+    if (name == "concave") return concave(params);
+    if (name == "glass") return glass();
+    throw std::invalid_argument("unknown scene '" + name + "'; valid scenes: " + valid_names);
+}
+
+std::vector<std::string> scene_names() {
+    return {"behind-0", "behind-1",   "behind-2",      "behind-4",      "behind-8", "behind-16", "behind-32",
+            "grid-32",  "diffuse-31", "reflective-32", "cone-cylinder", "concave",  "glass"};
+}
+
+} // namespace rcx
