@@ -1,0 +1,215 @@
+// raycache_embree_whitted: a Whitted ray tracer on Embree 3 whose reflective and refractive objects cache
+// the rays leaving them in per-object caching cubes (Ruff 2013). Renders a scene's camera path frame by
+// frame, the caches persisting across frames, and prints per frame: time, rays traced, cache hit rate and
+// fill. With --compare it also renders every frame uncached and prints the speed-up and the image error.
+//
+//   raycache_embree_whitted --scene behind-32 --size 512x512 --cache cct --frames 10 --compare
+//
+// This file is only the command line; the tracer is tracer.hpp/.cpp.
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rcx/image.hpp"
+#include "rcx/options.hpp"
+#include "rcx/progress.hpp"
+#include "rcx/scene.hpp"
+#include "tracer.hpp"
+
+
+namespace {
+
+// Bad input: message on stderr, exit status 2.
+struct InputError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct FrameRecord {
+    double cached_ms = 0.0;
+    double uncached_ms = 0.0;
+    double psnr_db = 0.0;
+    double mean_error = 0.0;
+    double max_error = 0.0;
+    double hit_rate = -1.0;
+};
+
+std::string frame_path(const rcx::Options& o, const std::string& scene, const char* what, int frame) {
+    char name[256];
+    std::snprintf(name, sizeof name, "%s-%s-%04d.png", scene.c_str(), what, frame);
+    return (std::filesystem::path(o.out) / name).string();
+}
+
+std::string percent(double fraction) {
+    if (fraction < 0.0) return "    -";
+    char text[32];
+    std::snprintf(text, sizeof text, "%5.1f%%", 100.0 * fraction);
+    return text;
+}
+
+std::string psnr_text(double db) {
+    if (std::isinf(db)) return "   inf";
+    char text[32];
+    std::snprintf(text, sizeof text, "%6.2f", db);
+    return text;
+}
+
+int run(const rcx::Options& o) {
+    rcx::Scene scene;
+    try {
+        scene = rcx::make_scene(o.scene, rcx::scene_params(o));
+        rcx::apply_options(scene, o);
+        rcx::ensure_writable_directory(o.out);
+    } catch (const std::exception& e) {
+        throw InputError(e.what());
+    }
+
+    rcx::embree::Tracer tracer(scene);
+    rcx::embree::RenderSettings settings;
+    settings.width = o.width;
+    settings.height = o.height;
+    settings.mode = o.cache;
+    settings.threads = o.threads;
+
+    std::unique_ptr<raycache::embree::SceneCache> caches;
+    if (o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct) {
+        raycache::ReliefParameters relief;
+        relief.step = o.delta;
+        relief.epsilon = o.epsilon;
+        relief.max_steps = o.max_steps;
+        try {
+            caches = std::make_unique<raycache::embree::SceneCache>(
+                o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct, relief);
+            tracer.attach_caches(*caches, o.face_size);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(e.what());
+        }
+        settings.caches = caches.get();
+    }
+
+    const int frames = scene.path.frames;
+    if (!o.quiet) {
+        std::printf("scene %s: %zu spheres, %zu meshes, %d cached objects; %dx%d, depth %d, %s path, %d frames of %.2f deg\n",
+                    scene.name.c_str(), scene.spheres.size(), scene.meshes.size(), scene.cached_object_count(),
+                    o.width, o.height, scene.max_depth, rcx::to_string(scene.path.kind), frames,
+                    static_cast<double>(scene.path.step_degrees));
+        std::printf("cache %s", rcx::to_string(o.cache));
+        if (o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct) std::printf(", faces %dx%d", o.face_size, o.face_size);
+        if (o.cache == rcx::CacheMode::cdct)
+            std::printf(", delta %g, epsilon %g, max steps %d", static_cast<double>(o.delta), static_cast<double>(o.epsilon), o.max_steps);
+        std::printf("; threads %s; PNGs in %s\n", o.threads > 0 ? std::to_string(o.threads).c_str() : "all", o.out.c_str());
+        std::printf("frame         ms   rays traced  hit rate  filled%s\n",
+                    o.compare ? "    uncached ms  speed-up   PSNR dB  mean err  max err  differing" : "");
+        std::fflush(stdout);
+    }
+
+    rcx::ProgressBar bar("rendering", frames * (o.compare ? 2 : 1), rcx::progress_enabled(o.quiet, o.progress));
+    std::vector<FrameRecord> records;
+    std::size_t cache_bytes = 0;
+    for (int f = 0; f < frames; ++f) {
+        const rcx::Camera camera = scene.camera_at(f);
+        FrameRecord r;
+        rcx::embree::FrameStats stats;
+        const rcx::Image image = tracer.render(camera, settings, &stats);
+        r.cached_ms = stats.milliseconds;
+        bar.advance();
+        double filled = -1.0;
+        if (settings.caches) {
+            const raycache::embree::SceneCacheStatistics s = settings.caches->begin_frame();
+            r.hit_rate = s.hit_rate();
+            filled = s.valid_fraction();
+            cache_bytes = s.texel_bytes;
+        }
+        rcx::write_png(frame_path(o, scene.name, rcx::to_string(o.cache), f), image);
+
+        rcx::ImageDifference diff;
+        if (o.compare) {
+            rcx::embree::RenderSettings plain = settings;
+            plain.mode = rcx::CacheMode::off;
+            plain.caches = nullptr;
+            rcx::embree::FrameStats plain_stats;
+            const rcx::Image reference = tracer.render(camera, plain, &plain_stats);
+            bar.advance();
+            r.uncached_ms = plain_stats.milliseconds;
+            diff = rcx::compare(image, reference);
+            r.psnr_db = diff.psnr_db;
+            r.mean_error = diff.mean_abs_error;
+            r.max_error = diff.max_abs_error;
+            rcx::write_png(frame_path(o, scene.name, "reference", f), reference);
+            rcx::write_png(frame_path(o, scene.name, (std::string(rcx::to_string(o.cache)) + "-diff").c_str(), f),
+                           rcx::difference_image(image, reference));
+        }
+        records.push_back(r);
+
+        if (!o.quiet) {
+            bar.clear();
+            std::printf("%5d %10.2f %13llu   %s  %s", f, r.cached_ms, static_cast<unsigned long long>(stats.rays),
+                        percent(r.hit_rate).c_str(), percent(filled).c_str());
+            if (o.compare)
+                std::printf(" %12.2f %8.2fx   %s  %8.5f %8.4f   %s", r.uncached_ms, r.uncached_ms / r.cached_ms,
+                            psnr_text(r.psnr_db).c_str(), r.mean_error, r.max_error,
+                            percent(static_cast<double>(diff.differing_pixels) / static_cast<double>(diff.pixels)).c_str());
+            std::printf("\n");
+            std::fflush(stdout);
+        }
+    }
+    bar.finish();
+
+    // Summary: means over all frames and over the frames after the first (warm caches).
+    double cached_all = 0, cached_warm = 0, plain_all = 0, plain_warm = 0, psnr_min = std::numeric_limits<double>::infinity();
+    double psnr_sum = 0;
+    int psnr_finite = 0;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+        cached_all += records[i].cached_ms;
+        plain_all += records[i].uncached_ms;
+        if (i > 0) cached_warm += records[i].cached_ms, plain_warm += records[i].uncached_ms;
+        psnr_min = std::min(psnr_min, records[i].psnr_db);
+        if (std::isfinite(records[i].psnr_db)) psnr_sum += records[i].psnr_db, ++psnr_finite;
+    }
+    const double n = static_cast<double>(records.size());
+    const double warm = n > 1 ? n - 1 : 1;
+    std::printf("summary %s, %dx%d, cache %s: mean %.2f ms/frame (%.2f ms after the first)",
+                scene.name.c_str(), o.width, o.height, rcx::to_string(o.cache), cached_all / n,
+                records.size() > 1 ? cached_warm / warm : cached_all / n);
+    if (cache_bytes) std::printf(", cubes %.1f MiB", static_cast<double>(cache_bytes) / (1024.0 * 1024.0));
+    std::printf("\n");
+    if (o.compare) {
+        const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;
+        std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame;"
+                    " PSNR min %s dB, mean of finite %s dB (%d of %zu frames identical)\n",
+                    plain_all / n, records.size() > 1 ? plain_warm / warm : plain_all / n, speedup,
+                    psnr_text(psnr_min).c_str(), psnr_finite ? psnr_text(psnr_sum / psnr_finite).c_str() : "     -",
+                    static_cast<int>(records.size()) - psnr_finite, records.size());
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_embree_whitted").filename().string();
+    rcx::Options options;
+    try {
+        options = rcx::parse_options(argc, argv);
+    } catch (const rcx::UsageError& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        return 2;
+    }
+    if (options.help) {
+        std::fputs(rcx::help_text(program).c_str(), stdout);
+        return 0;
+    }
+    try {
+        return run(options);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: error: %s\n", program.c_str(), e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,348 @@
+// The Embree Whitted tracer core; see tracer.hpp.
+#include "tracer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <raycache/embree/scene_cache.hpp>
+
+namespace rcx::embree {
+
+namespace {
+
+constexpr int tile_size = 8;
+constexpr float infinity = std::numeric_limits<float>::infinity();
+
+// What an Embree geometry id stands for.
+struct ObjectRef {
+    bool is_sphere = true;
+    std::size_t index = 0; // into scene.spheres or scene.meshes
+};
+
+void embree_error(void* user, RTCError code, const char* message) {
+    auto* last = static_cast<std::string*>(user);
+    if (last->empty()) *last = "Embree error " + std::to_string(static_cast<int>(code)) + ": " + (message ? message : "");
+}
+
+// Ray offset from a surface: relative to the size of the coordinates, so far-away floor points work too.
+float surface_epsilon(const glm::vec3& p) {
+    const float m = std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z)));
+    return 1e-4f * std::max(1.0f, m);
+}
+
+// Schlick's approximation of the Fresnel reflectance from refractive index n1 into n2; cos_i = cos of the
+// incidence angle, cos_t of the transmitted one (used when leaving the denser medium).
+float schlick(float n1, float n2, float cos_i, float cos_t) {
+    const float r0 = (n1 - n2) / (n1 + n2);
+    const float c = n1 <= n2 ? cos_i : cos_t;
+    const float x = 1.0f - c;
+    return r0 * r0 + (1.0f - r0 * r0) * x * x * x * x * x;
+}
+
+} // namespace
+
+struct Tracer::Impl {
+    Scene scene;
+    std::string error;
+    RTCDevice device = nullptr;
+    RTCScene rtc = nullptr;
+    std::vector<ObjectRef> objects; // by Embree geometry id
+
+    void check(const char* what) const {
+        if (!error.empty()) throw std::runtime_error(std::string("Embree tracer: ") + what + ": " + error);
+        const RTCError e = rtcGetDeviceError(device);
+        if (e != RTC_ERROR_NONE)
+            throw std::runtime_error(std::string("Embree tracer: ") + what + ": Embree error " + std::to_string(static_cast<int>(e)));
+    }
+
+    void attach(RTCGeometry g, ObjectRef ref) {
+        rtcCommitGeometry(g);
+        const unsigned id = rtcAttachGeometry(rtc, g);
+        rtcReleaseGeometry(g);
+        if (objects.size() <= id) objects.resize(id + 1);
+        objects[id] = ref;
+    }
+
+    const Material& material(unsigned geom) const {
+        const ObjectRef& r = objects[geom];
+        return r.is_sphere ? scene.spheres[r.index].material : scene.meshes[r.index].material;
+    }
+};
+
+namespace {
+
+// One tile's worth of shading state: counters only, so tiles share nothing mutable but the caches.
+struct Shader {
+    const Tracer::Impl& t;
+    CacheMode mode;
+    raycache::embree::SceneCache* caches;
+    FrameStats stats{};
+
+    raycache::TracedRay trace(const glm::vec3& origin, const glm::vec3& direction, int depth) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRayHit rh{};
+        rh.ray.org_x = origin.x;
+        rh.ray.org_y = origin.y;
+        rh.ray.org_z = origin.z;
+        rh.ray.dir_x = direction.x;
+        rh.ray.dir_y = direction.y;
+        rh.ray.dir_z = direction.z;
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = infinity;
+        rh.ray.mask = 0xFFFFFFFFu; // Debian's Embree is built with ray masks: a zero mask hits nothing
+        rh.ray.flags = 0;
+        rh.ray.time = 0.0f;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(t.rtc, &context, &rh);
+        ++stats.rays;
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {t.scene.environment, infinity};
+        return {shade(rh, origin, direction, depth), rh.ray.tfar};
+    }
+
+    bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRay ray{};
+        ray.org_x = origin.x;
+        ray.org_y = origin.y;
+        ray.org_z = origin.z;
+        ray.dir_x = direction.x;
+        ray.dir_y = direction.y;
+        ray.dir_z = direction.z;
+        ray.tnear = 0.0f;
+        ray.tfar = distance;
+        ray.mask = 0xFFFFFFFFu;
+        ray.flags = 0;
+        ray.time = 0.0f;
+        rtcOccluded1(t.rtc, &context, &ray);
+        ++stats.shadow_rays;
+        return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
+    }
+
+    // The colour brought back by the ray leaving object `geom` from `origin` in unit `direction`: the one
+    // place where the cache plugs in.
+    glm::vec3 leaving(unsigned geom, unsigned inst, const Material& m, const glm::vec3& origin,
+                      const glm::vec3& direction, int depth) {
+        auto trace_leaving = [&] { return trace(origin, direction, depth + 1); };
+        if (!m.cached) return trace_leaving().color;
+        ++stats.leaving_rays;
+        switch (mode) {
+        case CacheMode::off: return trace_leaving().color;
+        case CacheMode::ceiling: return t.scene.environment; // any constant: the cost of no tracing at all
+        case CacheMode::cct:
+        case CacheMode::cdct:
+            return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, trace_leaving);
+        }
+        return trace_leaving().color;
+    }
+
+    glm::vec3 shade(const RTCRayHit& rh, const glm::vec3& origin, const glm::vec3& d, int depth) {
+        const Scene& scene = t.scene;
+        const unsigned geom = rh.hit.geomID;
+        const ObjectRef& ref = t.objects[geom];
+        const Material& m = t.material(geom);
+        const glm::vec3 p = origin + rh.ray.tfar * d;
+
+        // Outward normals: geometric (which side of the surface we are on) and shading (lighting).
+        glm::vec3 ng, ns;
+        if (ref.is_sphere) {
+            ng = ns = glm::normalize(p - scene.spheres[ref.index].centre);
+        } else {
+            const Mesh& mesh = scene.meshes[ref.index];
+            const glm::uvec3 tri = mesh.triangles[rh.hit.primID];
+            const float u = rh.hit.u, v = rh.hit.v;
+            ns = glm::normalize((1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z]);
+            ng = glm::cross(mesh.positions[tri.y] - mesh.positions[tri.x], mesh.positions[tri.z] - mesh.positions[tri.x]);
+            ng = glm::normalize(glm::dot(ng, ns) < 0.0f ? -ng : ng); // trust the vertex normals' side
+        }
+        const bool inside = glm::dot(d, ng) > 0.0f; // the ray comes from the inside of the object
+        const glm::vec3 nf = inside ? -ng : ng;     // geometric normal facing the ray
+        glm::vec3 n = inside ? -ns : ns;            // shading normal facing the ray
+        if (glm::dot(n, d) >= 0.0f) n = nf;         // interpolated normal turned away: fall back
+        const float eps = surface_epsilon(p);
+        const glm::vec3 above = p + eps * nf;       // origin of rays leaving on the ray's side
+        const glm::vec3 below = p - eps * nf;       // origin of rays crossing the surface
+
+        glm::vec3 base = m.diffuse;
+        if (m.checker) {
+            const float s = m.checker_scale > 0.0f ? m.checker_scale : 1.0f;
+            const long cell = static_cast<long>(std::floor(p.x / s)) + static_cast<long>(std::floor(p.z / s));
+            if (cell & 1) base = m.checker_color;
+        }
+        const float local = std::max(0.0f, 1.0f - m.reflectivity - m.transparency);
+
+        glm::vec3 color(0.0f);
+        if (!inside) {
+            color += scene.ambient * local * base;
+            const glm::vec3 to_light = scene.light.position - p;
+            const float distance = glm::length(to_light);
+            const glm::vec3 l = to_light / distance;
+            const float n_dot_l = glm::dot(n, l);
+            if (n_dot_l > 0.0f && glm::dot(nf, l) > 0.0f && !occluded(above, l, distance - eps)) {
+                color += scene.light.intensity * (local * n_dot_l) * base;
+                if (m.specular > 0.0f) {
+                    const float r_dot_v = glm::dot(glm::reflect(-l, n), -d);
+                    if (r_dot_v > 0.0f) color += scene.light.intensity * (m.specular * std::pow(r_dot_v, m.shininess));
+                }
+            }
+        }
+        if (depth >= scene.max_depth) return color;
+
+        const unsigned inst = rh.hit.instID[0];
+        const float cos_i = -glm::dot(d, n);
+        const glm::vec3 mirrored = glm::normalize(d + 2.0f * cos_i * n);
+        if (m.reflectivity > 0.0f && !inside) color += m.reflectivity * leaving(geom, inst, m, above, mirrored, depth);
+
+        if (m.transparency > 0.0f) {
+            const float n1 = inside ? m.ior : 1.0f, n2 = inside ? 1.0f : m.ior;
+            const float eta = n1 / n2;
+            const float sin2_t = eta * eta * (1.0f - cos_i * cos_i);
+            glm::vec3 transmitted(0.0f);
+            float fresnel = 1.0f; // total internal reflection
+            if (sin2_t < 1.0f) {
+                const float cos_t = std::sqrt(1.0f - sin2_t);
+                fresnel = schlick(n1, n2, cos_i, cos_t);
+                const glm::vec3 t_dir = glm::normalize(eta * d + (eta * cos_i - cos_t) * n);
+                // Entering: an ordinary ray inside the object. Leaving: the ray that leaves the object.
+                transmitted = inside ? leaving(geom, inst, m, below, t_dir, depth) : trace(below, t_dir, depth + 1).color;
+            }
+            glm::vec3 reflected(0.0f);
+            if (fresnel > 0.0f)
+                reflected = inside ? trace(above, mirrored, depth + 1).color // stays inside: not a leaving ray
+                                   : leaving(geom, inst, m, above, mirrored, depth);
+            color += m.transparency * (fresnel * reflected + (1.0f - fresnel) * transmitted);
+        }
+        return color;
+    }
+};
+
+} // namespace
+
+Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+    Impl& t = *impl_;
+    t.scene = scene;
+    t.device = rtcNewDevice(nullptr);
+    if (!t.device)
+        throw std::runtime_error("Embree tracer: cannot create an Embree device (error " +
+                                 std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+    rtcSetDeviceErrorFunction(t.device, embree_error, &t.error);
+    t.rtc = rtcNewScene(t.device);
+
+    for (std::size_t i = 0; i < t.scene.spheres.size(); ++i) {
+        const Sphere& s = t.scene.spheres[i];
+        RTCGeometry g = rtcNewGeometry(t.device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+        t.check("sphere vertex buffer");
+        v[0] = s.centre.x;
+        v[1] = s.centre.y;
+        v[2] = s.centre.z;
+        v[3] = s.radius;
+        t.attach(g, {true, i});
+    }
+    for (std::size_t i = 0; i < t.scene.meshes.size(); ++i) {
+        const Mesh& m = t.scene.meshes[i];
+        if (m.normals.size() != m.positions.size())
+            throw std::invalid_argument("Embree tracer: mesh '" + m.name + "' needs one normal per vertex");
+        for (const glm::uvec3& tri : m.triangles)
+            if (tri.x >= m.positions.size() || tri.y >= m.positions.size() || tri.z >= m.positions.size())
+                throw std::invalid_argument("Embree tracer: mesh '" + m.name + "' has a vertex index out of range");
+        RTCGeometry g = rtcNewGeometry(t.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), m.positions.size()));
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), m.triangles.size()));
+        t.check("mesh buffers");
+        for (std::size_t k = 0; k < m.positions.size(); ++k)
+            for (int c = 0; c < 3; ++c) v[3 * k + static_cast<std::size_t>(c)] = m.positions[k][c];
+        for (std::size_t k = 0; k < m.triangles.size(); ++k)
+            for (int c = 0; c < 3; ++c) idx[3 * k + static_cast<std::size_t>(c)] = m.triangles[k][c];
+        t.attach(g, {false, i});
+    }
+    rtcCommitScene(t.rtc);
+    t.check("building the scene");
+}
+
+Tracer::~Tracer() {
+    if (impl_->rtc) rtcReleaseScene(impl_->rtc);
+    if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+const Scene& Tracer::scene() const noexcept { return impl_->scene; }
+RTCScene Tracer::rtc_scene() const noexcept { return impl_->rtc; }
+
+std::vector<unsigned> Tracer::cached_geometries() const {
+    std::vector<unsigned> ids;
+    for (unsigned id = 0; id < impl_->objects.size(); ++id)
+        if (impl_->material(id).cached) ids.push_back(id);
+    return ids;
+}
+
+void Tracer::attach_caches(raycache::embree::SceneCache& caches, int face_size) const {
+    for (unsigned id : cached_geometries()) caches.attach(impl_->rtc, raycache::embree::ObjectId{id}, face_size);
+}
+
+glm::vec3 Tracer::primary_direction(const Camera& camera, int width, int height, int x, int y) {
+    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
+    const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
+    const glm::vec3 up = glm::cross(right, forward);
+    const float tan_half = std::tan(0.5f * camera.fov_y_degrees * 3.14159265358979f / 180.0f);
+    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f) * tan_half * aspect;
+    const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height)) * tan_half;
+    return glm::normalize(forward + sx * right + sy * up);
+}
+
+Image Tracer::render(const Camera& camera, const RenderSettings& settings, FrameStats* stats) const {
+    if (settings.width < 1 || settings.height < 1)
+        throw std::invalid_argument("Embree tracer: image size must be at least 1x1, got " +
+                                    std::to_string(settings.width) + "x" + std::to_string(settings.height));
+    const bool needs_cache = settings.mode == CacheMode::cct || settings.mode == CacheMode::cdct;
+    if (needs_cache && !settings.caches)
+        throw std::invalid_argument(std::string("Embree tracer: cache mode ") + to_string(settings.mode) +
+                                    " needs a SceneCache");
+
+    Image image(settings.width, settings.height);
+    const int tiles_x = (settings.width + tile_size - 1) / tile_size;
+    const int tiles_y = (settings.height + tile_size - 1) / tile_size;
+    std::vector<FrameStats> tile_stats(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
+
+    auto render_tiles = [&](const tbb::blocked_range<int>& range) {
+        for (int tile = range.begin(); tile != range.end(); ++tile) {
+            Shader shader{*impl_, settings.mode, settings.caches};
+            const int x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
+            const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x)
+                    image.at(x, y) = shader.trace(camera.eye, primary_direction(camera, settings.width, settings.height, x, y), 0).color;
+            tile_stats[static_cast<std::size_t>(tile)] = shader.stats;
+        }
+    };
+
+    tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
+    const auto start = std::chrono::steady_clock::now();
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), render_tiles); });
+    const auto end = std::chrono::steady_clock::now();
+
+    if (stats) {
+        *stats = FrameStats{};
+        for (const FrameStats& s : tile_stats) {
+            stats->rays += s.rays;
+            stats->shadow_rays += s.shadow_rays;
+            stats->leaving_rays += s.leaving_rays;
+        }
+        stats->milliseconds = std::chrono::duration<double, std::milli>(end - start).count();
+    }
+    return image;
+}
+
+} // namespace rcx::embree

@@ -1,0 +1,193 @@
+// The example scenes (examples/common, rcx/scene.hpp and rcx/meshes.hpp): every scene builds, names are
+// checked, behind-N has its spheres where the thesis puts them, and camera paths move as specified.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "rcx/meshes.hpp"
+#include "rcx/scene.hpp"
+
+namespace {
+
+const char* const wuson = "/usr/share/assimp/models/PLY/Wuson.ply";
+
+float angle_degrees(glm::vec3 a, glm::vec3 b) {
+    const float c = glm::dot(glm::normalize(a), glm::normalize(b));
+    return std::acos(glm::clamp(c, -1.0f, 1.0f)) * 180.0f / 3.14159265f;
+}
+
+glm::vec3 forward(const rcx::Camera& c) { return glm::normalize(c.target - c.eye); }
+
+// Every triangle's winding agrees with its vertex normals (but for a fraction `tolerated`: a loaded mesh
+// may have a few folded or degenerate faces), every normal is unit length.
+void check_mesh(const rcx::Mesh& m, double tolerated = 0.0) {
+    REQUIRE(m.normals.size() == m.positions.size());
+    REQUIRE_FALSE(m.triangles.empty());
+    for (const glm::vec3& n : m.normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
+    int wrong = 0;
+    for (const glm::uvec3& t : m.triangles) {
+        REQUIRE(t.x < m.positions.size());
+        REQUIRE(t.y < m.positions.size());
+        REQUIRE(t.z < m.positions.size());
+        const glm::vec3 face = glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]);
+        if (glm::dot(face, m.normals[t.x] + m.normals[t.y] + m.normals[t.z]) <= 0.0f) ++wrong;
+    }
+    CHECK(wrong <= tolerated * static_cast<double>(m.triangles.size()));
+}
+
+} // namespace
+
+TEST_CASE("every listed scene builds with a checkerboard floor, a light and a cached object") {
+    for (const std::string& name : rcx::scene_names()) {
+        CAPTURE(name);
+        if (name == "concave" && !std::filesystem::exists(wuson)) {
+            CHECK_THROWS_WITH_AS(rcx::make_scene(name), doctest::Contains("assimp-testmodels"), std::runtime_error);
+            continue;
+        }
+        const rcx::Scene s = rcx::make_scene(name);
+        CHECK(s.name == name);
+        REQUIRE_FALSE(s.meshes.empty());
+        CHECK(s.meshes[0].material.checker);
+        CHECK(s.max_depth == 5);
+        CHECK(s.path.frames >= 1);
+        CHECK(s.cached_object_count() >= 1);
+        for (const rcx::Mesh& m : s.meshes) check_mesh(m, m.name == "wuson" ? 0.01 : 0.0);
+        for (const rcx::Sphere& sp : s.spheres) CHECK(sp.radius > 0.0f);
+    }
+}
+
+TEST_CASE("the scenes have the thesis's object counts") {
+    CHECK(rcx::make_scene("grid-32").spheres.size() == 32);
+    CHECK(rcx::make_scene("grid-32").cached_object_count() == 32);
+    const rcx::Scene diffuse = rcx::make_scene("diffuse-31");
+    CHECK(diffuse.spheres.size() == 32);
+    CHECK(diffuse.cached_object_count() == 1);
+    const rcx::Scene reflective = rcx::make_scene("reflective-32");
+    CHECK(reflective.spheres.size() == 32);
+    CHECK(reflective.cached_object_count() == 32);
+    const rcx::Scene cc = rcx::make_scene("cone-cylinder");
+    CHECK(cc.meshes.size() == 3); // floor, cone, cylinder
+    CHECK(cc.cached_object_count() == 2);
+    const rcx::Scene glass = rcx::make_scene("glass");
+    CHECK(glass.spheres[0].material.transparency > 0.0f);
+    CHECK(glass.spheres[0].material.cached);
+}
+
+TEST_CASE("behind-N has a cached main sphere facing the camera and N cached mirror spheres behind the camera") {
+    for (int n = 0; n <= rcx::max_behind_spheres; ++n) {
+        CAPTURE(n);
+        const rcx::Scene s = rcx::make_scene("behind-" + std::to_string(n));
+        REQUIRE(s.spheres.size() == static_cast<std::size_t>(1 + n));
+        CHECK(s.cached_object_count() == 1 + n);
+        const glm::vec3 f = forward(s.camera);
+        const rcx::Sphere& main = s.spheres[0];
+        CHECK(main.material.reflectivity > 0.0f);
+        CHECK(glm::dot(main.centre - s.camera.eye, f) > main.radius); // in front
+        for (int i = 1; i <= n; ++i) {
+            const rcx::Sphere& b = s.spheres[static_cast<std::size_t>(i)];
+            CHECK(b.material.reflectivity > 0.0f);
+            CHECK(glm::dot(b.centre - s.camera.eye, f) < -b.radius); // wholly behind the eye
+        }
+    }
+    rcx::SceneParams thesis;
+    thesis.cache_behind_spheres = false;
+    CHECK(rcx::make_scene("behind-8", thesis).cached_object_count() == 1);
+}
+
+TEST_CASE("behind-32's main sphere fills a good part of a square image") {
+    const rcx::Scene s = rcx::make_scene("behind-32");
+    const float distance = glm::length(s.spheres[0].centre - s.camera.eye);
+    const float diameter_degrees = 2.0f * std::asin(s.spheres[0].radius / distance) * 180.0f / 3.14159265f;
+    CHECK(diameter_degrees / s.camera.fov_y_degrees > 0.6f);
+    CHECK(diameter_degrees / s.camera.fov_y_degrees < 1.0f);
+}
+
+TEST_CASE("unknown scene names throw invalid_argument listing the valid names") {
+    for (const char* bad : {"", "nope", "grid-31", "behind-33", "behind-", "behind--1", "behind-x", "behind-1a", "behind-1000"}) {
+        CAPTURE(bad);
+        try {
+            rcx::make_scene(bad);
+            FAIL("no exception");
+        } catch (const std::invalid_argument& e) {
+            const std::string what = e.what();
+            for (const char* valid : {"behind-N", "grid-32", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass"})
+                CHECK(what.find(valid) != std::string::npos);
+        }
+    }
+}
+
+TEST_CASE("an orbit keeps the distance to the target and turns the eye about +Y by the step") {
+    rcx::Camera start;
+    start.eye = {1.0f, 2.0f, 6.0f};
+    start.target = {0.5f, 0.0f, -1.0f};
+    rcx::CameraPath path{rcx::CameraPath::Kind::orbit, 10, 3.0f};
+    for (int f = 0; f < 10; ++f) {
+        CAPTURE(f);
+        const rcx::Camera c = path.at(start, f);
+        CHECK(c.target == start.target);
+        CHECK(glm::length(c.eye - c.target) == doctest::Approx(glm::length(start.eye - start.target)).epsilon(1e-5));
+        CHECK(c.eye.y == doctest::Approx(start.eye.y));
+        const glm::vec3 a = start.eye - start.target, b = c.eye - c.target;
+        CHECK(angle_degrees({a.x, 0, a.z}, {b.x, 0, b.z}) == doctest::Approx(3.0f * f).epsilon(1e-3));
+    }
+}
+
+TEST_CASE("a pan keeps the eye and turns the view direction about +Y by the step") {
+    rcx::Camera start;
+    start.eye = {0.0f, 1.0f, 4.0f};
+    start.target = {0.0f, 0.0f, 0.0f};
+    rcx::CameraPath path{rcx::CameraPath::Kind::pan, 9, 10.0f / 3.0f};
+    for (int f = 0; f < 9; ++f) {
+        CAPTURE(f);
+        const rcx::Camera c = path.at(start, f);
+        CHECK(c.eye == start.eye);
+        const glm::vec3 a = forward(start), b = forward(c);
+        CHECK(b.y == doctest::Approx(a.y).epsilon(1e-5)); // about +Y: the pitch is unchanged
+        CHECK(angle_degrees({a.x, 0, a.z}, {b.x, 0, b.z}) == doctest::Approx(10.0f / 3.0f * f).epsilon(1e-3));
+    }
+    const rcx::CameraPath fixed{rcx::CameraPath::Kind::fixed, 5, 7.0f};
+    CHECK(fixed.at(start, 4).eye == start.eye);
+    CHECK(fixed.at(start, 4).target == start.target);
+    CHECK(rcx::parse_path_kind("pan") == rcx::CameraPath::Kind::pan);
+    CHECK_THROWS_AS(rcx::parse_path_kind("spin"), std::invalid_argument);
+}
+
+TEST_CASE("procedural meshes have outward windings, unit normals and their analytic shape") {
+    check_mesh(rcx::make_cone(1.0f, 2.0f, 16));
+    check_mesh(rcx::make_cylinder(1.0f, 2.0f, 16));
+    const rcx::Mesh torus = rcx::make_torus(2.0f, 0.5f, 24, 12);
+    check_mesh(torus);
+    for (const glm::vec3& p : torus.positions) {
+        const glm::vec2 ring = glm::normalize(glm::vec2(p.x, p.z)) * 2.0f;
+        CHECK(glm::length(p - glm::vec3(ring.x, 0.0f, ring.y)) == doctest::Approx(0.5f).epsilon(1e-4));
+    }
+    const rcx::Bounds b = rcx::mesh_bounds(rcx::make_cylinder(1.0f, 2.0f, 64));
+    CHECK(b.min.y == doctest::Approx(0.0f));
+    CHECK(b.max.y == doctest::Approx(2.0f));
+    CHECK_THROWS_AS(rcx::make_cone(1.0f, 1.0f, 2), std::invalid_argument);
+    CHECK_THROWS_AS(rcx::make_torus(0.5f, 1.0f), std::invalid_argument);
+}
+
+TEST_CASE("load_mesh reads the Wuson smooth and names the path when it cannot read a file") {
+    CHECK_THROWS_WITH_AS(rcx::load_mesh("/no/such/mesh.ply"), doctest::Contains("/no/such/mesh.ply"), std::runtime_error);
+    const std::string not_a_mesh = (std::filesystem::temp_directory_path() / "raycache-not-a-mesh.ply").string();
+    {
+        std::FILE* f = std::fopen(not_a_mesh.c_str(), "w");
+        REQUIRE(f);
+        std::fputs("this is not a mesh\n", f);
+        std::fclose(f);
+    }
+    CHECK_THROWS_WITH_AS(rcx::load_mesh(not_a_mesh), doctest::Contains(not_a_mesh.c_str()), std::runtime_error);
+    std::filesystem::remove(not_a_mesh);
+    if (!std::filesystem::exists(wuson)) return; // assimp-testmodels not installed
+    rcx::Mesh m = rcx::load_mesh(wuson);
+    CHECK(m.triangles.size() == 3732);
+    CHECK(m.positions.size() < 3 * m.triangles.size()); // identical vertices joined
+    rcx::fit_mesh(m, {0.0f, 0.0f, 0.0f}, 2.0f);
+    const rcx::Bounds b = rcx::mesh_bounds(m);
+    const glm::vec3 size = b.max - b.min;
+    CHECK(std::max(size.x, std::max(size.y, size.z)) == doctest::Approx(2.0f).epsilon(1e-4));
+    for (const glm::vec3& n : m.normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
+}
