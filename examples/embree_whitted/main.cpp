@@ -81,14 +81,22 @@ int run(const rcx::Options& o) {
         relief.step = o.delta;
         relief.epsilon = o.epsilon;
         relief.max_steps = o.max_steps;
+        relief.max_gap = o.max_gap > 0.0f ? o.max_gap : std::numeric_limits<float>::infinity();
         try {
             caches = std::make_unique<raycache::embree::SceneCache>(
-                o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct, relief);
+                o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct, relief,
+                o.pyramid);
             tracer.attach_caches(*caches, o.face_size);
         } catch (const std::invalid_argument& e) {
             throw InputError(e.what());
         }
         settings.caches = caches.get();
+        if (o.prefill) {
+            double ms = 0.0;
+            const std::size_t stored = tracer.prefill(*caches, o.threads, &ms);
+            caches->begin_frame();
+            if (!o.quiet) std::printf("prefilled %zu texels in %.0f ms\n", stored, ms);
+        }
     }
 
     const int frames = scene.path.frames;

@@ -9,6 +9,8 @@
 #include <string>
 
 #include <tbb/blocked_range.h>
+#include <atomic>
+
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -300,6 +302,34 @@ glm::vec3 Tracer::primary_direction(const Camera& camera, int width, int height,
     const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f) * tan_half * aspect;
     const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height)) * tan_half;
     return glm::normalize(forward + sx * right + sy * up);
+}
+
+std::size_t Tracer::prefill(raycache::embree::SceneCache& caches, int threads, double* milliseconds) const {
+    struct Row {
+        raycache::embree::ObjectId id;
+        int face, row;
+    };
+    std::vector<Row> rows;
+    for (const raycache::embree::ObjectId id : caches.objects())
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < caches.face_size(id); ++row) rows.push_back({id, face, row});
+    std::atomic<std::size_t> stored{0};
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    const auto start = std::chrono::steady_clock::now();
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+            // A ray leaving the object is a depth-1 ray; traced with the cache off.
+            Shader shader{*impl_, CacheMode::off, nullptr};
+            std::size_t count = 0;
+            for (std::size_t i = range.begin(); i != range.end(); ++i)
+                count += caches.prefill_row(rows[i].id, rows[i].face, rows[i].row,
+                                            [&](glm::vec3 o, glm::vec3 d) { return shader.trace(o, d, 1); });
+            stored += count;
+        });
+    });
+    if (milliseconds)
+        *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return stored.load();
 }
 
 Image Tracer::render(const Camera& camera, const RenderSettings& settings, FrameStats* stats) const {

@@ -57,6 +57,12 @@ public:
     // Attaches a cube of face_size x face_size texels to every cached object (bounds from the geometry).
     void attach_caches(raycache::embree::SceneCache& caches, int face_size) const;
 
+    // Pre-fills every cube of `caches` (raycache/prefill.hpp): each empty texel traced once from its
+    // cube's box outwards, with the cache off, over TBB (threads: 0 = every core). The texels become
+    // visible at the caches' next begin_frame(). Returns the texels stored; *milliseconds, when given,
+    // the time it took.
+    std::size_t prefill(raycache::embree::SceneCache& caches, int threads = 0, double* milliseconds = nullptr) const;
+
     // Renders one frame. Thread-safe for concurrent calls only with distinct caches (or none).
     // Throws std::invalid_argument for a size < 1 or a cct/cdct mode without caches.
     Image render(const Camera& camera, const RenderSettings& settings, FrameStats* stats = nullptr) const;

@@ -102,6 +102,12 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
+        else if (arg == "--max-gap") {
+            o.max_gap = parse_float(arg, next(), false);
+            if (o.max_gap < 0.0f) throw UsageError("--max-gap: must be >= 0 (0 turns it off)");
+        }
+        else if (arg == "--no-pyramid") { flag(); o.pyramid = false; }
+        else if (arg == "--prefill") { flag(); o.prefill = true; }
         else if (arg == "--frames") o.frames = static_cast<int>(parse_int(arg, next(), 1, 1000000));
         else if (arg == "--step") o.step_degrees = parse_float(arg, next(), false);
         else if (arg == "--path") {
@@ -147,7 +153,10 @@ std::string help_text(const std::string& program) {
         "  --face-size N       texels per cube face side, 1..4096                     [512]\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
         "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
-        "  --max-steps N       CDCT linear steps before giving up                     [1024]\n"
+        "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"
+        "  --no-pyramid        CDCT: the thesis's fixed-step walk, no min-depth pyramid\n"
+        "  --max-gap F         CDCT: a crossing F behind the cached surface is a miss  [0.5; 0 = off]\n"
+        "  --prefill           trace every cube texel once before the first frame\n"
         "Run\n"
         "  --threads N         worker threads, 0 = all cores                          [0]\n"
         "  --out DIR           folder for the PNGs (created when missing)             [out]\n"

@@ -37,7 +37,10 @@ struct Options {
     int face_size = 512;              // texels per cube face side (the thesis's 512 x 512)
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
-    int max_steps = 1024;             // CDCT linear steps before a miss
+    int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss
+    bool pyramid = true;              // CDCT searches over a min-depth pyramid (false: the thesis's linear walk)
+    float max_gap = 0.5f;             // CDCT: a crossing this far behind the cached surface is a miss (0 = off)
+    bool prefill = false;             // trace every cube texel once before the first frame
     std::optional<int> frames;        // unset: the scene's camera path decides
     std::optional<float> step_degrees;
     std::optional<CameraPath::Kind> path;
