@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # install-deps.sh: install RayCache's build and test dependencies on Debian 12 / Ubuntu.
 # Idempotent: when every package is already installed it does not touch apt at all.
-# Runs apt as root, or through sudo when not root.
+# Runs apt as root, or through sudo when not root. --bench adds what scripts/bench.sh needs for plots.
 set -euo pipefail
 
 packages=(
@@ -10,6 +10,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers glslang-tools vulkan-validationlayers
   libstb-dev libassimp-dev assimp-testmodels libbenchmark-dev
 )
+if [[ "${1:-}" == "--bench" ]]; then packages+=(python3 python3-matplotlib); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""Turns the benchmark outputs in docs/results/ into plots (PNG) and docs/RESULTS.md.
+
+Reads: tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench) and
+micro.csv (raycache_micro_bench, Google Benchmark's CSV). Usage: make_results.py RESULTS_DIR OUTPUT_MD
+"""
+import csv
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def micro(path):
+    """Google Benchmark CSV: skips its preamble lines up to the header that starts with name."""
+    with open(path) as f:
+        lines = f.read().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("name,"))
+    table = {r["name"].strip('"'): r for r in csv.DictReader(lines[start:])}
+    medians = {name[: -len("_median")]: r for name, r in table.items() if name.endswith("_median")}
+    return medians or table
+
+
+def plot_table_5_2(results, out):
+    data = rows(os.path.join(results, "table_5_2.csv"))
+    n = [int(r["n"]) for r in data]
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for key, label, style in [("ceiling_speedup", "ceiling (no cache can beat it)", "k--"),
+                              ("cct_speedup", "CCT", "o-"), ("cdct_speedup", "CDCT (filled by rendering)", "s-"),
+                              ("cdct_prefilled_speedup", "CDCT pre-filled", "^-")]:
+        ax.plot(n, [float(r[key]) for r in data], style, label=label)
+    thesis = [(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["thesis_cct_speedup"]]
+    if thesis:
+        ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis CCT (Table 5.2)")
+    ax.axhline(1.0, color="lightgray", lw=1)
+    ax.set_xlabel("N reflective spheres behind the camera")
+    ax.set_ylabel("speed-up over the cache off")
+    ax.set_title("behind-N, warm caches (Table 5.2)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "table_5_2.png"), dpi=110)
+    plt.close(fig)
+
+
+def plot_figure_5_9(results, out):
+    data = rows(os.path.join(results, "figure_5_9.csv"))
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    thesis = {128: 3, 256: 31, 512: 73}
+    for face in sorted({int(r["face_size"]) for r in data}):
+        pts = [(int(r["frame"]), float(r["outdated_percent"])) for r in data if int(r["face_size"]) == face and int(r["frame"]) > 0]
+        line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=f"{face} texels")
+        if face in thesis:
+            ax.plot([1], [thesis[face]], "x", color=line.get_color(), markersize=10)
+    ax.set_xlabel("frame (the camera pans 10/3 degrees a frame)")
+    ax.set_ylabel("outdated texels before the frame (%)")
+    ax.set_title("Update rate (Figure 5.9); x = the thesis after frame 1")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "figure_5_9.png"), dpi=110)
+    plt.close(fig)
+
+
+def targets(results):
+    """One line per target of the benchmarks issue: (target, measured, met)."""
+    lines = []
+    t52 = {int(r["n"]): r for r in rows(os.path.join(results, "table_5_2.csv"))}
+    if 32 in t52:
+        r = t52[32]
+        s, ceiling_ratio, psnr = float(r["cct_speedup"]), float(r["cct_ms"]) / float(r["ceiling_ms"]), float(r["cct_psnr"])
+        lines.append(("CCT on behind-32 at least 4x faster than the cache off", f"{s:.2f}x", s >= 4.0))
+        lines.append(("CCT on behind-32 within 10% of the ceiling", f"CCT ms / ceiling ms = {ceiling_ratio:.2f}", ceiling_ratio <= 1.10))
+        lines.append(("CCT on behind-32: PSNR >= 40 dB at the filling viewpoint", f"{psnr:.1f} dB", psnr >= 40.0))
+    t53 = [r for r in rows(os.path.join(results, "table_5_3.csv")) if r["scene"] == "reflective-32" and r["setting"].startswith("CDCT")]
+    if t53:
+        best = max(t53, key=lambda r: float(r["speedup"]))
+        lines.append(("CDCT on reflective-32 at least 2x faster than the cache off",
+                      f"best {float(best['speedup']):.2f}x ({best['setting']})", float(best["speedup"]) >= 2.0))
+        fewest = min(float(r["texels_per_lookup"]) for r in t53)
+        lines.append(("CDCT on reflective-32: at most 16 texels read per lookup on average",
+                      f"{fewest:.1f} at best; " + ", ".join(f"{float(r['texels_per_lookup']):.1f}" for r in t53), fewest <= 16))
+    q = [r for r in rows(os.path.join(results, "quality.csv")) if r["scene"] == "reflective-32" and r["viewpoint"] == "moved"]
+    if q:
+        cct = next(float(r["psnr"]) for r in q if r["technique"] == "CCT")
+        best = max((r for r in q if r["technique"].startswith("CDCT")), key=lambda r: float(r["psnr"]))
+        gain = float(best["psnr"]) - cct
+        lines.append(("CDCT at the moved viewpoint: PSNR at least 3 dB above the CCT's (reflective-32)",
+                      f"{gain:+.1f} dB ({best['technique']} {float(best['psnr']):.1f} vs CCT {cct:.1f})", gain >= 3.0))
+    f59 = [r for r in rows(os.path.join(results, "figure_5_9.csv")) if int(r["face_size"]) == 512 and int(r["frame"]) == 8]
+    if f59:
+        v = float(f59[0]["outdated_percent"])
+        lines.append(("Update rate at 512: at most 1% outdated after 8 frames", f"{v:.1f}%", v <= 1.0))
+    mpath = os.path.join(results, "micro.csv")
+    if os.path.exists(mpath):
+        m = micro(mpath)
+        if "rtc_intersect1" in m and "cct_lookup" in m:
+            ratio = float(m["rtc_intersect1"]["real_time"]) / float(m["cct_lookup"]["real_time"])
+            lines.append(("One CCT lookup at least 20x cheaper than one rtcIntersect1 (behind-32)", f"{ratio:.1f}x", ratio >= 20))
+    return lines
+
+
+def micro_table(results):
+    mpath = os.path.join(results, "micro.csv")
+    if not os.path.exists(mpath):
+        return "(micro-benchmarks not run)\n"
+    m = micro(mpath)
+    out = ["| benchmark | ns per operation | texels per search | hit rate |", "|---|---|---|---|"]
+    for name, r in m.items():
+        extra = [r.get("texels_per_search", ""), r.get("hit_rate", "")]
+        extra = [f"{float(x):.1f}" if x not in ("", None) else "-" for x in extra]
+        out.append(f"| {name} | {float(r['real_time']):.1f} | {extra[0]} | {extra[1]} |")
+    return "\n".join(out) + "\n"
+
+
+def main():
+    results, output = sys.argv[1], sys.argv[2]
+    plot_table_5_2(results, results)
+    plot_figure_5_9(results, results)
+    rel = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
+    with open(os.path.join(results, "tables.md")) as f:
+        tables = f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
+    md = ["# RayCache results", "",
+          "Regenerate everything with `scripts/bench.sh` (about 10 minutes on 2 cores). Every speed-up is a ratio of "
+          "medians of renders interleaved in one process on the same frames; files (CSV, PNG) are in "
+          f"[`{rel}/`]({rel}/).", "", "## Targets", "", "| target | measured | met |", "|---|---|---|"]
+    for target, measured, met in targets(results):
+        md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
+    md += ["", f"![behind-N speed-ups]({rel}/table_5_2.png)", "", tables, "## Micro-benchmarks (Google Benchmark)", "",
+           "One operation on the reflected rays of behind-32's main sphere; CDCT searches on a cube filled by tracing every "
+           "texel.", "", micro_table(results)]
+    with open(output, "w") as f:
+        f.write("\n".join(md))
+    print(f"wrote {output}")
+
+
+if __name__ == "__main__":
+    main()

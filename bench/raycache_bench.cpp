@@ -1,0 +1,434 @@
+// raycache_bench: reproduces the thesis's experiments (Tables 5.1-5.3, Figure 5.9, the quality figures) on
+// the Embree Whitted tracer and writes docs/RESULTS.md's tables, CSV files for plotting and the
+// difference images. Every speed-up is a ratio of medians of renders interleaved in this one process
+// (off, CCT, CDCT, ceiling, off, ...), on the same frames, so machine noise hits all modes alike.
+//
+// Usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST]
+//   --quick   small images, few rounds: a smoke test that every experiment runs and writes its files
+//   --only    comma-separated experiments: table_5_2, table_5_3, figure_5_9, quality, memory (default: all)
+//   --ns      comma-separated N for table_5_2 (default 0,1,2,4,8,16,32)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tracer.hpp"
+
+namespace fs = std::filesystem;
+using raycache::embree::SceneCache;
+using raycache::embree::SceneCacheStatistics;
+using raycache::embree::Technique;
+using rcx::CacheMode;
+using rcx::Image;
+
+namespace {
+
+struct Config {
+    bool quick = false;
+    std::string out = "docs/results";
+    int rounds = 5;
+    std::string only;     // empty: every experiment
+    std::vector<int> ns;  // empty: the default rows
+    bool wants(const std::string& name) const { return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos; }
+};
+
+std::vector<int> parse_list(const std::string& text) {
+    std::vector<int> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
+    return values;
+}
+
+std::string machine_name() {
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(cpuinfo, line))
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    return "unknown CPU";
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+std::string fmt(double value, int digits = 2) {
+    if (std::isinf(value)) return "inf";
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+    return buffer;
+}
+
+// One way of rendering a frame: a mode and, for the cached modes, its own caches.
+struct Variant {
+    std::string label;
+    CacheMode mode = CacheMode::off;
+    std::unique_ptr<SceneCache> caches;
+    std::vector<double> ms;
+    SceneCacheStatistics last_stats;
+    std::uint64_t texels_read = 0, lookups = 0, max_texels = 0;
+    Image last;
+};
+
+// A variant with its own caches; `prefill` traces every texel first (Tracer::prefill).
+Variant make_variant(const rcx::embree::Tracer& tracer, std::string label, CacheMode mode, int face_size,
+                     raycache::ReliefParameters relief = {}, bool pyramid = true, bool prefill = false) {
+    Variant v;
+    v.label = std::move(label);
+    v.mode = mode;
+    if (mode == CacheMode::cct || mode == CacheMode::cdct) {
+        v.caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, relief, pyramid);
+        tracer.attach_caches(*v.caches, face_size);
+        if (prefill) {
+            tracer.prefill(*v.caches);
+            v.caches->begin_frame();
+        }
+    }
+    return v;
+}
+
+// Renders one frame of a variant; ends the caches' frame and keeps its statistics.
+Image render(const rcx::embree::Tracer& tracer, Variant& v, const rcx::Camera& camera, int width, int height,
+             double* ms = nullptr) {
+    rcx::embree::RenderSettings settings;
+    settings.width = width;
+    settings.height = height;
+    settings.mode = v.mode;
+    settings.caches = v.caches.get();
+    rcx::embree::FrameStats stats;
+    Image image = tracer.render(camera, settings, &stats);
+    if (ms) *ms = stats.milliseconds;
+    if (v.caches) v.last_stats = v.caches->begin_frame();
+    return image;
+}
+
+// Times every variant `rounds` times on the same camera, interleaved, in a rotating order.
+void time_interleaved(const rcx::embree::Tracer& tracer, std::vector<Variant*> variants, const rcx::Camera& camera,
+                      int width, int height, int rounds) {
+    for (int r = 0; r < rounds; ++r)
+        for (std::size_t k = 0; k < variants.size(); ++k) {
+            Variant& v = *variants[(k + r) % variants.size()];
+            double ms = 0.0;
+            v.last = render(tracer, v, camera, width, height, &ms);
+            v.ms.push_back(ms);
+            v.texels_read += v.last_stats.texels_read;
+            v.lookups += v.last_stats.lookups;
+            v.max_texels = std::max(v.max_texels, v.last_stats.max_texels_read);
+        }
+}
+
+struct Report {
+    std::ostringstream md;
+    std::string dir;
+    std::ofstream csv(const std::string& name, const std::string& header) {
+        std::ofstream f(dir + "/" + name);
+        if (!f) throw std::runtime_error("cannot write " + dir + "/" + name);
+        f << header << "\n";
+        return f;
+    }
+    void png(const std::string& name, const Image& image) { rcx::write_png(dir + "/" + name, image); }
+};
+
+void progress(const std::string& what) {
+    std::fprintf(stderr, "[bench] %s\n", what.c_str());
+    std::fflush(stderr);
+}
+
+// Table 5.2: conventional ray tracing of behind-N with warm caches.
+void table_5_2(const Config& c, Report& out) {
+    const int size = c.quick ? 128 : 1024, face = c.quick ? 64 : 512;
+    const std::vector<int> ns = !c.ns.empty() ? c.ns : c.quick ? std::vector<int>{0, 32} : std::vector<int>{0, 1, 2, 4, 8, 16, 32};
+    const std::map<int, double> thesis = {{1, 1.02}, {2, 1.07}, {4, 1.15}, {8, 1.32}, {16, 1.95}, {32, 2.68}};
+    std::ofstream csv = out.csv("table_5_2.csv",
+                                "n,off_ms,cct_ms,cdct_ms,ceiling_ms,cct_speedup,cdct_speedup,ceiling_speedup,"
+                                "cct_psnr,cdct_psnr,cct_hit_rate,cdct_hit_rate,cdct_texels_per_lookup,thesis_cct_speedup,"
+                                "cdct_prefilled_ms,cdct_prefilled_speedup,cdct_prefilled_psnr,cdct_prefilled_hit_rate,"
+                                "cdct_prefilled_texels_per_lookup");
+    out.md << "## Table 5.2: conventional ray tracing, behind-N\n\n"
+           << size << "x" << size << " pixels, " << face << "-texel faces, every reflective sphere cached, warm caches "
+           << "(filled by rendering the same view first), recursion depth 5. Speed-up = median ms with the cache "
+           << "off / median ms of the technique, " << c.rounds << " interleaved rounds. Ceiling: every cached "
+           << "secondary ray answered by a constant (no cache can be faster). PSNR against the uncached frame.\n\n"
+           << "CDCT: pyramid search, max_gap 0.5, caches filled by rendering the view twice (as the thesis); "
+           << "CDCT pre: the same, pre-filled first (Tracer::prefill). Hit rates in `table_5_2.csv`.\n\n"
+           << "| N | off ms | CCT ms | CDCT ms | CDCT pre ms | ceiling ms | CCT speed-up | CDCT speed-up | "
+              "CDCT pre speed-up | ceiling | CCT ms / ceiling ms | CCT PSNR dB | CDCT PSNR dB | CDCT pre PSNR dB | "
+              "CDCT texels/lookup | CDCT pre texels/lookup | thesis CCT |\n"
+           << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (int n : ns) {
+        progress("Table 5.2: behind-" + std::to_string(n));
+        const rcx::Scene scene = rcx::make_scene("behind-" + std::to_string(n));
+        rcx::embree::Tracer tracer(scene);
+        Variant off = make_variant(tracer, "off", CacheMode::off, face);
+        Variant cct = make_variant(tracer, "cct", CacheMode::cct, face);
+        Variant cdct = make_variant(tracer, "cdct", CacheMode::cdct, face, raycache::ReliefParameters{0.2f, 0.02f, 1024, 100.0f, 0.5f});
+        Variant cdct_prefilled = make_variant(tracer, "cdct prefilled", CacheMode::cdct, face,
+                                              raycache::ReliefParameters{0.2f, 0.02f, 1024, 100.0f, 0.5f}, true, true);
+        Variant ceiling = make_variant(tracer, "ceiling", CacheMode::ceiling, face);
+        const rcx::Camera camera = scene.camera_at(0);
+        for (int warm = 0; warm < 2; ++warm) {
+            render(tracer, cct, camera, size, size);
+            render(tracer, cdct, camera, size, size);
+            render(tracer, cdct_prefilled, camera, size, size);
+        }
+        time_interleaved(tracer, {&off, &cct, &cdct, &cdct_prefilled, &ceiling}, camera, size, size, c.rounds);
+        const double off_ms = median(off.ms), cct_ms = median(cct.ms), cdct_ms = median(cdct.ms), ceil_ms = median(ceiling.ms);
+        const double pre_ms = median(cdct_prefilled.ms);
+        const double cct_psnr = rcx::compare(off.last, cct.last).psnr_db, cdct_psnr = rcx::compare(off.last, cdct.last).psnr_db;
+        const double pre_psnr = rcx::compare(off.last, cdct_prefilled.last).psnr_db;
+        const double tpl = cdct.lookups ? double(cdct.texels_read) / cdct.lookups : 0.0;
+        const double pre_tpl = cdct_prefilled.lookups ? double(cdct_prefilled.texels_read) / cdct_prefilled.lookups : 0.0;
+        const auto t = thesis.find(n);
+        csv << n << "," << off_ms << "," << cct_ms << "," << cdct_ms << "," << ceil_ms << "," << off_ms / cct_ms << ","
+            << off_ms / cdct_ms << "," << off_ms / ceil_ms << "," << cct_psnr << "," << cdct_psnr << ","
+            << cct.last_stats.hit_rate() << "," << cdct.last_stats.hit_rate() << "," << tpl << ","
+            << (t == thesis.end() ? std::string("") : fmt(t->second)) << "," << pre_ms << "," << off_ms / pre_ms << ","
+            << pre_psnr << "," << cdct_prefilled.last_stats.hit_rate() << "," << pre_tpl << "\n";
+        out.md << "| " << n << " | " << fmt(off_ms, 1) << " | " << fmt(cct_ms, 1) << " | " << fmt(cdct_ms, 1) << " | "
+               << fmt(pre_ms, 1) << " | " << fmt(ceil_ms, 1) << " | " << fmt(off_ms / cct_ms) << "x | "
+               << fmt(off_ms / cdct_ms) << "x | " << fmt(off_ms / pre_ms) << "x | " << fmt(off_ms / ceil_ms) << "x | "
+               << fmt(cct_ms / ceil_ms) << " | " << fmt(cct_psnr, 1) << " | " << fmt(cdct_psnr, 1) << " | "
+               << fmt(pre_psnr, 1) << " | " << fmt(tpl, 1) << " | " << fmt(pre_tpl, 1) << " | "
+               << (t == thesis.end() ? std::string("-") : fmt(t->second) + "x") << " |\n";
+        if (n == ns.back()) {
+            out.png("behind-" + std::to_string(n) + "_off.png", off.last);
+            out.png("behind-" + std::to_string(n) + "_cct.png", cct.last);
+            out.png("behind-" + std::to_string(n) + "_cct_diff.png", rcx::difference_image(off.last, cct.last));
+            out.png("behind-" + std::to_string(n) + "_cdct_diff.png", rcx::difference_image(off.last, cdct.last));
+        }
+    }
+    out.md << "\nImages of the last row: `behind-" << ns.back() << "_off.png`, `_cct.png`, and the difference images "
+           << "`_cct_diff.png`, `_cdct_diff.png` (blue = equal, red = completely different).\n\n";
+}
+
+// Table 5.3: the CDCT's parameters on diffuse-31 and reflective-32.
+void table_5_3(const Config& c, Report& out) {
+    const int width = c.quick ? 160 : 1920, height = c.quick ? 90 : 1080, face = c.quick ? 64 : 512;
+    const int rounds = c.quick ? 1 : 3;
+    struct Setting {
+        std::string label;
+        raycache::ReliefParameters relief;
+        bool pyramid;
+    };
+    const std::vector<Setting> settings = {
+        {"thesis (2, 0.2)", {2.0f, 0.2f, 2048, 100.0f}, false},
+        {"thesis (0.4, 0.05)", {0.4f, 0.05f, 2048, 100.0f}, false},
+        {"thesis (0.2, 0.02)", {0.2f, 0.02f, 2048, 100.0f}, false},
+        {"thesis (0.02, 0.002)", {0.02f, 0.002f, 2048, 100.0f}, false},
+        {"pyramid, eps 0.02", {0.2f, 0.02f, 1024, 100.0f}, true},
+        {"pyramid, eps 0.02, max_gap 0.5", {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true},
+    };
+    const raycache::ReliefParameters ours{0.2f, 0.02f, 1024, 100.0f, 0.5f};
+    const std::map<std::string, std::vector<double>> thesis_fps = {
+        {"diffuse-31", {76.0, 69.6, 49.5, 35.3, 30.7, 19.0}}, {"reflective-32", {68.2, 30.1, 13.5, 12.7, 12.1, 9.5}}};
+    std::ofstream csv = out.csv("table_5_3.csv", "scene,setting,ms,speedup,texels_per_lookup,max_texels,hit_rate,psnr,thesis_speedup");
+    out.md << "## Table 5.3: the CDCT's search parameters\n\n"
+           << width << "x" << height << " pixels, " << face << "-texel faces, depths up to 100 units, warm caches "
+           << "(two filling frames of the same view). (delta, epsilon) as in the thesis; the linear walk is capped at "
+           << "2048 steps (a longer walk is a miss, traced). Pyramid: our search over a min-depth pyramid. max_gap: "
+           << "crossings more than 0.5 units behind the cached surface are misses. Thesis speed-up = its fps / its plain RT fps.\n\n"
+           << "| scene | technique | ms | speed-up | texels/lookup | max texels | hit rate | PSNR dB | thesis speed-up |\n"
+           << "|---|---|---|---|---|---|---|---|---|\n";
+    for (const std::string name : {"diffuse-31", "reflective-32"}) {
+        progress("Table 5.3: " + name);
+        const rcx::Scene scene = rcx::make_scene(name);
+        rcx::embree::Tracer tracer(scene);
+        const rcx::Camera camera = scene.camera_at(0);
+        std::vector<Variant> variants;
+        variants.push_back(make_variant(tracer, "off", CacheMode::off, face));
+        variants.push_back(make_variant(tracer, "CCT", CacheMode::cct, face));
+        for (const Setting& s : settings)
+            variants.push_back(make_variant(tracer, "CDCT " + s.label, CacheMode::cdct, face, s.relief, s.pyramid));
+        variants.push_back(make_variant(tracer, "CDCT pyramid, max_gap 0.5, prefilled", CacheMode::cdct, face, ours, true, true));
+        std::vector<Variant*> all;
+        for (Variant& v : variants) {
+            for (int warm = 0; warm < 2 && v.caches; ++warm) render(tracer, v, camera, width, height);
+            all.push_back(&v);
+        }
+        time_interleaved(tracer, all, camera, width, height, rounds);
+        const double off_ms = median(variants[0].ms);
+        const std::vector<double>& fps = thesis_fps.at(name);
+        for (std::size_t i = 0; i < variants.size(); ++i) {
+            Variant& v = variants[i];
+            const double ms = median(v.ms);
+            const double tpl = v.lookups ? double(v.texels_read) / v.lookups : 0.0;
+            const double psnr = rcx::compare(variants[0].last, v.last).psnr_db;
+            // Thesis columns: CCT, RT, then the four CDCT settings.
+            std::string thesis = "-";
+            if (i == 0) thesis = "1.00x";
+            if (i == 1) thesis = fmt(fps[0] / fps[1]) + "x";
+            if (i >= 2 && i < 6) thesis = fmt(fps[i] / fps[1]) + "x";
+            csv << name << "," << v.label << "," << ms << "," << off_ms / ms << "," << tpl << "," << v.max_texels << ","
+                << v.last_stats.hit_rate() << "," << psnr << "," << (thesis == "-" ? "" : thesis.substr(0, thesis.size() - 1)) << "\n";
+            out.md << "| " << name << " | " << v.label << " | " << fmt(ms, 1) << " | " << fmt(off_ms / ms) << "x | "
+                   << (v.mode == CacheMode::cdct ? fmt(tpl, 1) : "-") << " | "
+                   << (v.mode == CacheMode::cdct ? std::to_string(v.max_texels) : "-") << " | "
+                   << (v.caches ? fmt(100.0 * v.last_stats.hit_rate(), 1) + "%" : "-") << " | " << fmt(psnr, 1) << " | "
+                   << thesis << " |\n";
+        }
+    }
+    out.md << "\n";
+}
+
+// Figure 5.9: share of the texels a frame needs that are outdated (missing) before it, while panning.
+void figure_5_9(const Config& c, Report& out) {
+    const int size = c.quick ? 128 : 1024;
+    const int frames = 10; // frame 0 and nine pans of 10/3 degrees
+    std::ofstream csv = out.csv("figure_5_9.csv", "face_size,frame,outdated_percent,valid_percent");
+    out.md << "## Figure 5.9: update rate while panning\n\n"
+           << "behind-0 (one reflective sphere facing the camera), " << size << "x" << size << " pixels, CCT, the camera "
+           << "pans nine times by 10/3 degrees. Outdated = lookups of the frame that found no valid texel (the rays "
+           << "that must be traced and stored), before each frame. Thesis after frame 1: 3% (128), 31% (256), 73% (512).\n\n"
+           << "| face size | frame 1 | frame 2 | frame 3 | frame 4 | frame 5 | frame 6 | frame 7 | frame 8 | frame 9 |\n"
+           << "|---|---|---|---|---|---|---|---|---|---|\n";
+    rcx::Scene scene = rcx::make_scene("behind-0");
+    scene.path.kind = rcx::CameraPath::Kind::pan;
+    scene.path.step_degrees = 10.0f / 3.0f;
+    rcx::embree::Tracer tracer(scene);
+    for (int face : {128, 256, 512}) {
+        progress("Figure 5.9: faces of " + std::to_string(face));
+        Variant cct = make_variant(tracer, "cct", CacheMode::cct, face);
+        out.md << "| " << face << " |";
+        for (int f = 0; f < frames; ++f) {
+            render(tracer, cct, scene.camera_at(f), size, size);
+            const double outdated = 100.0 * (1.0 - cct.last_stats.hit_rate());
+            csv << face << "," << f << "," << outdated << "," << 100.0 * cct.last_stats.valid_fraction() << "\n";
+            if (f > 0) out.md << " " << fmt(outdated, 1) << "% |";
+        }
+        out.md << "\n";
+    }
+    out.md << "\nPlot: `figure_5_9.png`.\n\n";
+}
+
+// Quality at the filling viewpoints and after the camera moved away (the parallax test).
+void quality(const Config& c, Report& out) {
+    const int size = c.quick ? 128 : 768, face = c.quick ? 64 : 512;
+    const int fill_frames = c.quick ? 3 : 8, moved_frames = 6; // orbit 2 degrees a frame
+    std::ofstream csv = out.csv("quality.csv", "scene,technique,viewpoint,psnr,mean_abs_error,max_abs_error,hit_rate");
+    out.md << "## Quality: at the filling viewpoints and after moving away\n\n"
+           << size << "x" << size << " pixels, " << face << "-texel faces. The caches fill while the camera orbits "
+           << fill_frames << " frames of 2 degrees; (a) is the last filling frame, (b) a frame " << moved_frames * 2
+           << " degrees further along the orbit, rendered from the caches as they are. Errors on tone-mapped 8-bit "
+           << "values, 0..1.\n\n"
+           << "| scene | technique | viewpoint | PSNR dB | mean abs error | max abs error | hit rate |\n"
+           << "|---|---|---|---|---|---|---|\n";
+    for (const std::string name : {"grid-32", "reflective-32"}) {
+        progress("Quality: " + name);
+        rcx::Scene scene = rcx::make_scene(name);
+        scene.path.kind = rcx::CameraPath::Kind::orbit;
+        scene.path.step_degrees = 2.0f;
+        rcx::embree::Tracer tracer(scene);
+        Variant off = make_variant(tracer, "off", CacheMode::off, face);
+        std::vector<Variant> techniques;
+        techniques.push_back(make_variant(tracer, "CCT", CacheMode::cct, face));
+        techniques.push_back(make_variant(tracer, "CDCT thesis (0.2, 0.02)", CacheMode::cdct, face, {0.2f, 0.02f, 2048, 100.0f}, false));
+        techniques.push_back(make_variant(tracer, "CDCT pyramid + max_gap", CacheMode::cdct, face, {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true));
+        techniques.push_back(make_variant(tracer, "CDCT pyramid + max_gap, prefilled", CacheMode::cdct, face,
+                                          {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true, true));
+        for (int f = 0; f < fill_frames; ++f)
+            for (Variant& v : techniques) v.last = render(tracer, v, scene.camera_at(f), size, size);
+        const Image filled_reference = render(tracer, off, scene.camera_at(fill_frames - 1), size, size);
+        const int moved = fill_frames - 1 + moved_frames;
+        const Image moved_reference = render(tracer, off, scene.camera_at(moved), size, size);
+        for (Variant& v : techniques) {
+            const double filled_hits = v.last_stats.hit_rate();
+            const rcx::ImageDifference a = rcx::compare(filled_reference, v.last);
+            const Image at_moved = render(tracer, v, scene.camera_at(moved), size, size);
+            const rcx::ImageDifference b = rcx::compare(moved_reference, at_moved);
+            for (int k = 0; k < 2; ++k) {
+                const rcx::ImageDifference& d = k ? b : a;
+                const char* where = k ? "moved" : "filling";
+                const double hits = k ? v.last_stats.hit_rate() : filled_hits;
+                csv << name << "," << v.label << "," << where << "," << d.psnr_db << "," << d.mean_abs_error << ","
+                    << d.max_abs_error << "," << hits << "\n";
+                out.md << "| " << name << " | " << v.label << " | " << (k ? "(b) moved" : "(a) filling") << " | "
+                       << fmt(d.psnr_db, 1) << " | " << fmt(d.mean_abs_error, 4) << " | " << fmt(d.max_abs_error, 3)
+                       << " | " << fmt(100.0 * hits, 1) << "% |\n";
+            }
+            std::string file = name + "_moved_" + v.label + "_diff.png";
+            std::replace_if(file.begin(), file.end(), [](char ch) { return !std::isalnum(static_cast<unsigned char>(ch)) && ch != '.' && ch != '-' && ch != '_'; }, '_');
+            out.png(file, rcx::difference_image(moved_reference, at_moved));
+        }
+        out.png(name + "_moved_off.png", moved_reference);
+    }
+    out.md << "\nDifference images at the moved viewpoint: `*_moved_*_diff.png` (blue = equal, red = completely different).\n\n";
+}
+
+void memory(Report& out) {
+    std::ofstream csv = out.csv("memory.csv", "face_size,cct_bytes,cdct_bytes,pyramid_bytes");
+    out.md << "## Memory per cube\n\n"
+           << "Texel storage is 6 N^2 x 4 bytes for the CCT (RGB9E5) and 6 N^2 x 8 bytes for the CDCT (RGB9E5 + "
+           << "float distance); the thesis used 16 bytes (RGBA float). The CDCT's optional depth pyramid adds about "
+           << "a third of a float per texel; a cube also keeps one bit per texel for the frame's stores.\n\n"
+           << "| face size | CCT | CDCT | CDCT pyramid | thesis (16 B/texel) |\n|---|---|---|---|---|\n";
+    for (int n : {128, 256, 512, 1024}) {
+        const raycache::CctCube cct(n);
+        const raycache::CdctCube cdct(n);
+        const raycache::DepthPyramid pyramid(n);
+        const auto mib = [](std::size_t b) { return fmt(b / 1048576.0, 2) + " MiB"; };
+        csv << n << "," << cct.texel_bytes() << "," << cdct.texel_bytes() << "," << pyramid.bytes() << "\n";
+        out.md << "| " << n << " | " << mib(cct.texel_bytes()) << " | " << mib(cdct.texel_bytes()) << " | "
+               << mib(pyramid.bytes()) << " | " << mib(std::size_t{6} * n * n * 16) << " |\n";
+    }
+    out.md << "\n";
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Config c;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--quick") {
+            c.quick = true;
+            c.rounds = 1;
+        } else if (a == "--out" && i + 1 < argc) {
+            c.out = argv[++i];
+        } else if (a == "--rounds" && i + 1 < argc) {
+            c.rounds = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--only" && i + 1 < argc) {
+            c.only = argv[++i];
+        } else if (a == "--ns" && i + 1 < argc) {
+            c.ns = parse_list(argv[++i]);
+        } else {
+            std::fprintf(stderr, "usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST]\n");
+            return a == "--help" ? 0 : 2;
+        }
+    }
+    try {
+        fs::create_directories(c.out);
+        Report out;
+        out.dir = c.out;
+        const auto started = std::chrono::steady_clock::now();
+        if (c.wants("table_5_2")) table_5_2(c, out);
+        if (c.wants("table_5_3")) table_5_3(c, out);
+        if (c.wants("figure_5_9")) figure_5_9(c, out);
+        if (c.wants("quality")) quality(c, out);
+        if (c.wants("memory")) memory(out);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        std::ofstream md(c.out + "/tables.md");
+        md << "Machine: " << machine_name() << ", " << std::thread::hardware_concurrency() << " hardware threads. "
+           << (c.quick ? "QUICK MODE (small images, one round): smoke test, not results. " : "")
+           << "Generated by `raycache_bench` in " << fmt(seconds, 0) << " s.\n\n"
+           << out.md.str();
+        if (!md) throw std::runtime_error("cannot write " + c.out + "/tables.md");
+        std::printf("%s", out.md.str().c_str());
+        std::fprintf(stderr, "[bench] done in %.0f s; tables in %s/tables.md\n", seconds, c.out.c_str());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "raycache_bench: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
