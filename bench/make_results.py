@@ -2,9 +2,10 @@
 """Turns the benchmark outputs in docs/results/ into plots (PNG) and docs/RESULTS.md.
 
 Reads: tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench) and
-micro.csv (raycache_micro_bench, Google Benchmark's CSV). Usage: make_results.py RESULTS_DIR OUTPUT_MD
+micro.json (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
 import csv
+import json
 import math
 import os
 import sys
@@ -21,13 +22,11 @@ def rows(path):
 
 
 def micro(path):
-    """Google Benchmark CSV: skips its preamble lines up to the header that starts with name."""
+    """Google Benchmark's JSON: name -> run (medians when repetitions were aggregated)."""
     with open(path) as f:
-        lines = f.read().splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith("name,"))
-    table = {r["name"].strip('"'): r for r in csv.DictReader(lines[start:])}
-    medians = {name[: -len("_median")]: r for name, r in table.items() if name.endswith("_median")}
-    return medians or table
+        runs = json.load(f)["benchmarks"]
+    medians = {r["run_name"]: r for r in runs if r.get("aggregate_name") == "median"}
+    return medians or {r["name"]: r for r in runs if r.get("run_type", "iteration") == "iteration"}
 
 
 def plot_table_5_2(results, out):
@@ -98,7 +97,7 @@ def targets(results):
     if f59:
         v = float(f59[0]["outdated_percent"])
         lines.append(("Update rate at 512: at most 1% outdated after 8 frames", f"{v:.1f}%", v <= 1.0))
-    mpath = os.path.join(results, "micro.csv")
+    mpath = os.path.join(results, "micro.json")
     if os.path.exists(mpath):
         m = micro(mpath)
         if "rtc_intersect1" in m and "cct_lookup" in m:
@@ -108,14 +107,14 @@ def targets(results):
 
 
 def micro_table(results):
-    mpath = os.path.join(results, "micro.csv")
+    mpath = os.path.join(results, "micro.json")
     if not os.path.exists(mpath):
         return "(micro-benchmarks not run)\n"
     m = micro(mpath)
     out = ["| benchmark | ns per operation | texels per search | hit rate |", "|---|---|---|---|"]
     for name, r in m.items():
-        extra = [r.get("texels_per_search", ""), r.get("hit_rate", "")]
-        extra = [f"{float(x):.1f}" if x not in ("", None) else "-" for x in extra]
+        extra = [r.get("texels_per_search"), r.get("hit_rate")]
+        extra = [f"{float(x):.2f}" if x is not None else "-" for x in extra]
         out.append(f"| {name} | {float(r['real_time']):.1f} | {extra[0]} | {extra[1]} |")
     return "\n".join(out) + "\n"
 

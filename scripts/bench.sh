@@ -16,8 +16,8 @@ if [[ "${1:-}" == "--quick" ]]; then
   out=build-bench/quick
   rm -rf "$out"
   build-bench/bench/raycache_bench --quick --out "$out"
-  build-bench/bench/raycache_micro_bench --benchmark_min_time=0.01 --benchmark_out="$out/micro.csv" --benchmark_out_format=csv
-  python3 bench/make_results.py "$out" "$out/RESULTS.md"
+  build-bench/bench/raycache_micro_bench --benchmark_min_time=0.01 --benchmark_out="$out/micro.json" --benchmark_out_format=json
+  /usr/bin/python3 bench/make_results.py "$out" "$out/RESULTS.md"
   exit 0
 fi
 
@@ -26,5 +26,6 @@ rm -rf "$out"
 mkdir -p "$out"
 build-bench/bench/raycache_bench --out "$out"
 build-bench/bench/raycache_micro_bench --benchmark_min_time=0.5 --benchmark_repetitions=3 \
-  --benchmark_report_aggregates_only=true --benchmark_out="$out/micro.csv" --benchmark_out_format=csv
-python3 bench/make_results.py "$out" docs/RESULTS.md
+  --benchmark_report_aggregates_only=true --benchmark_out="$out/micro.json" --benchmark_out_format=json
+# Debian's python: the one python3-matplotlib installs into.
+/usr/bin/python3 bench/make_results.py "$out" docs/RESULTS.md
