@@ -181,7 +181,7 @@ TEST_CASE("the CDCT stores a traced hit at its distance, so a ray from elsewhere
     SUBCASE("with the depth pyramid") { check_cdct_finds_stored_hit(true); }
 }
 
-TEST_CASE("pre-filling an object's cube through the adapter traces every texel once, from the box outwards") {
+TEST_CASE("pre-filling an object's cube through the adapter traces every texel once, from the centre outwards") {
     World w;
     SceneCache caches(Technique::cdct, raycache::ReliefParameters{0.05f, 0.005f, 2000, 100.0f});
     caches.attach(w.scene, {w.mirror}, 16);
@@ -193,12 +193,12 @@ TEST_CASE("pre-filling an object's cube through the adapter traces every texel o
     for (int face = 0; face < 6; ++face)
         for (int row = 0; row < 16; ++row)
             stored += caches.prefill_row({w.mirror}, face, row, [&](glm::vec3 o, glm::vec3 d) {
-                const auto [t, id] = w.intersect(o, d);
-                mirror_hits += id == w.mirror; // rays start outside the box: never the object itself
-                return TracedRay{id == w.floor ? glm::vec3(0.5f) : glm::vec3(0.1f), t};
+                mirror_hits += o == glm::vec3(1, 2, 3); // rays start at the cube's centre...
+                const auto [t, id] = w.intersect(o + 0.5001f * d, d); // ...and pass through the sphere
+                return TracedRay{id == w.floor ? glm::vec3(0.5f) : glm::vec3(0.1f), t + 0.5001f};
             });
     CHECK(stored == 6 * 16 * 16);
-    CHECK(mirror_hits == 0);
+    CHECK(mirror_hits == 6 * 16 * 16);
     const auto s = caches.begin_frame();
     CHECK(s.valid_texels == 6 * 16 * 16);
     // A second pre-fill finds nothing empty.

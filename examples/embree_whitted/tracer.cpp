@@ -88,7 +88,10 @@ struct Shader {
     raycache::embree::SceneCache* caches;
     FrameStats stats{};
 
-    raycache::TracedRay trace(const glm::vec3& origin, const glm::vec3& direction, int depth) {
+    // The first hit along the ray, shaded; hits on geometry `pass_through` are skipped (pre-filling a
+    // cube traces from inside its own object).
+    raycache::TracedRay trace(const glm::vec3& origin, const glm::vec3& direction, int depth,
+                              unsigned pass_through = RTC_INVALID_GEOMETRY_ID) {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         RTCRayHit rh{};
@@ -107,6 +110,14 @@ struct Shader {
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(t.rtc, &context, &rh);
         ++stats.rays;
+        for (int skipped = 0; skipped < 16 && rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.geomID == pass_through; ++skipped) {
+            rh.ray.tnear = rh.ray.tfar * (1.0f + 1e-6f) + 1e-4f;
+            rh.ray.tfar = infinity;
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(t.rtc, &context, &rh);
+            ++stats.rays;
+        }
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {t.scene.environment, infinity};
         return {shade(rh, origin, direction, depth), rh.ray.tfar};
     }
@@ -318,12 +329,14 @@ std::size_t Tracer::prefill(raycache::embree::SceneCache& caches, int threads, d
     const auto start = std::chrono::steady_clock::now();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size()), [&](const tbb::blocked_range<std::size_t>& range) {
-            // A ray leaving the object is a depth-1 ray; traced with the cache off.
+            // A ray leaving the object is a depth-1 ray; traced with the cache off, from the cube's centre
+            // through the object itself.
             Shader shader{*impl_, CacheMode::off, nullptr};
             std::size_t count = 0;
             for (std::size_t i = range.begin(); i != range.end(); ++i)
-                count += caches.prefill_row(rows[i].id, rows[i].face, rows[i].row,
-                                            [&](glm::vec3 o, glm::vec3 d) { return shader.trace(o, d, 1); });
+                count += caches.prefill_row(rows[i].id, rows[i].face, rows[i].row, [&](glm::vec3 o, glm::vec3 d) {
+                    return shader.trace(o, d, 1, rows[i].id.geom_id);
+                });
             stored += count;
         });
     });

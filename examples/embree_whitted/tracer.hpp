@@ -58,7 +58,7 @@ public:
     void attach_caches(raycache::embree::SceneCache& caches, int face_size) const;
 
     // Pre-fills every cube of `caches` (raycache/prefill.hpp): each empty texel traced once from its
-    // cube's box outwards, with the cache off, over TBB (threads: 0 = every core). The texels become
+    // cube's centre outwards, through the object itself, with the cache off, over TBB (threads: 0 = every core). The texels become
     // visible at the caches' next begin_frame(). Returns the texels stored; *milliseconds, when given,
     // the time it took.
     std::size_t prefill(raycache::embree::SceneCache& caches, int threads = 0, double* milliseconds = nullptr) const;

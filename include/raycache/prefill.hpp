@@ -2,8 +2,9 @@
 //
 // The CDCT's store key is the direction of what a ray hit, so texels that no hit falls into stay empty,
 // and a search that meets one is a miss, frame after frame. Pre-filling traces the cube's own view:
-// for each texel, a ray from the cube's box surface outwards along the texel's centre direction (the
-// object inside the box is not seen). For the CCT this is the classic environment-map approximation.
+// for each texel, a ray from the cube's centre along the texel's centre direction, which must not see
+// the cached object itself (the caller's trace skips it). Starting on the box's surface instead would
+// start under the floor an object rests on. For the CCT this is the classic environment-map approximation.
 #pragma once
 
 #include <cmath>
@@ -15,20 +16,11 @@
 
 namespace raycache {
 
-namespace detail {
-
-// Where the unit direction d from the box's centre leaves the box, a hair outside it.
-inline glm::vec3 box_surface_point(const CubeBounds& b, const glm::vec3& d) {
-    const float major = std::max(std::abs(d.x), std::max(std::abs(d.y), std::abs(d.z)));
-    return b.centre + d * (b.half_size / major * 1.0001f);
-}
-
-} // namespace detail
-
 // Traces and stores every empty texel of one row of one face (a unit of work for a parallel loop over
 // faces and rows; rows of one cube may run on different threads at once). Returns the texels stored.
-// trace: callable `TracedRay trace(glm::vec3 origin, glm::vec3 unit_direction)`. The CDCT stores the
-// hit's distance from the centre (escaped rays at p.max_depth); the CCT stores only the colour.
+// trace: callable `TracedRay trace(glm::vec3 origin, glm::vec3 unit_direction)`, called with the cube's
+// centre as origin; it must pass through the cached object itself. The CDCT stores the hit's distance
+// from the centre (escaped rays at p.max_depth); the CCT stores only the colour.
 // Stores become visible at the cube's next begin_frame(). face in 0..5, row in 0..N-1 (asserted).
 template <class Texel, class Trace>
 std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const ReliefParameters& p, int face, int row,
@@ -43,7 +35,7 @@ std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const 
         const TexelAddress texel{face, column, row};
         if (cube.load(texel)) continue;
         const glm::vec3 d = glm::normalize(texel_direction(texel, n));
-        const glm::vec3 origin = detail::box_surface_point(bounds, d);
+        const glm::vec3 origin = bounds.centre;
         const TracedRay traced = trace(origin, d);
         bool written;
         if constexpr (std::is_same_v<Texel, CctTexel>) {

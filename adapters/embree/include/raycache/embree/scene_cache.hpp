@@ -158,7 +158,8 @@ public:
     }
 
     // Pre-fills one row of one face of object `id`'s cube (see raycache/prefill.hpp): every empty texel is
-    // traced from the cube's box outwards. trace: `TracedRay trace(glm::vec3 origin, glm::vec3 direction)`.
+    // traced from the cube's centre outwards. trace: `TracedRay trace(glm::vec3 origin, glm::vec3 direction)`,
+    // which must pass through object `id` itself (for example by continuing past hits on its geometry).
     // Rows may be filled from many threads at once; the stores become visible at the next begin_frame().
     // Returns the texels stored (0 for an object without a cube).
     template <class Trace>
