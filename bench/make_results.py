@@ -83,16 +83,28 @@ def targets(results):
         best = max(t53, key=lambda r: float(r["speedup"]))
         lines.append(("CDCT on reflective-32 at least 2x faster than the cache off",
                       f"best {float(best['speedup']):.2f}x ({best['setting']})", float(best["speedup"]) >= 2.0))
-        fewest = min(float(r["texels_per_lookup"]) for r in t53)
-        lines.append(("CDCT on reflective-32: at most 16 texels read per lookup on average",
-                      f"{fewest:.1f} at best; " + ", ".join(f"{float(r['texels_per_lookup']):.1f}" for r in t53), fewest <= 16))
+        # A search that stops at an empty texel reads one texel: only variants that answer most rays count.
+        answering = [r for r in t53 if float(r["hit_rate"]) >= 0.5]
+        if answering:
+            fewest = min(answering, key=lambda r: float(r["texels_per_lookup"]))
+            lines.append(("CDCT on reflective-32: at most 16 texels read per lookup on average (variants answering >= 50% of rays)",
+                          f"{float(fewest['texels_per_lookup']):.1f} ({fewest['setting']}, hit rate {100 * float(fewest['hit_rate']):.0f}%); "
+                          "the others stop at empty texels (hit rates " +
+                          ", ".join(f"{100 * float(r['hit_rate']):.0f}%" for r in t53 if r not in answering) + ")",
+                          float(fewest["texels_per_lookup"]) <= 16))
     q = [r for r in rows(os.path.join(results, "quality.csv")) if r["scene"] == "reflective-32" and r["viewpoint"] == "moved"]
     if q:
         cct = next(float(r["psnr"]) for r in q if r["technique"] == "CCT")
-        best = max((r for r in q if r["technique"].startswith("CDCT")), key=lambda r: float(r["psnr"]))
-        gain = float(best["psnr"]) - cct
-        lines.append(("CDCT at the moved viewpoint: PSNR at least 3 dB above the CCT's (reflective-32)",
-                      f"{gain:+.1f} dB ({best['technique']} {float(best['psnr']):.1f} vs CCT {cct:.1f})", gain >= 3.0))
+        # A CDCT that answers few rays traces the rest exactly: only variants answering most rays count.
+        answering = [r for r in q if r["technique"].startswith("CDCT") and float(r["hit_rate"]) >= 0.5]
+        if answering:
+            best = max(answering, key=lambda r: float(r["psnr"]))
+            gain = float(best["psnr"]) - cct
+            lines.append(("CDCT at the moved viewpoint: PSNR at least 3 dB above the CCT's (reflective-32; CDCT variants answering >= 50% of rays)",
+                          f"{gain:+.1f} dB ({best['technique']} {float(best['psnr']):.1f} dB at hit rate "
+                          f"{100 * float(best['hit_rate']):.0f}%, vs CCT {cct:.1f} dB); variants filled only by rendering answer "
+                          + ", ".join(f"{100 * float(r['hit_rate']):.1f}%" for r in q if r["technique"].startswith("CDCT") and r not in answering)
+                          + " of rays (the rest traced)", gain >= 3.0))
     f59 = [r for r in rows(os.path.join(results, "figure_5_9.csv")) if int(r["face_size"]) == 512 and int(r["frame"]) == 8]
     if f59:
         v = float(f59[0]["outdated_percent"])

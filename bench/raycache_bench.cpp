@@ -60,7 +60,7 @@ std::string machine_name() {
 }
 
 // A CSV text field: quoted, so labels may contain commas.
-std::string quoted(const std::string& text) { return "\"" + text + "\""; }
+std::string csv_text(const std::string& text) { return "\"" + text + "\""; }
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -273,7 +273,7 @@ void table_5_3(const Config& c, Report& out) {
             if (i == 0) thesis = "1.00x";
             if (i == 1) thesis = fmt(fps[0] / fps[1]) + "x";
             if (i >= 2 && i < 6) thesis = fmt(fps[i] / fps[1]) + "x";
-            csv << name << "," << quoted(v.label) << "," << ms << "," << off_ms / ms << "," << tpl << "," << v.max_texels << ","
+            csv << name << "," << csv_text(v.label) << "," << ms << "," << off_ms / ms << "," << tpl << "," << v.max_texels << ","
                 << v.last_stats.hit_rate() << "," << psnr << "," << (thesis == "-" ? "" : thesis.substr(0, thesis.size() - 1)) << "\n";
             out.md << "| " << name << " | " << v.label << " | " << fmt(ms, 1) << " | " << fmt(off_ms / ms) << "x | "
                    << (v.mode == CacheMode::cdct ? fmt(tpl, 1) : "-") << " | "
@@ -354,7 +354,7 @@ void quality(const Config& c, Report& out) {
                 const rcx::ImageDifference& d = k ? b : a;
                 const char* where = k ? "moved" : "filling";
                 const double hits = k ? v.last_stats.hit_rate() : filled_hits;
-                csv << name << "," << quoted(v.label) << "," << where << "," << d.psnr_db << "," << d.mean_abs_error << ","
+                csv << name << "," << csv_text(v.label) << "," << where << "," << d.psnr_db << "," << d.mean_abs_error << ","
                     << d.max_abs_error << "," << hits << "\n";
                 out.md << "| " << name << " | " << v.label << " | " << (k ? "(b) moved" : "(a) filling") << " | "
                        << fmt(d.psnr_db, 1) << " | " << fmt(d.mean_abs_error, 4) << " | " << fmt(d.max_abs_error, 3)
