@@ -1,0 +1,237 @@
+// rcx/vulkan.hpp: a tiny Vulkan compute harness for RayCache's GLSL tests and its Vulkan example tracer.
+//
+// One Context (instance, one device with a compute queue, validation when installed), host-visible
+// storage buffers, compute pipelines loaded from SPIR-V files, a sampled cube image, and submissions
+// that record dispatches and wait for them. Everything is synchronous and single-threaded: made for
+// tests and small tracers, not for a renderer's frame loop.
+//
+// Errors: NoDeviceError when Vulkan or a usable device is missing (tests turn it into exit code 77,
+// "skipped"); Error for any other failure, with the Vulkan call and VkResult in the message.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <initializer_list>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+namespace rcx::vk {
+
+// Thrown when there is no Vulkan loader, no driver, or no device with a compute queue.
+struct NoDeviceError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// Thrown for every other failure (a Vulkan call that fails, a missing SPIR-V file, bad arguments).
+struct Error : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// The name of a VkResult ("VK_ERROR_OUT_OF_DEVICE_MEMORY"), or its number.
+std::string to_string(VkResult result);
+
+struct ContextOptions {
+    // Enable VK_LAYER_KHRONOS_validation when it is installed (environment RCX_VULKAN_VALIDATION=0
+    // turns it off). Warnings and errors are printed to stderr; errors of type VALIDATION are counted
+    // (Context::validation_errors()).
+    bool validation = true;
+    // Device choice: the first whose name contains this text; empty: the environment variable
+    // RCX_VULKAN_DEVICE, else lavapipe (llvmpipe) if present, else a discrete, integrated, other GPU.
+    std::string device_name;
+    // Fail with NoDeviceError unless the device has shaderInt64 and shaderBufferInt64Atomics
+    // (RayCache's CDCT stores need them). Either way they are enabled when supported.
+    bool require_int64_atomics = false;
+};
+
+class Context;
+class ComputePipeline;
+
+// A storage buffer in host-visible, host-coherent memory, mapped for its whole life.
+class Buffer {
+public:
+    // `bytes` > 0. Usage: storage, transfer source and destination.
+    Buffer(Context& context, VkDeviceSize bytes);
+    ~Buffer();
+    Buffer(Buffer&& other) noexcept;
+    Buffer& operator=(Buffer&& other) noexcept;
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+
+    VkBuffer handle() const noexcept { return buffer_; }
+    VkDeviceSize size() const noexcept { return size_; }
+    void* data() const noexcept { return mapped_; }
+    template <class T>
+    T* as() const noexcept { return static_cast<T*>(mapped_); }
+    // Copies `bytes` from `source` to the start of the buffer (bytes <= size(), else Error).
+    void upload(const void* source, std::size_t bytes);
+    // Sets every 32-bit word of the buffer to `word` (on the host).
+    void fill(std::uint32_t word) noexcept;
+
+private:
+    void release() noexcept;
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkBuffer buffer_ = VK_NULL_HANDLE;
+    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    VkDeviceSize size_ = 0;
+    void* mapped_ = nullptr;
+};
+
+// A cube-compatible image (6 layers of face_size x face_size), sampled through a cube view with a
+// NEAREST, CLAMP_TO_EDGE sampler: what a `samplerCube` / `usamplerCube` binding sees.
+class SampledCubeImage {
+public:
+    // format: a sampleable 4-byte format (default R32_UINT, read as usamplerCube). Throws Error when the
+    // device cannot make such an image (face_size beyond maxImageDimensionCube, memory).
+    SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format = VK_FORMAT_R32_UINT);
+    ~SampledCubeImage();
+    SampledCubeImage(const SampledCubeImage&) = delete;
+    SampledCubeImage& operator=(const SampledCubeImage&) = delete;
+
+    // Uploads all six faces: 6 * face_size^2 texels of 4 bytes, face (= Vulkan layer) by face, row by
+    // row, row 0 first (so texel (face, column, row) is element (face * N + row) * N + column).
+    void upload(const void* texels, std::size_t bytes);
+
+    std::uint32_t face_size() const noexcept { return face_size_; }
+    VkImageView view() const noexcept { return view_; }
+    VkSampler sampler() const noexcept { return sampler_; }
+
+private:
+    void destroy() noexcept;
+    Context& context_;
+    std::uint32_t face_size_;
+    VkImage image_ = VK_NULL_HANDLE;
+    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    VkImageView view_ = VK_NULL_HANDLE;
+    VkSampler sampler_ = VK_NULL_HANDLE;
+};
+
+// What a binding of a compute pipeline is given: a storage buffer or a sampled cube image.
+struct Resource {
+    Resource(const Buffer& b) : buffer(&b) {}                 // NOLINT: implicit on purpose
+    Resource(const SampledCubeImage& i) : image(&i) {}        // NOLINT
+    const Buffer* buffer = nullptr;
+    const SampledCubeImage* image = nullptr;
+};
+
+// One submission being recorded (see Context::submit).
+class Commands {
+public:
+    // Binds `resources` to bindings 0, 1, 2... of set 0 (in the order the pipeline declared them),
+    // pushes `push_bytes` of push constants and dispatches groups_x * groups_y * groups_z groups.
+    void dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                  std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y = 1,
+                  std::uint32_t groups_z = 1);
+    // Makes the shader and transfer writes recorded so far visible to later dispatches and transfers.
+    void barrier();
+    // Fills `buffer` with the 32-bit `word` on the device (vkCmdFillBuffer).
+    void fill(const Buffer& buffer, std::uint32_t word);
+    VkCommandBuffer handle() const noexcept { return command_buffer_; }
+
+private:
+    friend class Context;
+    Commands(Context& context, VkCommandBuffer command_buffer) : context_(context), command_buffer_(command_buffer) {}
+    Context& context_;
+    VkCommandBuffer command_buffer_;
+    std::vector<VkDescriptorPool> pools_;
+};
+
+class Context {
+public:
+    // Creates the instance (with validation if wanted and installed) and the device.
+    // Throws NoDeviceError when Vulkan or a device with a compute queue is missing, Error otherwise.
+    explicit Context(const ContextOptions& options = {});
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    VkInstance instance() const noexcept { return instance_; }
+    VkPhysicalDevice physical_device() const noexcept { return physical_device_; }
+    VkDevice device() const noexcept { return device_; }
+    VkQueue queue() const noexcept { return queue_; }
+    std::uint32_t queue_family() const noexcept { return queue_family_; }
+    const VkPhysicalDeviceProperties& properties() const noexcept { return properties_; }
+    std::string device_name() const { return properties_.deviceName; }
+
+    // Whether VK_LAYER_KHRONOS_validation is active.
+    bool validation_enabled() const noexcept { return validation_; }
+    // Validation errors reported so far (messages of severity ERROR); every one was printed to stderr.
+    std::uint64_t validation_errors() const noexcept;
+    // Whether shaderInt64 + shaderBufferInt64Atomics were enabled (64-bit atomicMin on storage buffers).
+    bool int64_atomics() const noexcept { return int64_atomics_; }
+
+    // Records commands with `record`, submits them to the compute queue and waits until they finished.
+    void submit(const std::function<void(Commands&)>& record);
+    // submit() with one dispatch.
+    void dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                  std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y = 1,
+                  std::uint32_t groups_z = 1);
+
+    // Index of a memory type allowed by `type_bits` with all of `flags`; Error if none.
+    std::uint32_t memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags flags) const;
+
+    struct Messenger; // debug-utils state, shared with the callback
+
+private:
+    friend class Commands;
+    VkDescriptorPool make_descriptor_pool();
+    void destroy() noexcept;
+
+    VkInstance instance_ = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    std::unique_ptr<Messenger> messenger_state_;
+    VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
+    VkPhysicalDeviceProperties properties_{};
+    VkPhysicalDeviceMemoryProperties memory_properties_{};
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    std::uint32_t queue_family_ = 0;
+    VkCommandPool command_pool_ = VK_NULL_HANDLE;
+    bool validation_ = false;
+    bool int64_atomics_ = false;
+};
+
+// A compute pipeline made from a SPIR-V file (entry point "main"), with one descriptor set (set 0)
+// whose bindings 0..n-1 have the given types, and `push_constant_bytes` of push constants.
+class ComputePipeline {
+public:
+    // Throws Error naming the file when it is missing or unreadable, or when Vulkan rejects the module.
+    ComputePipeline(Context& context, const std::string& spirv_path, std::vector<VkDescriptorType> bindings,
+                    std::uint32_t push_constant_bytes = 0);
+    ~ComputePipeline();
+    ComputePipeline(const ComputePipeline&) = delete;
+    ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+    VkPipeline handle() const noexcept { return pipeline_; }
+    VkPipelineLayout layout() const noexcept { return layout_; }
+    VkDescriptorSetLayout set_layout() const noexcept { return set_layout_; }
+    const std::vector<VkDescriptorType>& bindings() const noexcept { return bindings_; }
+    std::uint32_t push_constant_bytes() const noexcept { return push_constant_bytes_; }
+
+private:
+    void destroy() noexcept;
+    Context& context_;
+    std::vector<VkDescriptorType> bindings_;
+    std::uint32_t push_constant_bytes_;
+    VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
+    VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+};
+
+// Reads a SPIR-V file; Error naming the path when it is missing, unreadable, or not SPIR-V.
+std::vector<std::uint32_t> read_spirv(const std::string& path);
+
+// Validation errors reported by every Context of this process so far, destroyed ones included (an error
+// can come while a device or instance is destroyed).
+std::uint64_t validation_errors_in_process() noexcept;
+
+// Number of groups of `group_size` invocations that cover `count` invocations.
+inline std::uint32_t group_count(std::uint64_t count, std::uint32_t group_size) {
+    return static_cast<std::uint32_t>((count + group_size - 1) / group_size);
+}
+
+} // namespace rcx::vk

@@ -1,0 +1,717 @@
+// rcx/vulkan.cpp: the compute harness of rcx/vulkan.hpp.
+#include "rcx/vulkan.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+
+namespace rcx::vk {
+
+namespace {
+
+void check(VkResult result, const char* what) {
+    if (result != VK_SUCCESS) throw Error(std::string("rcx::vk: ") + what + " failed: " + to_string(result));
+}
+
+bool environment_says_off(const char* name) {
+    const char* value = std::getenv(name);
+    return value && (std::strcmp(value, "0") == 0 || std::strcmp(value, "off") == 0 || std::strcmp(value, "OFF") == 0);
+}
+
+bool has_layer(const char* name) {
+    std::uint32_t count = 0;
+    if (vkEnumerateInstanceLayerProperties(&count, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkLayerProperties> layers(count);
+    if (vkEnumerateInstanceLayerProperties(&count, layers.data()) != VK_SUCCESS) return false;
+    return std::any_of(layers.begin(), layers.end(), [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
+}
+
+bool has_instance_extension(const char* layer, const char* name) {
+    std::uint32_t count = 0;
+    if (vkEnumerateInstanceExtensionProperties(layer, &count, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkExtensionProperties> extensions(count);
+    if (vkEnumerateInstanceExtensionProperties(layer, &count, extensions.data()) != VK_SUCCESS) return false;
+    return std::any_of(extensions.begin(), extensions.end(),
+                       [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+}
+
+int queue_family_with_compute(VkPhysicalDevice device) {
+    std::uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &count, families.data());
+    for (std::uint32_t i = 0; i < count; ++i)
+        if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) return static_cast<int>(i);
+    return -1;
+}
+
+bool has_device_extension(VkPhysicalDevice device, const char* name) {
+    std::uint32_t count = 0;
+    if (vkEnumerateDeviceExtensionProperties(device, nullptr, &count, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkExtensionProperties> extensions(count);
+    if (vkEnumerateDeviceExtensionProperties(device, nullptr, &count, extensions.data()) != VK_SUCCESS) return false;
+    return std::any_of(extensions.begin(), extensions.end(),
+                       [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+}
+
+// Whether the device has shaderInt64 and shaderBufferInt64Atomics (core from 1.2, an extension before).
+bool has_int64_atomics(VkPhysicalDevice device, std::uint32_t api_version) {
+    if (api_version < VK_API_VERSION_1_2 && !has_device_extension(device, VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME))
+        return false;
+    VkPhysicalDeviceShaderAtomicInt64Features atomics{};
+    atomics.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES;
+    VkPhysicalDeviceFeatures2 features{};
+    features.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+    features.pNext = &atomics;
+    vkGetPhysicalDeviceFeatures2(device, &features);
+    return features.features.shaderInt64 && atomics.shaderBufferInt64Atomics;
+}
+
+// Higher is preferred when no name is asked for: lavapipe first (the device RayCache is tested on).
+int preference(const VkPhysicalDeviceProperties& p) {
+    if (std::strstr(p.deviceName, "llvmpipe")) return 5;
+    switch (p.deviceType) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
+    default: return 0;
+    }
+}
+
+} // namespace
+
+std::string to_string(VkResult result) {
+    switch (result) {
+#define RCX_CASE(x) \
+    case x: return #x;
+        RCX_CASE(VK_SUCCESS)
+        RCX_CASE(VK_NOT_READY)
+        RCX_CASE(VK_TIMEOUT)
+        RCX_CASE(VK_INCOMPLETE)
+        RCX_CASE(VK_ERROR_OUT_OF_HOST_MEMORY)
+        RCX_CASE(VK_ERROR_OUT_OF_DEVICE_MEMORY)
+        RCX_CASE(VK_ERROR_INITIALIZATION_FAILED)
+        RCX_CASE(VK_ERROR_DEVICE_LOST)
+        RCX_CASE(VK_ERROR_MEMORY_MAP_FAILED)
+        RCX_CASE(VK_ERROR_LAYER_NOT_PRESENT)
+        RCX_CASE(VK_ERROR_EXTENSION_NOT_PRESENT)
+        RCX_CASE(VK_ERROR_FEATURE_NOT_PRESENT)
+        RCX_CASE(VK_ERROR_INCOMPATIBLE_DRIVER)
+        RCX_CASE(VK_ERROR_TOO_MANY_OBJECTS)
+        RCX_CASE(VK_ERROR_FORMAT_NOT_SUPPORTED)
+        RCX_CASE(VK_ERROR_FRAGMENTED_POOL)
+        RCX_CASE(VK_ERROR_OUT_OF_POOL_MEMORY)
+        RCX_CASE(VK_ERROR_INVALID_SHADER_NV)
+#undef RCX_CASE
+    default: return "VkResult " + std::to_string(static_cast<int>(result));
+    }
+}
+
+// ---- Context ---------------------------------------------------------------------------------------
+
+struct Context::Messenger {
+    std::atomic<std::uint64_t> errors{0};
+    std::mutex print;
+};
+
+namespace {
+
+std::atomic<std::uint64_t> g_process_errors{0};
+
+// Prints every warning and error; counts the errors of type VALIDATION (not, say, the loader's complaints
+// about a driver manifest it cannot use, which say nothing about this program's use of Vulkan).
+VKAPI_ATTR VkBool32 VKAPI_CALL on_debug_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                VkDebugUtilsMessageTypeFlagsEXT types,
+                                                const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+    auto* state = static_cast<Context::Messenger*>(user);
+    const bool error = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    const bool validation = types & VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+    if (error && validation) {
+        state->errors.fetch_add(1, std::memory_order_relaxed);
+        g_process_errors.fetch_add(1, std::memory_order_relaxed);
+    }
+    std::lock_guard<std::mutex> lock(state->print);
+    std::fprintf(stderr, "[vulkan %s %s] %s\n", validation ? "validation" : (types & VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT) ? "performance" : "general",
+                 error ? "error" : "warning", data && data->pMessage ? data->pMessage : "(no message)");
+    return VK_FALSE;
+}
+
+VkDebugUtilsMessengerCreateInfoEXT messenger_info(Context::Messenger* state) {
+    VkDebugUtilsMessengerCreateInfoEXT info{};
+    info.sType = VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT;
+    info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    info.pfnUserCallback = on_debug_message;
+    info.pUserData = state;
+    return info;
+}
+
+} // namespace
+
+Context::Context(const ContextOptions& options) : messenger_state_(new Messenger) {
+    // --- Instance.
+    std::uint32_t loader_version = VK_API_VERSION_1_0;
+    // vkEnumerateInstanceVersion is absent from 1.0 loaders; the loader exports it from 1.1 on.
+    auto enumerate_version = reinterpret_cast<PFN_vkEnumerateInstanceVersion>(
+        vkGetInstanceProcAddr(VK_NULL_HANDLE, "vkEnumerateInstanceVersion"));
+    if (enumerate_version) enumerate_version(&loader_version);
+    if (loader_version < VK_API_VERSION_1_1)
+        throw NoDeviceError("rcx::vk: the Vulkan loader supports only Vulkan 1.0; 1.1 is needed");
+
+    validation_ = options.validation && !environment_says_off("RCX_VULKAN_VALIDATION") &&
+                  has_layer("VK_LAYER_KHRONOS_validation");
+    const bool debug_utils = validation_ && (has_instance_extension(nullptr, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) ||
+                                             has_instance_extension("VK_LAYER_KHRONOS_validation",
+                                                                    VK_EXT_DEBUG_UTILS_EXTENSION_NAME));
+    std::vector<const char*> layers, extensions;
+    if (validation_) layers.push_back("VK_LAYER_KHRONOS_validation");
+    if (debug_utils) extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    if (validation_ && !debug_utils) {
+        std::fprintf(stderr, "rcx::vk: validation layer without VK_EXT_debug_utils: errors are not counted\n");
+    }
+
+    VkApplicationInfo app{};
+    app.sType = VK_STRUCTURE_TYPE_APPLICATION_INFO;
+    app.pApplicationName = "RayCache";
+    app.pEngineName = "rcx::vk";
+    app.apiVersion = VK_API_VERSION_1_2;
+    VkDebugUtilsMessengerCreateInfoEXT debug_info = messenger_info(messenger_state_.get());
+    VkInstanceCreateInfo instance_info{};
+    instance_info.sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO;
+    instance_info.pNext = debug_utils ? &debug_info : nullptr; // also covers instance creation and destruction
+    instance_info.pApplicationInfo = &app;
+    instance_info.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
+    instance_info.ppEnabledLayerNames = layers.data();
+    instance_info.enabledExtensionCount = static_cast<std::uint32_t>(extensions.size());
+    instance_info.ppEnabledExtensionNames = extensions.data();
+    const VkResult created = vkCreateInstance(&instance_info, nullptr, &instance_);
+    if (created == VK_ERROR_INCOMPATIBLE_DRIVER || created == VK_ERROR_INITIALIZATION_FAILED)
+        throw NoDeviceError("rcx::vk: no Vulkan driver (vkCreateInstance: " + to_string(created) + ")");
+    check(created, "vkCreateInstance");
+
+    try {
+        if (debug_utils) {
+            auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+            if (create) check(create(instance_, &debug_info, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+        }
+
+        // --- Physical device: one with a compute queue and Vulkan 1.1.
+        std::uint32_t count = 0;
+        const VkResult enumerated = vkEnumeratePhysicalDevices(instance_, &count, nullptr);
+        if (enumerated != VK_SUCCESS || count == 0) throw NoDeviceError("rcx::vk: no Vulkan device");
+        std::vector<VkPhysicalDevice> devices(count);
+        check(vkEnumeratePhysicalDevices(instance_, &count, devices.data()), "vkEnumeratePhysicalDevices");
+        std::string wanted = options.device_name;
+        if (wanted.empty() && std::getenv("RCX_VULKAN_DEVICE")) wanted = std::getenv("RCX_VULKAN_DEVICE");
+        int best_score = -1;
+        std::string seen;
+        for (VkPhysicalDevice candidate : devices) {
+            VkPhysicalDeviceProperties p;
+            vkGetPhysicalDeviceProperties(candidate, &p);
+            seen += std::string(seen.empty() ? "" : ", ") + p.deviceName;
+            if (p.apiVersion < VK_API_VERSION_1_1 || queue_family_with_compute(candidate) < 0) continue;
+            if (options.require_int64_atomics && !has_int64_atomics(candidate, p.apiVersion)) continue;
+            const int score = wanted.empty() ? preference(p) : (std::strstr(p.deviceName, wanted.c_str()) ? 1 : -1);
+            if (score > best_score) {
+                best_score = score;
+                physical_device_ = candidate;
+                properties_ = p;
+            }
+        }
+        if (!physical_device_)
+            throw NoDeviceError("rcx::vk: no suitable Vulkan device (Vulkan 1.1, a compute queue" +
+                                std::string(options.require_int64_atomics ? ", 64-bit buffer atomics" : "") +
+                                (wanted.empty() ? std::string() : ", name containing '" + wanted + "'") +
+                                ") among: " + (seen.empty() ? std::string("none") : seen));
+        vkGetPhysicalDeviceMemoryProperties(physical_device_, &memory_properties_);
+        queue_family_ = static_cast<std::uint32_t>(queue_family_with_compute(physical_device_));
+
+        // --- Device, with 64-bit integers and 64-bit buffer atomics when the device has them (core in
+        // Vulkan 1.2, VK_KHR_shader_atomic_int64 before).
+        VkPhysicalDeviceFeatures supported{};
+        vkGetPhysicalDeviceFeatures(physical_device_, &supported);
+        int64_atomics_ = has_int64_atomics(physical_device_, properties_.apiVersion);
+        std::vector<const char*> device_extensions;
+        if (int64_atomics_ && properties_.apiVersion < VK_API_VERSION_1_2)
+            device_extensions.push_back(VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
+
+        VkPhysicalDeviceShaderAtomicInt64Features enable_atomics{};
+        enable_atomics.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES;
+        enable_atomics.shaderBufferInt64Atomics = VK_TRUE;
+        VkPhysicalDeviceFeatures2 enable{};
+        enable.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+        enable.pNext = int64_atomics_ ? &enable_atomics : nullptr;
+        enable.features.shaderInt64 = int64_atomics_;
+        enable.features.fragmentStoresAndAtomics = supported.fragmentStoresAndAtomics;
+
+        const float priority = 1.0f;
+        VkDeviceQueueCreateInfo queue_info{};
+        queue_info.sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO;
+        queue_info.queueFamilyIndex = queue_family_;
+        queue_info.queueCount = 1;
+        queue_info.pQueuePriorities = &priority;
+        VkDeviceCreateInfo device_info{};
+        device_info.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;
+        device_info.pNext = &enable;
+        device_info.queueCreateInfoCount = 1;
+        device_info.pQueueCreateInfos = &queue_info;
+        device_info.enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size());
+        device_info.ppEnabledExtensionNames = device_extensions.data();
+        check(vkCreateDevice(physical_device_, &device_info, nullptr, &device_), "vkCreateDevice");
+        vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+
+        VkCommandPoolCreateInfo pool_info{};
+        pool_info.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
+        pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+        pool_info.queueFamilyIndex = queue_family_;
+        check(vkCreateCommandPool(device_, &pool_info, nullptr, &command_pool_), "vkCreateCommandPool");
+    } catch (...) {
+        destroy();
+        throw;
+    }
+}
+
+Context::~Context() { destroy(); }
+
+void Context::destroy() noexcept {
+    if (device_) {
+        vkDeviceWaitIdle(device_);
+        if (command_pool_) vkDestroyCommandPool(device_, command_pool_, nullptr);
+        vkDestroyDevice(device_, nullptr);
+        device_ = VK_NULL_HANDLE;
+    }
+    if (instance_) {
+        if (messenger_) {
+            auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+            if (destroy) destroy(instance_, messenger_, nullptr);
+            messenger_ = VK_NULL_HANDLE;
+        }
+        vkDestroyInstance(instance_, nullptr);
+        instance_ = VK_NULL_HANDLE;
+    }
+}
+
+std::uint64_t validation_errors_in_process() noexcept { return g_process_errors.load(std::memory_order_relaxed); }
+
+std::uint64_t Context::validation_errors() const noexcept {
+    return messenger_state_->errors.load(std::memory_order_relaxed);
+}
+
+std::uint32_t Context::memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags flags) const {
+    for (std::uint32_t i = 0; i < memory_properties_.memoryTypeCount; ++i)
+        if ((type_bits & (1u << i)) && (memory_properties_.memoryTypes[i].propertyFlags & flags) == flags) return i;
+    throw Error("rcx::vk: no memory type with flags " + std::to_string(flags) + " on " + device_name());
+}
+
+VkDescriptorPool Context::make_descriptor_pool() {
+    const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 16},
+                                          {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 4},
+                                          {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4}};
+    VkDescriptorPoolCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO;
+    info.maxSets = 1;
+    info.poolSizeCount = 3;
+    info.pPoolSizes = sizes;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    check(vkCreateDescriptorPool(device_, &info, nullptr, &pool), "vkCreateDescriptorPool");
+    return pool;
+}
+
+void Context::submit(const std::function<void(Commands&)>& record) {
+    VkCommandBufferAllocateInfo allocate{};
+    allocate.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+    allocate.commandPool = command_pool_;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer command_buffer = VK_NULL_HANDLE;
+    check(vkAllocateCommandBuffers(device_, &allocate, &command_buffer), "vkAllocateCommandBuffers");
+    Commands commands(*this, command_buffer);
+    VkFence fence = VK_NULL_HANDLE;
+    auto cleanup = [&] {
+        if (fence) vkDestroyFence(device_, fence, nullptr);
+        for (VkDescriptorPool pool : commands.pools_) vkDestroyDescriptorPool(device_, pool, nullptr);
+        vkFreeCommandBuffers(device_, command_pool_, 1, &command_buffer);
+    };
+    try {
+        VkCommandBufferBeginInfo begin{};
+        begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        check(vkBeginCommandBuffer(command_buffer, &begin), "vkBeginCommandBuffer");
+        record(commands);
+        // Make every write visible to the host, which reads the mapped buffers next.
+        VkMemoryBarrier to_host{};
+        to_host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+        to_host.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+        to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+        vkCmdPipelineBarrier(command_buffer, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0, nullptr);
+        check(vkEndCommandBuffer(command_buffer), "vkEndCommandBuffer");
+
+        VkFenceCreateInfo fence_info{};
+        fence_info.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+        check(vkCreateFence(device_, &fence_info, nullptr, &fence), "vkCreateFence");
+        VkSubmitInfo submit_info{};
+        submit_info.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+        submit_info.commandBufferCount = 1;
+        submit_info.pCommandBuffers = &command_buffer;
+        check(vkQueueSubmit(queue_, 1, &submit_info, fence), "vkQueueSubmit");
+        check(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    } catch (...) {
+        vkQueueWaitIdle(queue_);
+        cleanup();
+        throw;
+    }
+    cleanup();
+}
+
+void Context::dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                       std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y,
+                       std::uint32_t groups_z) {
+    submit([&](Commands& c) { c.dispatch(pipeline, resources, push, push_bytes, groups_x, groups_y, groups_z); });
+}
+
+// ---- Commands --------------------------------------------------------------------------------------
+
+void Commands::dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                        std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y,
+                        std::uint32_t groups_z) {
+    if (resources.size() != pipeline.bindings().size())
+        throw Error("rcx::vk: dispatch given " + std::to_string(resources.size()) + " resources for a pipeline with " +
+                    std::to_string(pipeline.bindings().size()) + " bindings");
+    if (push_bytes != pipeline.push_constant_bytes())
+        throw Error("rcx::vk: dispatch given " + std::to_string(push_bytes) + " bytes of push constants, pipeline takes " +
+                    std::to_string(pipeline.push_constant_bytes()));
+    const std::uint32_t* limit = context_.properties().limits.maxComputeWorkGroupCount;
+    if (groups_x > limit[0] || groups_y > limit[1] || groups_z > limit[2])
+        throw Error("rcx::vk: dispatch of " + std::to_string(groups_x) + " x " + std::to_string(groups_y) + " x " +
+                    std::to_string(groups_z) + " groups exceeds the device's maxComputeWorkGroupCount");
+
+    VkDescriptorPool pool = context_.make_descriptor_pool();
+    pools_.push_back(pool);
+    VkDescriptorSetLayout set_layout = pipeline.set_layout();
+    VkDescriptorSetAllocateInfo allocate{};
+    allocate.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO;
+    allocate.descriptorPool = pool;
+    allocate.descriptorSetCount = 1;
+    allocate.pSetLayouts = &set_layout;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    check(vkAllocateDescriptorSets(context_.device(), &allocate, &set), "vkAllocateDescriptorSets");
+
+    std::vector<VkDescriptorBufferInfo> buffers(resources.size());
+    std::vector<VkDescriptorImageInfo> images(resources.size());
+    std::vector<VkWriteDescriptorSet> writes(resources.size());
+    std::uint32_t binding = 0;
+    for (const Resource& r : resources) {
+        const VkDescriptorType type = pipeline.bindings()[binding];
+        VkWriteDescriptorSet& w = writes[binding];
+        w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+        w.dstSet = set;
+        w.dstBinding = binding;
+        w.descriptorCount = 1;
+        w.descriptorType = type;
+        if (type == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER) {
+            if (!r.image) throw Error("rcx::vk: binding " + std::to_string(binding) + " needs a SampledCubeImage");
+            images[binding] = {r.image->sampler(), r.image->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+            w.pImageInfo = &images[binding];
+        } else {
+            if (!r.buffer) throw Error("rcx::vk: binding " + std::to_string(binding) + " needs a Buffer");
+            if (type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER &&
+                r.buffer->size() > context_.properties().limits.maxStorageBufferRange)
+                throw Error("rcx::vk: a buffer of " + std::to_string(r.buffer->size()) + " bytes at binding " +
+                            std::to_string(binding) + " exceeds maxStorageBufferRange (" +
+                            std::to_string(context_.properties().limits.maxStorageBufferRange) + ") on " +
+                            context_.device_name());
+            buffers[binding] = {r.buffer->handle(), 0, VK_WHOLE_SIZE};
+            w.pBufferInfo = &buffers[binding];
+        }
+        ++binding;
+    }
+    vkUpdateDescriptorSets(context_.device(), static_cast<std::uint32_t>(writes.size()), writes.data(), 0, nullptr);
+
+    vkCmdBindPipeline(command_buffer_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+    vkCmdBindDescriptorSets(command_buffer_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &set, 0, nullptr);
+    if (push_bytes)
+        vkCmdPushConstants(command_buffer_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
+    vkCmdDispatch(command_buffer_, groups_x, groups_y, groups_z);
+}
+
+void Commands::barrier() {
+    VkMemoryBarrier b{};
+    b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                      VK_ACCESS_TRANSFER_WRITE_BIT;
+    const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+    vkCmdPipelineBarrier(command_buffer_, stages, stages, 0, 1, &b, 0, nullptr, 0, nullptr);
+}
+
+void Commands::fill(const Buffer& buffer, std::uint32_t word) {
+    vkCmdFillBuffer(command_buffer_, buffer.handle(), 0, VK_WHOLE_SIZE, word);
+}
+
+// ---- Buffer ----------------------------------------------------------------------------------------
+
+Buffer::Buffer(Context& context, VkDeviceSize bytes) : device_(context.device()), size_(bytes) {
+    if (bytes == 0) throw Error("rcx::vk: a Buffer needs at least 1 byte");
+    VkBufferCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+    info.size = bytes;
+    info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(device_, &info, nullptr, &buffer_), "vkCreateBuffer");
+    try {
+        VkMemoryRequirements needs;
+        vkGetBufferMemoryRequirements(device_, buffer_, &needs);
+        VkMemoryAllocateInfo allocate{};
+        allocate.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+        allocate.allocationSize = needs.size;
+        allocate.memoryTypeIndex = context.memory_type(
+            needs.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+        check(vkAllocateMemory(device_, &allocate, nullptr, &memory_), "vkAllocateMemory (buffer)");
+        check(vkBindBufferMemory(device_, buffer_, memory_, 0), "vkBindBufferMemory");
+        check(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Buffer::~Buffer() { release(); }
+
+Buffer::Buffer(Buffer&& other) noexcept
+    : device_(other.device_), buffer_(other.buffer_), memory_(other.memory_), size_(other.size_), mapped_(other.mapped_) {
+    other.buffer_ = VK_NULL_HANDLE;
+    other.memory_ = VK_NULL_HANDLE;
+    other.mapped_ = nullptr;
+    other.size_ = 0;
+}
+
+Buffer& Buffer::operator=(Buffer&& other) noexcept {
+    if (this != &other) {
+        release();
+        device_ = other.device_;
+        buffer_ = other.buffer_;
+        memory_ = other.memory_;
+        size_ = other.size_;
+        mapped_ = other.mapped_;
+        other.buffer_ = VK_NULL_HANDLE;
+        other.memory_ = VK_NULL_HANDLE;
+        other.mapped_ = nullptr;
+        other.size_ = 0;
+    }
+    return *this;
+}
+
+void Buffer::release() noexcept {
+    if (mapped_) vkUnmapMemory(device_, memory_);
+    if (buffer_) vkDestroyBuffer(device_, buffer_, nullptr);
+    if (memory_) vkFreeMemory(device_, memory_, nullptr);
+    mapped_ = nullptr;
+    buffer_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+}
+
+void Buffer::upload(const void* source, std::size_t bytes) {
+    if (bytes > size_)
+        throw Error("rcx::vk: upload of " + std::to_string(bytes) + " bytes into a buffer of " + std::to_string(size_));
+    std::memcpy(mapped_, source, bytes);
+}
+
+void Buffer::fill(std::uint32_t word) noexcept {
+    std::uint32_t* words = as<std::uint32_t>();
+    std::fill(words, words + size_ / 4, word);
+}
+
+// ---- SampledCubeImage ------------------------------------------------------------------------------
+
+SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format)
+    : context_(context), face_size_(face_size) {
+    if (face_size == 0 || face_size > context.properties().limits.maxImageDimensionCube)
+        throw Error("rcx::vk: cube face size " + std::to_string(face_size) + " outside 1.." +
+                    std::to_string(context.properties().limits.maxImageDimensionCube) + " on " + context.device_name());
+    const VkDevice device = context.device();
+    try {
+        VkImageCreateInfo info{};
+        info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+        info.flags = VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
+        info.imageType = VK_IMAGE_TYPE_2D;
+        info.format = format;
+        info.extent = {face_size, face_size, 1};
+        info.mipLevels = 1;
+        info.arrayLayers = 6;
+        info.samples = VK_SAMPLE_COUNT_1_BIT;
+        info.tiling = VK_IMAGE_TILING_OPTIMAL;
+        info.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        check(vkCreateImage(device, &info, nullptr, &image_), "vkCreateImage (cube)");
+        VkMemoryRequirements needs;
+        vkGetImageMemoryRequirements(device, image_, &needs);
+        VkMemoryAllocateInfo allocate{};
+        allocate.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+        allocate.allocationSize = needs.size;
+        allocate.memoryTypeIndex = context.memory_type(needs.memoryTypeBits, 0);
+        check(vkAllocateMemory(device, &allocate, nullptr, &memory_), "vkAllocateMemory (cube image)");
+        check(vkBindImageMemory(device, image_, memory_, 0), "vkBindImageMemory");
+
+        VkImageViewCreateInfo view{};
+        view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
+        view.image = image_;
+        view.viewType = VK_IMAGE_VIEW_TYPE_CUBE;
+        view.format = format;
+        view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 6};
+        check(vkCreateImageView(device, &view, nullptr, &view_), "vkCreateImageView (cube)");
+
+        VkSamplerCreateInfo sampler{};
+        sampler.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;
+        sampler.magFilter = VK_FILTER_NEAREST;
+        sampler.minFilter = VK_FILTER_NEAREST;
+        sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+        sampler.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+        sampler.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+        sampler.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+        sampler.maxLod = 0.0f;
+        check(vkCreateSampler(device, &sampler, nullptr, &sampler_), "vkCreateSampler");
+    } catch (...) {
+        destroy();
+        throw;
+    }
+}
+
+SampledCubeImage::~SampledCubeImage() { destroy(); }
+
+void SampledCubeImage::destroy() noexcept {
+    const VkDevice device = context_.device();
+    if (sampler_) vkDestroySampler(device, sampler_, nullptr);
+    if (view_) vkDestroyImageView(device, view_, nullptr);
+    if (image_) vkDestroyImage(device, image_, nullptr);
+    if (memory_) vkFreeMemory(device, memory_, nullptr);
+    sampler_ = VK_NULL_HANDLE;
+    view_ = VK_NULL_HANDLE;
+    image_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+}
+
+void SampledCubeImage::upload(const void* texels, std::size_t bytes) {
+    const std::size_t expected = std::size_t{6} * face_size_ * face_size_ * 4;
+    if (bytes != expected)
+        throw Error("rcx::vk: cube upload of " + std::to_string(bytes) + " bytes, expected 6 * N^2 * 4 = " +
+                    std::to_string(expected));
+    Buffer staging(context_, bytes);
+    staging.upload(texels, bytes);
+    context_.submit([&](Commands& c) {
+        VkImageMemoryBarrier to_transfer{};
+        to_transfer.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+        to_transfer.srcAccessMask = 0;
+        to_transfer.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        to_transfer.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        to_transfer.newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        to_transfer.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        to_transfer.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        to_transfer.image = image_;
+        to_transfer.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 6};
+        vkCmdPipelineBarrier(c.handle(), VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0,
+                             nullptr, 0, nullptr, 1, &to_transfer);
+        VkBufferImageCopy region{};
+        region.bufferOffset = 0;
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6};
+        region.imageExtent = {face_size_, face_size_, 1};
+        vkCmdCopyBufferToImage(c.handle(), staging.handle(), image_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+        VkImageMemoryBarrier to_shader = to_transfer;
+        to_shader.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        to_shader.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+        to_shader.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        to_shader.newLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+        vkCmdPipelineBarrier(c.handle(), VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0, 0, nullptr,
+                             0, nullptr, 1, &to_shader);
+    });
+}
+
+// ---- ComputePipeline -------------------------------------------------------------------------------
+
+std::vector<std::uint32_t> read_spirv(const std::string& path) {
+    std::ifstream file(path, std::ios::binary | std::ios::ate);
+    if (!file)
+        throw Error("rcx::vk: SPIR-V file '" + path + "' not found or unreadable (shaders are compiled at build time: "
+                    "was the project built, and the shader listed in raycache_add_glsl_shader()?)");
+    const std::streamsize bytes = file.tellg();
+    if (bytes < 20 || bytes % 4 != 0)
+        throw Error("rcx::vk: '" + path + "' is not SPIR-V (" + std::to_string(bytes) + " bytes)");
+    std::vector<std::uint32_t> words(static_cast<std::size_t>(bytes) / 4);
+    file.seekg(0);
+    if (!file.read(reinterpret_cast<char*>(words.data()), bytes)) throw Error("rcx::vk: could not read '" + path + "'");
+    if (words[0] != 0x07230203u) throw Error("rcx::vk: '" + path + "' is not SPIR-V (bad magic number)");
+    return words;
+}
+
+ComputePipeline::ComputePipeline(Context& context, const std::string& spirv_path, std::vector<VkDescriptorType> bindings,
+                                 std::uint32_t push_constant_bytes)
+    : context_(context), bindings_(std::move(bindings)), push_constant_bytes_(push_constant_bytes) {
+    const std::vector<std::uint32_t> code = read_spirv(spirv_path);
+    const VkDevice device = context.device();
+    VkShaderModule module = VK_NULL_HANDLE;
+    try {
+        std::vector<VkDescriptorSetLayoutBinding> layout_bindings(bindings_.size());
+        for (std::uint32_t i = 0; i < bindings_.size(); ++i)
+            layout_bindings[i] = {i, bindings_[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+        VkDescriptorSetLayoutCreateInfo set_info{};
+        set_info.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO;
+        set_info.bindingCount = static_cast<std::uint32_t>(layout_bindings.size());
+        set_info.pBindings = layout_bindings.data();
+        check(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout_), "vkCreateDescriptorSetLayout");
+
+        VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_};
+        VkPipelineLayoutCreateInfo layout_info{};
+        layout_info.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO;
+        layout_info.setLayoutCount = 1;
+        layout_info.pSetLayouts = &set_layout_;
+        layout_info.pushConstantRangeCount = push_constant_bytes_ ? 1 : 0;
+        layout_info.pPushConstantRanges = &range;
+        check(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout_), "vkCreatePipelineLayout");
+
+        VkShaderModuleCreateInfo module_info{};
+        module_info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
+        module_info.codeSize = code.size() * 4;
+        module_info.pCode = code.data();
+        check(vkCreateShaderModule(device, &module_info, nullptr, &module),
+              ("vkCreateShaderModule(" + spirv_path + ")").c_str());
+
+        VkComputePipelineCreateInfo pipeline_info{};
+        pipeline_info.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO;
+        pipeline_info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+        pipeline_info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+        pipeline_info.stage.module = module;
+        pipeline_info.stage.pName = "main";
+        pipeline_info.layout = layout_;
+        check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline_),
+              ("vkCreateComputePipelines(" + spirv_path + ")").c_str());
+        vkDestroyShaderModule(device, module, nullptr);
+    } catch (...) {
+        if (module) vkDestroyShaderModule(device, module, nullptr);
+        destroy();
+        throw;
+    }
+}
+
+ComputePipeline::~ComputePipeline() { destroy(); }
+
+void ComputePipeline::destroy() noexcept {
+    const VkDevice device = context_.device();
+    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (layout_) vkDestroyPipelineLayout(device, layout_, nullptr);
+    if (set_layout_) vkDestroyDescriptorSetLayout(device, set_layout_, nullptr);
+    pipeline_ = VK_NULL_HANDLE;
+    layout_ = VK_NULL_HANDLE;
+    set_layout_ = VK_NULL_HANDLE;
+}
+
+} // namespace rcx::vk

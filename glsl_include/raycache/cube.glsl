@@ -1,0 +1,69 @@
+/* raycache/cube.glsl: what the CCT and the CDCT share in GLSL: the options, the texel a direction falls
+ * in within a cube's buffers, and small float helpers evaluated in the C++ headers' order.
+ *
+ * The face table, tie rule and texel rounding come from raycache/shared/cube_face.h and the cube
+ * descriptor from raycache/shared/gpu_layout.h, the same files the C++ library compiles.
+ *
+ * Options (define before the first RayCache include):
+ *   RAYCACHE_SET         descriptor set of RayCache's buffers (default 0)
+ *   RAYCACHE_READ_ONLY   lookups only: no pending buffers, no store functions (no atomics needed)
+ *   RAYCACHE_END_FRAME   texel buffers writable, and the end-frame functions defined (for the pass
+ *                        that runs between frames); otherwise texel buffers are readonly
+ * Stores from a fragment shader need the device feature fragmentStoresAndAtomics.
+ */
+#ifndef RAYCACHE_CUBE_GLSL
+#define RAYCACHE_CUBE_GLSL
+
+#include "raycache/shared/cube_face.h"
+#include "raycache/shared/texel_encoding.h"
+#include "raycache/shared/gpu_layout.h"
+
+#ifndef RAYCACHE_SET
+#define RAYCACHE_SET 0
+#endif
+
+#if defined(RAYCACHE_READ_ONLY) && defined(RAYCACHE_END_FRAME)
+#error "RayCache: RAYCACHE_READ_ONLY and RAYCACHE_END_FRAME exclude each other"
+#endif
+
+/* Access qualifier of the texel buffers: written only by the end-frame pass. */
+#ifdef RAYCACHE_END_FRAME
+#define RAYCACHE_TEXEL_ACCESS
+#else
+#define RAYCACHE_TEXEL_ACCESS readonly
+#endif
+
+/* Returned instead of a buffer element when a vector has no texel. */
+#define RAYCACHE_NO_TEXEL 0xFFFFFFFFu
+
+/* +infinity (the default max_gap of the relief search). */
+#define RAYCACHE_INFINITY uintBitsToFloat(0x7F800000u)
+
+/* True when the cube's face size is 1..4096 (anything else has no texels). */
+bool raycache_cube_has_texels(raycache_gpu_cube cube) {
+    return cube.face_size >= RAYCACHE_MIN_FACE_SIZE && cube.face_size <= RAYCACHE_MAX_FACE_SIZE;
+}
+
+/* Element of the cube's texel (and pending) buffer holding the texel that s falls in; s need not be
+ * unit length. RAYCACHE_NO_TEXEL when s is not a direction or the cube has no texels. Callers check
+ * the element against the buffer's length before reading. */
+uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
+    if (!raycache_cube_has_texels(cube)) return RAYCACHE_NO_TEXEL;
+    raycache_texel_address a = raycache_texel_of(s, cube.face_size);
+    if (a.face == RAYCACHE_NO_FACE) return RAYCACHE_NO_TEXEL;
+    return cube.first_texel + raycache_texel_linear_index(a, cube.face_size);
+}
+
+/* True when no component of v is infinite or NaN. */
+bool raycache_is_finite3(vec3 v) {
+    return raycache_is_finite(v.x) && raycache_is_finite(v.y) && raycache_is_finite(v.z);
+}
+
+/* |v| as the C++ side computes it (glm::length: sqrt((x*x + y*y) + z*z)), never fused into FMAs. */
+float raycache_length(vec3 v) {
+    precise float squared = (v.x * v.x + v.y * v.y) + v.z * v.z;
+    precise float length = sqrt(squared);
+    return length;
+}
+
+#endif /* RAYCACHE_CUBE_GLSL */

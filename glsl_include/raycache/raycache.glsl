@@ -1,0 +1,22 @@
+/* raycache/raycache.glsl: RayCache in GLSL (Vulkan): caching cubes read and written by shaders, bit for
+ * bit the texels of the C++ library (same face table, texel rounding and encodings, one shared source).
+ *
+ * How to use it, from a compute, fragment or ray-generation shader:
+ *   #extension GL_GOOGLE_include_directive : require
+ *   #define RAYCACHE_SET 1                      // options: set, bindings, RAYCACHE_READ_ONLY (cube.glsl)
+ *   #include "raycache/raycache.glsl"           // or only raycache/cct.glsl or raycache/cdct.glsl
+ *   raycache_gpu_cube cube = my_cubes[object];  // descriptor: raycache/shared/gpu_layout.h, C++ too
+ *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
+ *   if (!c.hit) { c.color = trace(hit, reflected); raycache_cct_store(cube, reflected, c.color); }
+ *   raycache_relief_result f = raycache_relief_search(cube, hit, reflected, parameters); // CDCT
+ * Between frames, one pass compiled with RAYCACHE_END_FRAME calls raycache_cct_end_frame(i) (and
+ * raycache_cdct_end_frame(i)) for every buffer element i, which makes the frame's stores visible.
+ * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
+ */
+#ifndef RAYCACHE_RAYCACHE_GLSL
+#define RAYCACHE_RAYCACHE_GLSL
+
+#include "raycache/cct.glsl"
+#include "raycache/cdct.glsl"
+
+#endif /* RAYCACHE_RAYCACHE_GLSL */

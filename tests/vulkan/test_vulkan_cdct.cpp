@@ -1,0 +1,390 @@
+// The CDCT in GLSL (raycache/cdct.glsl, driven by shaders/cdct_cross.comp) against raycache::CdctCube
+// and raycache::relief_search: texels written by C++ give the same relief searches in GLSL (hit, texels
+// read, distance, point and colour, bit for bit), and texels stored by GLSL (store_hit, store_escape,
+// store), after the end-frame pass, are word for word what C++ makes of the same stores.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <raycache/raycache.hpp>
+
+#include "vulkan_test.hpp"
+
+using namespace raycache;
+namespace gpu = raycache::shared;
+
+namespace {
+
+// shaders/cdct_cross.comp's Query, Result and push constants, with their std430 layouts.
+struct Query {
+    glm::vec3 origin; // search: ray origin; store_hit: the hit point
+    std::uint32_t cube;
+    glm::vec3 direction; // search and store_escape: ray direction; store: key
+    std::uint32_t mode;  // 0: search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance)
+    glm::vec3 color;
+    float distance;
+};
+static_assert(sizeof(Query) == 48, "Query must match cdct_cross.comp");
+struct Result {
+    std::uint32_t hit;
+    std::int32_t texels_read;
+    float distance;
+    std::uint32_t pad;
+    glm::vec3 color;
+    float pad1;
+    glm::vec3 point;
+    float pad2;
+};
+static_assert(sizeof(Result) == 48, "Result must match cdct_cross.comp");
+struct Push {
+    ReliefParameters parameters; // read in GLSL as raycache_relief_parameters: the same fields in order
+    std::uint32_t count;
+};
+static_assert(sizeof(ReliefParameters) == 20 && sizeof(Push) == 24, "ReliefParameters must be 5 4-byte fields");
+
+std::uint32_t bits(float x) {
+    std::uint32_t b;
+    std::memcpy(&b, &x, 4);
+    return b;
+}
+bool same_bits(const glm::vec3& a, const glm::vec3& b) {
+    return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z);
+}
+
+const std::vector<VkDescriptorType> cross_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+
+struct Scene {
+    std::vector<CdctCube> cubes;
+    std::vector<CubeBounds> bounds;
+    std::vector<gpu::raycache_gpu_cube> descriptors;
+    std::size_t elements = 0;
+
+    void add(int n, CubeBounds b) {
+        cubes.emplace_back(n);
+        bounds.push_back(b);
+        descriptors.push_back(gpu::raycache_make_gpu_cube(b.centre, b.half_size, static_cast<std::uint32_t>(elements), n));
+        elements += cubes.back().texel_count();
+    }
+    std::vector<std::uint64_t> words() const {
+        std::vector<std::uint64_t> all;
+        for (const CdctCube& cube : cubes) {
+            const std::vector<std::uint64_t> w = rcx_test::words_of(cube);
+            all.insert(all.end(), w.begin(), w.end());
+        }
+        return all;
+    }
+};
+
+// Three cubes in one buffer: a sphere of radius 5 with an unfilled cap (rays through it miss); rolling
+// hills of depth 2..5 with parallax; and a small cube of random depths. Texel colours are random.
+Scene make_scene(std::mt19937& rng, bool fill) {
+    Scene s;
+    s.add(32, CubeBounds{glm::vec3(1.0f, 2.0f, 3.0f), 1.0f});
+    s.add(64, CubeBounds{glm::vec3(-4.0f, 0.5f, 2.0f), 0.75f});
+    s.add(7, CubeBounds{glm::vec3(0.0f), 2.0f});
+    if (!fill) return s;
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (std::size_t c = 0; c < s.cubes.size(); ++c) {
+        CdctCube& cube = s.cubes[c];
+        const int n = cube.face_size();
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column) {
+                    const TexelAddress t{face, column, row};
+                    const glm::vec3 d = glm::normalize(texel_direction(t, n));
+                    float depth;
+                    if (c == 0) {
+                        if (d.y > 0.8f) continue; // the hole
+                        depth = 5.0f;
+                    } else if (c == 1) {
+                        depth = 3.5f + 1.5f * std::sin(3.0f * d.x) * std::cos(2.0f * d.z);
+                    } else {
+                        depth = 2.5f + 5.0f * u(rng);
+                    }
+                    cube.store_at(t, DepthSample{glm::vec3(u(rng), u(rng), u(rng)), depth});
+                }
+        cube.begin_frame();
+    }
+    return s;
+}
+
+glm::vec3 random_direction(std::mt19937& rng) {
+    std::normal_distribution<float> g;
+    return glm::vec3(g(rng), g(rng), g(rng)) * std::exp2(std::uniform_real_distribution<float>(-10, 10)(rng));
+}
+
+// Rays from inside and around each cube's box, plus bad ones (NaN or infinite origins, zero, NaN and
+// infinite directions, ties and signed zeros).
+std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube) {
+    std::vector<Query> queries;
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::nanf("");
+    for (std::uint32_t c = 0; c < s.cubes.size(); ++c)
+        for (int i = 0; i < per_cube; ++i) {
+            const float reach = i % 5 == 0 ? 3.0f : 0.95f; // every fifth origin may lie outside the box
+            Query q{};
+            q.origin = s.bounds[c].centre + s.bounds[c].half_size * reach * glm::vec3(u(rng), u(rng), u(rng));
+            q.direction = random_direction(rng);
+            q.cube = c;
+            switch (i % 97) {
+            case 1: q.origin.x = nan; break;
+            case 2: q.origin.y = inf; break;
+            case 3: q.direction = glm::vec3(0.0f); break;
+            case 4: q.direction = glm::vec3(nan, 1.0f, 0.0f); break;
+            case 5: q.direction = glm::vec3(-0.0f, 1.0f, 0.0f); break;
+            case 6: q.direction = glm::vec3(1.0f, -1.0f, 1.0f); break;
+            case 7: q.direction = glm::vec3(2.0f, 2.0f, -0.0f); break;
+            case 8: q.direction = glm::vec3(0.0f, 0.0f, -inf); break;
+            default: break;
+            }
+            queries.push_back(q);
+        }
+    return queries;
+}
+
+struct Comparison {
+    std::size_t same = 0, hits = 0;
+    long long texels = 0;
+};
+
+// Compares GPU search results with relief_search on the C++ cubes; prints the first differences.
+Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const Result* r, const ReliefParameters& p) {
+    Comparison c;
+    int printed = 0;
+    for (std::size_t i = 0; i < queries.size(); ++i) {
+        if (queries[i].mode != 0) continue;
+        const Query& q = queries[i];
+        const ReliefResult e = relief_search(s.cubes[q.cube], s.bounds[q.cube], q.origin, q.direction, p);
+        const bool ok = (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
+                        bits(r[i].distance) == bits(e.distance) && same_bits(r[i].point, e.point) &&
+                        same_bits(r[i].color, e.color);
+        c.same += ok;
+        c.hits += e.hit;
+        c.texels += e.texels_read;
+        if (!ok && printed++ < 8)
+            std::printf("  differs: cube %u origin (%a, %a, %a) direction (%a, %a, %a): C++ hit %d read %d t %a, "
+                        "GLSL hit %u read %d t %a\n",
+                        q.cube, q.origin.x, q.origin.y, q.origin.z, q.direction.x, q.direction.y, q.direction.z, e.hit,
+                        e.texels_read, e.distance, r[i].hit, r[i].texels_read, r[i].distance);
+    }
+    return c;
+}
+
+} // namespace
+
+TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), cross_bindings, sizeof(Push));
+    std::mt19937 rng(21);
+    Scene s = make_scene(rng, true);
+    const std::vector<Query> queries = search_queries(s, rng, 1500);
+
+    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
+    rcx::vk::Buffer pending(*vk, s.elements * 8);
+    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+
+    const float inf = std::numeric_limits<float>::infinity();
+    const ReliefParameters sets[] = {
+        {2.0f, 0.2f, 1024, 100.0f, inf},  {0.4f, 0.05f, 1024, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, inf},
+        {0.05f, 0.002f, 300, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, 0.3f}, {0.25f, 0.02f, 10, 100.0f, inf},
+    };
+    for (const ReliefParameters& p : sets) {
+        CAPTURE(p.step);
+        CAPTURE(p.epsilon);
+        CAPTURE(p.max_steps);
+        CAPTURE(p.max_gap);
+        const Push push{p, static_cast<std::uint32_t>(queries.size())};
+        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                     rcx::vk::group_count(queries.size(), 64));
+        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        std::printf("CDCT relief search (step %g, epsilon %g, %d steps, max_gap %g), C++ texels read in GLSL: %zu of "
+                    "%zu equal to C++ (%zu hits, %.1f texels read per search)\n",
+                    p.step, p.epsilon, p.max_steps, p.max_gap, c.same, queries.size(), c.hits,
+                    static_cast<double>(c.texels) / queries.size());
+        CHECK(c.same == queries.size());
+        CHECK(c.hits > queries.size() / 5);
+        CHECK(c.hits < queries.size());
+    }
+}
+
+TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then smallest word wins, and C++ reads the result") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), cross_bindings, sizeof(Push));
+    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), end_frame_bindings, 0);
+    std::mt19937 rng(22);
+    // The scene filled, then 3 of every 4 texels emptied: stores into the rest are refused.
+    Scene s = make_scene(rng, true);
+    for (CdctCube& cube : s.cubes) {
+        const int n = cube.face_size();
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column)
+                    if ((face + row + column) % 4 != 0) cube.invalidate(TexelAddress{face, column, row});
+    }
+    const ReliefParameters p{0.2f, 0.02f, 1024, 100.0f, std::numeric_limits<float>::infinity()};
+
+    // Stores of every kind, mixed with searches in one dispatch. Raw stores aim at a few keys with a
+    // few distances and colours, so that many texels see several competing words, ties of distance
+    // included; some distances are negative, NaN, infinite or -0.
+    std::vector<Query> queries = search_queries(s, rng, 800);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::uniform_int_distribution<int> pick(0, 7);
+    const float inf = std::numeric_limits<float>::infinity();
+    const float odd_distances[] = {-1.0f, std::nanf(""), inf, -0.0f, 0.0f, 1e-40f};
+    for (int i = 0; i < 24000; ++i) {
+        Query q{};
+        q.cube = static_cast<std::uint32_t>(i % s.cubes.size());
+        const CubeBounds& b = s.bounds[q.cube];
+        q.color = glm::vec3(pick(rng) / 4.0f, u(rng) < 0.5f ? 0.25f : 1.0f, 0.5f);
+        switch (i % 3) {
+        case 0: // store_hit at a point 0.5 to 150 from the centre (beyond 100: clamped to max_depth)
+            q.mode = 1;
+            q.origin = b.centre + glm::normalize(random_direction(rng)) * (0.5f + 150.0f * u(rng) * u(rng));
+            break;
+        case 1:
+            q.mode = 2;
+            q.direction = random_direction(rng);
+            break;
+        default:
+            q.mode = 3;
+            q.direction = glm::vec3(pick(rng) - 3.5f, pick(rng) % 3 - 1.0f, 1.0f + pick(rng) % 2);
+            q.distance = i % 50 == 2 ? odd_distances[pick(rng) % 6] : 1.0f + pick(rng) % 3;
+            break;
+        }
+        queries.push_back(q);
+    }
+    std::shuffle(queries.begin(), queries.end(), rng);
+
+    // What C++ answers this frame, before the stores (a store is invisible in its frame anyway), and
+    // which stores C++ must refuse whatever the order: bad key, bad distance, texel already visible.
+    std::vector<ReliefResult> frame_searches(queries.size());
+    std::vector<bool> refused_for_sure(queries.size());
+    for (std::size_t i = 0; i < queries.size(); ++i) {
+        const Query& q = queries[i];
+        CdctCube& cube = s.cubes[q.cube];
+        if (q.mode == 0) {
+            frame_searches[i] = relief_search(cube, s.bounds[q.cube], q.origin, q.direction, p);
+            continue;
+        }
+        const glm::vec3 key = q.mode == 1 ? q.origin - s.bounds[q.cube].centre : q.direction;
+        const float d = q.mode == 3 ? q.distance : 0.0f;
+        refused_for_sure[i] = !is_direction(key) || !(d >= 0.0f) || !std::isfinite(d) ||
+                              (is_direction(key) && cube.peek(key).has_value());
+    }
+
+    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
+    rcx::vk::Buffer pending(*vk, s.elements * 8);
+    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+    std::vector<Query> next_queries = search_queries(s, rng, 1500);
+    rcx::vk::Buffer next_buffer = rcx_test::buffer_of(*vk, next_queries);
+    rcx::vk::Buffer frame_results(*vk, queries.size() * sizeof(Result));
+    rcx::vk::Buffer next_results(*vk, next_queries.size() * sizeof(Result));
+    const Push push{p, static_cast<std::uint32_t>(queries.size())};
+    const Push next_push{p, static_cast<std::uint32_t>(next_queries.size())};
+    vk->submit([&](rcx::vk::Commands& c) {
+        c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results}, &push, sizeof(push),
+                   rcx::vk::group_count(queries.size(), 64));
+        c.barrier();
+        rcx_test::record_end_frame(c, end_frame, texels, pending, s.elements);
+        c.barrier();
+        c.dispatch(cross, {texels, pending, cubes, next_buffer, next_results}, &next_push, sizeof(next_push),
+                   rcx::vk::group_count(next_queries.size(), 64));
+    });
+
+    // The same stores in C++, in order; count the texels that several different words competed for.
+    std::map<std::pair<std::uint32_t, std::size_t>, std::set<std::uint64_t>> competing;
+    for (const Query& q : queries) {
+        CdctCube& cube = s.cubes[q.cube];
+        const CubeBounds& b = s.bounds[q.cube];
+        bool stored = false;
+        glm::vec3 key(0.0f);
+        DepthSample sample;
+        if (q.mode == 1) {
+            stored = store_hit(cube, b, q.origin, q.color, p);
+            key = q.origin - b.centre;
+            sample = DepthSample{q.color, std::min(glm::length(key), p.max_depth)};
+        } else if (q.mode == 2) {
+            stored = store_escape(cube, q.direction, q.color, p);
+            key = q.direction;
+            sample = DepthSample{q.color, p.max_depth};
+        } else if (q.mode == 3) {
+            stored = cube.store(q.direction, DepthSample{q.color, q.distance});
+            key = q.direction;
+            sample = DepthSample{q.color, q.distance};
+        }
+        if (stored)
+            competing[{q.cube, texel_linear_index(*texel_of(key, cube.face_size()), cube.face_size())}].insert(
+                CdctTexel::encode(sample));
+    }
+    for (CdctCube& cube : s.cubes) cube.begin_frame();
+    std::size_t contended = 0;
+    for (const auto& texel : competing) contended += texel.second.size() > 1;
+
+    // During the frame: searches answered from the frame's start; stores refused where C++ must refuse.
+    const Result* r = frame_results.as<Result>();
+    std::size_t searches_same = 0, searches = 0, refusals_kept = 0, refusals = 0;
+    for (std::size_t i = 0; i < queries.size(); ++i) {
+        if (queries[i].mode == 0) {
+            ++searches;
+            const ReliefResult& e = frame_searches[i];
+            searches_same += (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
+                             bits(r[i].distance) == bits(e.distance) && same_bits(r[i].color, e.color);
+        } else if (refused_for_sure[i]) {
+            ++refusals;
+            refusals_kept += r[i].hit == 0u;
+        }
+    }
+    CHECK(searches_same == searches);
+    CHECK(refusals_kept == refusals);
+    CHECK(refusals > 0);
+
+    // After the end-frame pass: every valid word equals C++'s, every empty one is empty in C++, and
+    // the pending buffer is empty again.
+    const std::vector<std::uint64_t> expected = s.words();
+    const std::uint64_t* words = texels.as<std::uint64_t>();
+    std::size_t words_same = 0, valid = 0, pending_clear = 0;
+    for (std::size_t i = 0; i < s.elements; ++i) {
+        const bool gpu_valid = CdctTexel::is_valid(words[i]);
+        words_same += gpu_valid ? words[i] == expected[i] : !CdctTexel::is_valid(expected[i]);
+        valid += gpu_valid;
+        pending_clear += pending.as<std::uint64_t>()[i] == ~std::uint64_t{0};
+    }
+    std::printf("CDCT stores in GLSL: %zu of %zu words equal to C++'s after the frame (%zu valid, %zu stored by "
+                "several different stores); %zu of %zu searches during the frame equal to C++; %zu of %zu certain "
+                "refusals refused\n",
+                words_same, s.elements, valid, contended, searches_same, searches, refusals_kept, refusals);
+    CHECK(words_same == s.elements);
+    CHECK(pending_clear == s.elements);
+    CHECK(contended > 50);
+
+    // C++ reads the GPU's words: a fresh cube filled from them holds the same words, and the searches of
+    // the next frame in GLSL equal those of C++.
+    for (std::size_t c = 0; c < s.cubes.size(); ++c) {
+        CdctCube copy(s.cubes[c].face_size());
+        rcx_test::store_words(copy, words + s.descriptors[c].first_texel);
+        copy.begin_frame();
+        CHECK(rcx_test::words_of(copy) == rcx_test::words_of(s.cubes[c]));
+    }
+    const Comparison next = compare_searches(s, next_queries, next_results.as<Result>(), p);
+    std::printf("CDCT relief search in the next frame: %zu of %zu equal to C++ (%zu hits)\n", next.same,
+                next_queries.size(), next.hits);
+    CHECK(next.same == next_queries.size());
+    CHECK(next.hits > 0);
+}

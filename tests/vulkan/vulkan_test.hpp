@@ -1,0 +1,74 @@
+// vulkan_test.hpp: what the Vulkan cross-check tests share: one rcx::vk::Context per test process,
+// made on first use, and the paths of the SPIR-V files compiled at build time.
+//
+// A test case starts with `rcx::vk::Context* vk = rcx_test::context(); if (!vk) return;`: without a
+// Vulkan device the case does nothing and the process exits 77 (CTest: skipped). After the cases, the
+// process fails when the validation layer reported any error.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <raycache/cache_cube.hpp>
+#include <raycache/shared/gpu_layout.h>
+#include <rcx/vulkan.hpp>
+
+namespace rcx_test {
+
+// The process's Vulkan context, or nullptr when there is no Vulkan device (the reason is printed once).
+rcx::vk::Context* context();
+
+// Path of a SPIR-V file built from tests/vulkan/shaders/ ("face_map" -> ".../shaders/face_map.spv").
+std::string spirv(const std::string& name);
+
+// A storage buffer holding a copy of `values` (at least one element's worth of bytes).
+template <class T>
+rcx::vk::Buffer buffer_of(rcx::vk::Context& vk, const std::vector<T>& values) {
+    rcx::vk::Buffer buffer(vk, std::max<std::size_t>(values.size(), 1) * sizeof(T));
+    buffer.upload(values.data(), values.size() * sizeof(T));
+    return buffer;
+}
+
+// The words of a C++ cube in buffer order ((face * N + row) * N + column), read with CacheCube::load()
+// and re-encoded; empty texels give Texel::invalid.
+template <class Texel>
+std::vector<typename Texel::Word> words_of(const raycache::CacheCube<Texel>& cube) {
+    const int n = cube.face_size();
+    std::vector<typename Texel::Word> words;
+    words.reserve(cube.texel_count());
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column) {
+                const auto value = cube.load(raycache::TexelAddress{face, column, row});
+                words.push_back(value ? Texel::encode(*value) : Texel::invalid);
+            }
+    return words;
+}
+
+// Stores every valid word of words[first .. first + 6 N^2) into the same texel of `cube` (store_at with
+// the decoded value); the caller ends the frame. Returns how many were valid.
+template <class Texel>
+std::size_t store_words(raycache::CacheCube<Texel>& cube, const typename Texel::Word* words) {
+    const int n = cube.face_size();
+    std::size_t valid = 0, i = 0;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column, ++i)
+                if (Texel::is_valid(words[i])) {
+                    cube.store_at(raycache::TexelAddress{face, column, row}, Texel::decode(words[i]));
+                    ++valid;
+                }
+    return valid;
+}
+
+// Records the end-frame pass (shaders/end_frame.comp) over `elements` elements of texels and pending.
+inline void record_end_frame(rcx::vk::Commands& commands, const rcx::vk::ComputePipeline& end_frame,
+                             const rcx::vk::Buffer& texels, const rcx::vk::Buffer& pending, std::uint64_t elements) {
+    const std::uint32_t groups = rcx::vk::group_count(elements, 64);
+    const std::uint32_t x = std::min<std::uint32_t>(groups, 65535u);
+    commands.dispatch(end_frame, {texels, pending}, nullptr, 0, x, (groups + x - 1) / x);
+}
+
+} // namespace rcx_test
