@@ -8,6 +8,8 @@
 //  - the counters add up exactly to the operations issued.
 #include <doctest/doctest.h>
 
+#include "test_random.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -40,16 +42,6 @@ std::uint32_t bits_of(float x) {
 bool same_bits(const glm::vec3& a, const glm::vec3& b) {
     return bits_of(a.x) == bits_of(b.x) && bits_of(a.y) == bits_of(b.y) && bits_of(a.z) == bits_of(b.z);
 }
-
-struct Lcg {
-    std::uint64_t state;
-    std::uint32_t next() {
-        state = state * 6364136223846793005ull + 1442695040888963407ull;
-        return static_cast<std::uint32_t>(state >> 32);
-    }
-    float uniform() { return static_cast<float>(next() >> 8) * (1.0f / 16777216.0f); } // [0, 1)
-    float signed_uniform() { return 2.0f * uniform() - 1.0f; }
-};
 
 // The direction through the centre of texel (face, column, row), from the spec's face table:
 // sc = 2 (column + 0.5) / N - 1 is t'u / |m|, tc likewise t'v / |m|, with |m| = 1.

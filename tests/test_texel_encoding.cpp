@@ -8,6 +8,8 @@
 // brightest mantissa comes out as 512 the exponent goes up by one and the mantissas are recomputed.
 #include <doctest/doctest.h>
 
+#include "test_random.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -57,15 +59,6 @@ double clamped(float x) {
 }
 
 // Deterministic pseudo-random numbers (64-bit LCG), so a failure reproduces.
-struct Lcg {
-    std::uint64_t state;
-    std::uint32_t next() {
-        state = state * 6364136223846793005ull + 1442695040888963407ull;
-        return static_cast<std::uint32_t>(state >> 32);
-    }
-    float uniform() { return static_cast<float>(next() >> 8) * (1.0f / 16777216.0f); } // [0, 1)
-};
-
 struct RoundTripSweep {
     std::uint64_t colours = 0;
     std::uint64_t violations = 0;

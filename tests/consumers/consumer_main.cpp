@@ -1,4 +1,4 @@
-// Consumer of an installed RayCache: succeeds only if the headers match the package version.
+// A RayCache consumer (installed or vendored): succeeds only if the headers match the package version.
 #include <raycache/raycache.hpp>
 
 #include <cstdio>
