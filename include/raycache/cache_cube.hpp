@@ -213,9 +213,11 @@ private:
     }
 
     std::optional<Value> visible_value(std::size_t index) const noexcept {
-        // Acquire pairs with the store's release: a word written this frame comes with its written bit set.
+        // Acquire pairs with the store's release: a word written this frame comes with its written bit,
+        // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.
         const Word word = state_->texels[index].load(std::memory_order_acquire);
-        if (!Texel::is_valid(word) || written_this_frame(index)) return std::nullopt;
+        if (!Texel::is_valid(word)) return std::nullopt;
+        if (state_->written_this_frame.load(std::memory_order_relaxed) && written_this_frame(index)) return std::nullopt;
         return Texel::decode(word);
     }
 

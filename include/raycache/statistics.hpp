@@ -1,6 +1,7 @@
 // raycache/statistics.hpp: per-cube counters of lookups, hits, misses and stores, cheap to bump from many threads.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstddef>
@@ -28,36 +29,45 @@ struct CubeStatistics {
 
 namespace detail {
 
-// CounterCount counters spread over cache-line-sized slots, one per thread (modulo the slot count), so
-// that threads bumping them on the lookup path do not fight over one cache line. Sums are exact; a
-// snapshot taken while other threads count is a moment's approximation.
+// CounterCount counters spread over cache-line-sized slots. The first `owned_slots` threads that count
+// get a slot of their own and bump it with a plain load and store (no locked instruction on the lookup
+// path); later threads share one slot and bump it with fetch_add. Sums are exact; a snapshot taken
+// while other threads count is a moment's approximation.
 template <std::size_t CounterCount>
 class StripedCounters {
 public:
     void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
-        slots_[this_thread_slot()].values[counter].fetch_add(amount, std::memory_order_relaxed);
+        const std::size_t slot = this_thread_slot();
+        std::atomic<std::uint64_t>& value = slots_[slot].values[counter];
+        if (slot < owned_slots)
+            value.store(value.load(std::memory_order_relaxed) + amount, std::memory_order_relaxed); // only writer
+        else
+            value.fetch_add(amount, std::memory_order_relaxed);
     }
     std::uint64_t sum(std::size_t counter) const noexcept {
         std::uint64_t total = 0;
         for (const Slot& slot : slots_) total += slot.values[counter].load(std::memory_order_relaxed);
         return total;
     }
+    // Not concurrent with add().
     void reset() noexcept {
         for (Slot& slot : slots_)
             for (auto& value : slot.values) value.store(0, std::memory_order_relaxed);
     }
 
 private:
-    static constexpr std::size_t slot_count = 16;
+    static constexpr std::size_t owned_slots = 32;
     struct alignas(64) Slot {
         std::array<std::atomic<std::uint64_t>, CounterCount> values{};
     };
+    // This thread's slot: its own for the first owned_slots threads of the process, else the shared one.
     static std::size_t this_thread_slot() noexcept {
-        static std::atomic<std::size_t> next_slot{0};
-        thread_local const std::size_t slot = next_slot.fetch_add(1, std::memory_order_relaxed) % slot_count;
+        static std::atomic<std::size_t> next_thread{0};
+        thread_local const std::size_t slot =
+            std::min(next_thread.fetch_add(1, std::memory_order_relaxed), owned_slots);
         return slot;
     }
-    std::array<Slot, slot_count> slots_{};
+    std::array<Slot, owned_slots + 1> slots_{};
 };
 
 } // namespace detail
