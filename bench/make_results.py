@@ -139,7 +139,7 @@ def main():
     with open(os.path.join(results, "tables.md")) as f:
         tables = f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 10 minutes on 2 cores). Every speed-up is a ratio of "
+          "Regenerate everything with `scripts/bench.sh` (about 5 minutes on 2 cores). Every speed-up is a ratio of "
           "medians of renders interleaved in one process on the same frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", "", "## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # bench.sh: regenerates docs/RESULTS.md and docs/results/ from scratch: the thesis's experiments on the
 # Embree tracer (raycache_bench), the micro-benchmarks (raycache_micro_bench), and the plots.
-#   scripts/bench.sh           the full run (about 10 minutes on 2 cores)
+#   scripts/bench.sh           the full run (about 5 minutes on 2 cores)
 #   scripts/bench.sh --quick   small images, one round: checks the pipeline, not results (writes to build-bench/quick)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
