@@ -1,0 +1,91 @@
+// gpu_tracer.hpp: the core of the Vulkan compute Whitted example: an rcx::Scene flattened into GPU
+// buffers (a BVH over spheres and triangles built on the CPU with Embree's BVH builder, rtcBuildBVH),
+// traversed and shaded in a compute shader (shaders/whitted.comp) as examples/embree_whitted/tracer.cpp
+// shades, one invocation per pixel; caching cubes in storage buffers, used through RayCache's GLSL
+// include, with the end-frame pass (shaders/end_frame.comp) between frames.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <rcx/vulkan.hpp>
+
+#include "rcx/image.hpp"
+#include "rcx/options.hpp"
+#include "rcx/scene.hpp"
+
+namespace rcx::gpu {
+
+// A flattened BVH, as the shader reads it (layouts documented in shaders/whitted.comp).
+struct BvhNode {
+    float lo[3];
+    std::int32_t a;  // inner: first child (the second is a + 1); leaf: first primitive
+    float hi[3];
+    std::int32_t b;  // inner: 0; leaf: primitive count
+};
+struct GpuPrimitive {
+    float p[3][4];   // sphere: p[0] = centre, radius; triangle: vertices
+    float n[3][4];   // triangle: vertex normals
+    std::uint32_t info[4]; // kind (0 sphere, 1 triangle), object (Embree geometry id order), triangle, 0
+};
+static_assert(sizeof(BvhNode) == 32 && sizeof(GpuPrimitive) == 112, "GPU layouts");
+
+struct FlatBvh {
+    std::vector<BvhNode> nodes;
+    std::vector<GpuPrimitive> primitives; // in leaf order
+};
+
+// Builds the BVH with Embree's BVH builder (binary, up to 4 primitives a leaf, SAH) and flattens it.
+// Objects are numbered as the Embree tracer numbers its geometries: spheres, then meshes.
+// Throws std::runtime_error when Embree fails or the scene has nothing in it.
+FlatBvh build_bvh(const Scene& scene);
+
+struct TracerSettings {
+    CacheMode mode = CacheMode::off;
+    int face_size = 512;      // cube face texels (cct, cdct)
+    float delta = 0.2f;       // CDCT relief search: step, epsilon, linear steps, gap (0 = none)
+    float epsilon = 0.02f;
+    int max_steps = 1024;
+    float max_gap = 0.5f;
+    bool hybrid = false;      // primary hits from a raster pass into a G-buffer (thesis Table 5.1), the rest in compute
+};
+
+struct FrameStats {
+    double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for
+    double end_frame_milliseconds = 0.0; // the end-frame pass (cct, cdct), over the blocks stored into
+    double dirty_fraction = 0.0;         // of the texel blocks (1024 elements), visited by that pass
+    std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube
+    std::uint64_t hits = 0;              // ... and were answered by it
+};
+
+class Tracer {
+public:
+    // Uploads the scene; loads shaders/<name>.spv from spirv_dir (rcx::vk::Error naming the file when one
+    // is missing or rejected); allocates and clears the cubes of cached objects for cct/cdct.
+    // cdct needs a context with int64_atomics() (std::invalid_argument otherwise). All cubes live in one
+    // storage buffer (the GLSL include binds one per technique): a face size whose cubes exceed the
+    // device's maxStorageBufferRange is lowered to the largest that fits (face_size() tells).
+    Tracer(vk::Context& context, const Scene& scene, const std::string& spirv_dir, const TracerSettings& settings);
+    ~Tracer();
+    Tracer(const Tracer&) = delete;
+    Tracer& operator=(const Tracer&) = delete;
+
+    // Renders one frame, then (cct, cdct) runs the end-frame pass so this frame's stores become visible.
+    Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr);
+
+    std::size_t bvh_nodes() const noexcept;
+    int face_size() const noexcept;          // of the cubes, after fitting them into one buffer
+    std::size_t cube_bytes() const noexcept; // texel + pending buffers
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+// Where the build put the SPIR-V files (environment RAYCACHE_VULKAN_WHITTED_SHADERS overrides it).
+std::string default_spirv_dir();
+
+} // namespace rcx::gpu

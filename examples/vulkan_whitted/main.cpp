@@ -1,0 +1,210 @@
+// raycache_vulkan_whitted: the Whitted tracer of raycache_embree_whitted as a Vulkan compute shader (one
+// invocation per pixel, its own BVH traversed in GLSL; runs on Mesa's lavapipe), with the rays leaving
+// reflective and refractive objects cached in caching cubes through RayCache's GLSL include. Same
+// scenes, camera paths and options as the Embree example (rcx::parse_options; --help).
+//
+//   raycache_vulkan_whitted --scene behind-32 --size 256x256 --cache cct --frames 10 --compare
+//
+// Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill is
+// refused, the CDCT search is the linear walk (no depth pyramid in GLSL), and a ray leaving a cached
+// object inside the subtree of a missed leaving ray is traced without a lookup (no recursion in GLSL).
+// --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
+// rays in compute, as in the thesis's Table 5.1.
+// Exit status 2: bad options, no Vulkan device, a shader that does not load.
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <rcx/vulkan.hpp>
+
+#include "gpu_tracer.hpp"
+#include "rcx/image.hpp"
+#include "rcx/options.hpp"
+#include "rcx/scene.hpp"
+
+namespace {
+
+struct InputError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+std::string frame_path(const rcx::Options& o, const std::string& scene, const std::string& what, int frame, bool hybrid) {
+    char name[256];
+    std::snprintf(name, sizeof name, "%s-vulkan%s-%s-%04d.png", scene.c_str(), hybrid ? "-hybrid" : "", what.c_str(), frame);
+    return (std::filesystem::path(o.out) / name).string();
+}
+
+std::string psnr_text(double db) {
+    if (std::isinf(db)) return "   inf";
+    char text[32];
+    std::snprintf(text, sizeof text, "%6.2f", db);
+    return text;
+}
+
+int run(const rcx::Options& o, bool hybrid) {
+    if (o.prefill) throw InputError("--prefill is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    rcx::Scene scene;
+    try {
+        scene = rcx::make_scene(o.scene, rcx::scene_params(o));
+        rcx::apply_options(scene, o);
+        rcx::ensure_writable_directory(o.out);
+    } catch (const std::exception& e) {
+        throw InputError(e.what());
+    }
+
+    rcx::vk::ContextOptions context_options;
+    context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct;
+    std::unique_ptr<rcx::vk::Context> context;
+    try {
+        context = std::make_unique<rcx::vk::Context>(context_options);
+    } catch (const rcx::vk::NoDeviceError& e) {
+        throw InputError(std::string("no usable Vulkan device: ") + e.what() +
+                         ". On Debian/Ubuntu install mesa-vulkan-drivers (lavapipe, Vulkan on the CPU) and libvulkan1.");
+    }
+
+    rcx::gpu::TracerSettings settings;
+    settings.mode = o.cache;
+    settings.face_size = o.face_size;
+    settings.delta = o.delta;
+    settings.epsilon = o.epsilon;
+    settings.max_steps = o.max_steps;
+    settings.max_gap = o.max_gap;
+    settings.hybrid = hybrid;
+    const std::string spirv = rcx::gpu::default_spirv_dir();
+    std::unique_ptr<rcx::gpu::Tracer> tracer, reference;
+    try {
+        tracer = std::make_unique<rcx::gpu::Tracer>(*context, scene, spirv, settings);
+        if (o.compare) {
+            rcx::gpu::TracerSettings plain = settings;
+            plain.mode = rcx::CacheMode::off;
+            reference = std::make_unique<rcx::gpu::Tracer>(*context, scene, spirv, plain);
+        }
+    } catch (const rcx::vk::Error& e) {
+        throw InputError(std::string("cannot set up the Vulkan tracer: ") + e.what() +
+                         " (shaders are looked for in " + spirv + "; RAYCACHE_VULKAN_WHITTED_SHADERS overrides it)");
+    } catch (const std::invalid_argument& e) {
+        throw InputError(e.what());
+    }
+
+    const bool caching_mode = o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct;
+    if (caching_mode && tracer->face_size() != o.face_size)
+        std::fprintf(stderr, "%s: note: --face-size %d: the cubes do not fit in one storage buffer of this device "
+                             "(maxStorageBufferRange %llu bytes); using face size %d\n",
+                     "raycache_vulkan_whitted", o.face_size,
+                     static_cast<unsigned long long>(context->properties().limits.maxStorageBufferRange), tracer->face_size());
+    const int frames = scene.path.frames;
+    const bool caching = o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct;
+    if (!o.quiet) {
+        std::printf("device %s (validation %s); scene %s: %zu spheres, %zu meshes, %d cached objects, BVH %zu nodes; "
+                    "%dx%d, depth %d, %s path, %d frames of %.2f deg\n",
+                    context->device_name().c_str(), context->validation_enabled() ? "on" : "off", scene.name.c_str(),
+                    scene.spheres.size(), scene.meshes.size(), scene.cached_object_count(), tracer->bvh_nodes(), o.width,
+                    o.height, scene.max_depth, rcx::to_string(scene.path.kind), frames,
+                    static_cast<double>(scene.path.step_degrees));
+        std::printf("%s; cache %s", hybrid ? "hybrid: primary hits rasterised into a G-buffer, secondary rays in compute" : "all rays in compute",
+                    rcx::to_string(o.cache));
+        if (caching) std::printf(", faces %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
+                                 static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
+        if (o.cache == rcx::CacheMode::cdct)
+            std::printf(", delta %g, epsilon %g, max steps %d, linear search", static_cast<double>(o.delta),
+                        static_cast<double>(o.epsilon), o.max_steps);
+        std::printf("; PNGs in %s\n", o.out.c_str());
+        std::printf("frame         ms  end-frame ms  hit rate%s\n", o.compare ? "    uncached ms  speed-up   PSNR dB" : "");
+        std::fflush(stdout);
+    }
+
+    double sum_ms = 0.0, warm_ms = 0.0, sum_plain = 0.0, warm_plain = 0.0, psnr_min = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < frames; ++f) {
+        const rcx::Camera camera = scene.camera_at(f);
+        rcx::gpu::FrameStats stats;
+        const rcx::Image image = tracer->render(camera, o.width, o.height, &stats);
+        rcx::write_png(frame_path(o, scene.name, rcx::to_string(o.cache), f, hybrid), image);
+        const double ms = stats.milliseconds + stats.end_frame_milliseconds;
+        sum_ms += ms;
+        if (f > 0) warm_ms += ms;
+        double plain_ms = 0.0, psnr = 0.0;
+        if (o.compare) {
+            rcx::gpu::FrameStats plain_stats;
+            const rcx::Image plain = reference->render(camera, o.width, o.height, &plain_stats);
+            plain_ms = plain_stats.milliseconds;
+            sum_plain += plain_ms;
+            if (f > 0) warm_plain += plain_ms;
+            psnr = rcx::compare(image, plain).psnr_db;
+            psnr_min = std::min(psnr_min, psnr);
+            rcx::write_png(frame_path(o, scene.name, "reference", f, hybrid), plain);
+            rcx::write_png(frame_path(o, scene.name, std::string(rcx::to_string(o.cache)) + "-diff", f, hybrid),
+                           rcx::difference_image(image, plain));
+        }
+        if (!o.quiet) {
+            char hit[32] = "    -";
+            if (caching && stats.lookups > 0)
+                std::snprintf(hit, sizeof hit, "%5.1f%%", 100.0 * static_cast<double>(stats.hits) / static_cast<double>(stats.lookups));
+            std::printf("%5d %10.2f %13.2f   %s", f, stats.milliseconds, stats.end_frame_milliseconds, hit);
+            if (o.compare) std::printf(" %14.2f %8.2fx   %s", plain_ms, plain_ms / ms, psnr_text(psnr).c_str());
+            std::printf("\n");
+            std::fflush(stdout);
+        }
+    }
+    const double n = frames;
+    const double warm = frames > 1 ? n - 1 : 1;
+    std::printf("summary %s, %dx%d, cache %s (Vulkan, %s): mean %.2f ms/frame (%.2f ms after the first), end-frame pass included\n",
+                scene.name.c_str(), o.width, o.height, rcx::to_string(o.cache), context->device_name().c_str(), sum_ms / n,
+                frames > 1 ? warm_ms / warm : sum_ms / n);
+    if (o.compare)
+        std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame; PSNR min %s dB\n",
+                    sum_plain / n, frames > 1 ? warm_plain / warm : sum_plain / n,
+                    frames > 1 ? warm_plain / warm_ms : sum_plain / sum_ms, psnr_text(psnr_min).c_str());
+    tracer.reset();
+    reference.reset();
+    const std::uint64_t errors = context->validation_errors();
+    context.reset();
+    if (errors > 0 || rcx::vk::validation_errors_in_process() > 0) {
+        std::fprintf(stderr, "Vulkan validation reported %llu error(s)\n",
+                     static_cast<unsigned long long>(rcx::vk::validation_errors_in_process()));
+        return 1;
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_vulkan_whitted").filename().string();
+    // --hybrid is this tracer's own option (primary visibility by a raster pass); the rest are shared.
+    bool hybrid = false;
+    std::vector<const char*> args;
+    for (int i = 0; i < argc; ++i) {
+        if (i > 0 && std::string(argv[i]) == "--hybrid") hybrid = true;
+        else args.push_back(argv[i]);
+    }
+    rcx::Options options;
+    try {
+        options = rcx::parse_options(static_cast<int>(args.size()), args.data());
+    } catch (const rcx::UsageError& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        return 2;
+    }
+    if (options.help) {
+        std::fputs(rcx::help_text(program).c_str(), stdout);
+        std::fputs("\nVulkan tracer: --hybrid   primary visibility by a raster pass into a G-buffer, secondary rays in compute\n"
+                   "(thesis Table 5.1); with --compare the uncached reference is rendered the same way.\n"
+                   "--threads is ignored, --prefill is refused, the CDCT search is the linear walk.\n"
+                   "Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv files are looked for.\n",
+                   stdout);
+        return 0;
+    }
+    try {
+        return run(options, hybrid);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: error: %s\n", program.c_str(), e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,167 @@
+// scene.glsl: what the tracing compute shader (whitted.comp) and the raster G-buffer pass (gbuffer.vert,
+// gbuffer.frag) share: the scene buffers (bindings 5..8), glm-ordered float helpers, Embree's sphere and
+// triangle tests, the BVH traversal, and the primary ray through a pixel's centre.
+#ifndef WHITTED_SCENE_GLSL
+#define WHITTED_SCENE_GLSL
+
+#define INF uintBitsToFloat(0x7F800000u)
+
+struct Node {        // 32 bytes; leaf: b > 0 primitives from a; inner: b == 0, children a and a + 1
+    vec3 lo;
+    int a;
+    vec3 hi;
+    int b;
+};
+struct Prim {        // sphere: p0 = (centre, radius); triangle: p0..p2 vertices, n0..n2 vertex normals
+    vec4 p0, p1, p2;
+    vec4 n0, n1, n2;
+    uvec4 info;      // x: 0 sphere, 1 triangle; y: object (= Embree geometry id: spheres, then meshes)
+};
+struct Object {
+    vec4 m0;         // diffuse, specular
+    vec4 m1;         // checker colour, shininess
+    vec4 m2;         // reflectivity, transparency, ior, checker scale
+    vec4 m3;         // checker (0/1), cached (0/1), is sphere (0/1), -
+    vec4 m4;         // sphere: centre, radius
+};
+
+layout(std430, binding = 5) readonly buffer Nodes { Node nodes[]; };
+layout(std430, binding = 6) readonly buffer Prims { Prim prims[]; };
+layout(std430, binding = 7) readonly buffer Objects { Object objects[]; };
+layout(std430, binding = 8) readonly buffer Params {
+    vec4 eye;
+    vec4 forward;
+    vec4 right;
+    vec4 up;
+    vec4 light_position;  // w: ambient
+    vec4 light_intensity; // w: tan(fov_y / 2)
+    vec4 environment;     // w: aspect
+    ivec4 frame;          // width, height, mode, max depth
+    vec4 relief;          // step, epsilon, max depth, max gap
+    ivec4 relief_i;       // max steps, -, -, -
+};
+
+// glm's order of operations, never fused.
+float pdot(vec3 a, vec3 b) {
+    precise float r = (a.x * b.x + a.y * b.y) + a.z * b.z;
+    return r;
+}
+vec3 pnormalize(vec3 v) {
+    precise float s = 1.0 / sqrt(pdot(v, v));
+    precise vec3 r = v * s;
+    return r;
+}
+float plength(vec3 v) {
+    precise float r = sqrt(pdot(v, v));
+    return r;
+}
+vec3 pcross(vec3 x, vec3 y) {
+    precise vec3 r = vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+    return r;
+}
+
+// ---- intersection ------------------------------------------------------------------------------------
+
+struct Hit {
+    float t;
+    int prim;
+    float u, v;
+};
+
+// Embree's sphere test (SphereIntersector1): front hit if in [tnear, tfar], else the back hit.
+bool hit_sphere(vec4 s, vec3 o, vec3 d, float tfar, inout float t) {
+    precise vec3 c0 = s.xyz - o;
+    precise float rd2 = 1.0 / pdot(d, d);
+    precise float proj = pdot(c0, d) * rd2;
+    precise vec3 perp = c0 - proj * d;
+    precise float l2 = pdot(perp, perp);
+    precise float r2 = s.w * s.w;
+    if (!(l2 <= r2)) return false;
+    precise float td = sqrt((r2 - l2) * rd2);
+    precise float t_front = proj - td;
+    precise float t_back = proj + td;
+    if (0.0 <= t_front && t_front <= tfar) { t = t_front; return true; }
+    if (0.0 <= t_back && t_back <= tfar) { t = t_back; return true; }
+    return false;
+}
+
+// Embree's Moeller-Trumbore test: e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1; u weighs v1, v weighs v2.
+bool hit_triangle(Prim p, vec3 o, vec3 d, float tfar, inout float t, inout float u, inout float v) {
+    vec3 v0 = p.p0.xyz, v1 = p.p1.xyz, v2 = p.p2.xyz;
+    precise vec3 e1 = v0 - v1;
+    precise vec3 e2 = v2 - v0;
+    vec3 ng = pcross(e2, e1);
+    precise vec3 c = v0 - o;
+    vec3 r = pcross(c, d);
+    float den = pdot(ng, d);
+    float abs_den = abs(den);
+    float sgn = den < 0.0 ? -1.0 : 1.0;
+    float U = pdot(r, e2) * sgn;
+    float V = pdot(r, e1) * sgn;
+    if (!(den != 0.0 && U >= 0.0 && V >= 0.0 && U + V <= abs_den)) return false;
+    float T = pdot(ng, c) * sgn;
+    if (!(0.0 < T && T <= abs_den * tfar)) return false;
+    precise float rcp = 1.0 / abs_den;
+    t = T * rcp;
+    u = U * rcp;
+    v = V * rcp;
+    return true;
+}
+
+bool hit_box(vec3 lo, vec3 hi, vec3 o, vec3 inv, float tfar) {
+    vec3 a = (lo - o) * inv;
+    vec3 b = (hi - o) * inv;
+    vec3 tmin = min(a, b), tmax = max(a, b);
+    float t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+    float t1 = min(min(tmax.x, tmax.y), min(tmax.z, tfar));
+    return t0 <= t1 * 1.00000024; // a little slack: never miss a box by rounding
+}
+
+// The nearest hit in [0, tfar] (any: the first found, for shadow rays); prim -1 when none.
+Hit intersect(vec3 o, vec3 d, float tfar, bool any) {
+    Hit h;
+    h.t = tfar;
+    h.prim = -1;
+    h.u = 0.0;
+    h.v = 0.0;
+    vec3 safe = vec3(abs(d.x) < 1e-30 ? 1e-30 : d.x, abs(d.y) < 1e-30 ? 1e-30 : d.y, abs(d.z) < 1e-30 ? 1e-30 : d.z);
+    vec3 inv = 1.0 / safe;
+    int stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        Node n = nodes[stack[--top]];
+        if (!hit_box(n.lo, n.hi, o, inv, h.t)) continue;
+        if (n.b > 0) {
+            for (int i = n.a; i < n.a + n.b; ++i) {
+                Prim p = prims[i];
+                float t = 0.0, u = 0.0, v = 0.0;
+                bool hit = p.info.x == 0u ? hit_sphere(p.p0, o, d, h.t, t) : hit_triangle(p, o, d, h.t, t, u, v);
+                if (hit) {
+                    h.t = t;
+                    h.prim = i;
+                    h.u = u;
+                    h.v = v;
+                    if (any) return h;
+                }
+            }
+        } else if (top < 62) {
+            stack[top++] = n.a + 1;
+            stack[top++] = n.a;
+        }
+    }
+    return h;
+}
+
+// The unit direction of the primary ray through the centre of pixel (x, y), row 0 at the top (as
+// rcx::embree::Tracer::primary_direction, with the camera basis computed on the CPU).
+vec3 primary_direction(int x, int y) {
+    int width = frame.x, height = frame.y;
+    float tan_half = light_intensity.w, aspect = environment.w;
+    precise float sx = (2.0 * (float(x) + 0.5) / float(width) - 1.0) * tan_half * aspect;
+    precise float sy = (1.0 - 2.0 * (float(y) + 0.5) / float(height)) * tan_half;
+    precise vec3 dir = forward.xyz + sx * right.xyz + sy * up.xyz;
+    return pnormalize(dir);
+}
+
+#endif /* WHITTED_SCENE_GLSL */

@@ -1,0 +1,258 @@
+#version 450
+// whitted.comp: the Whitted tracer of examples/embree_whitted/tracer.cpp in a compute shader, one
+// invocation per pixel: a stack-based traversal of a BVH built on the CPU (Embree's BVH builder),
+// spheres and triangles as primitives, and the recursion replaced by an explicit stack of rays with
+// throughput weights (colour is linear in the children's colours, so the sum is the same).
+//
+// Caching (Params.mode: 0 off, 1 cct, 2 cdct, 3 ceiling): a ray leaving a cached object, met on the way
+// of a primary ray's tree, goes through the object's cube (RayCache's GLSL include); on a miss its
+// subtree is traced with trace_subtree(), which does not consult caches again (GLSL has no recursion),
+// and the result is stored, with the store's block of texels flagged dirty for the end-frame pass
+// (end_frame.comp visits only those). Hybrid (mode + 16): the primary ray's hit is read from the G-buffer
+// that the raster pass wrote (gbuffer.vert/.frag) instead of traced. Compiled twice: without
+// WHITTED_CDCT (off, cct, ceiling: no 64-bit atomics needed) and with it (cdct).
+#extension GL_GOOGLE_include_directive : require
+#ifdef WHITTED_CDCT
+#include "raycache/cdct.glsl"
+#else
+#include "raycache/cct.glsl"
+#endif
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "scene.glsl"
+
+layout(std430, binding = 4) readonly buffer Cubes { raycache_gpu_cube cubes[]; };
+layout(std430, binding = 9) writeonly buffer Output { vec4 pixels[]; };
+layout(std430, binding = 10) buffer Counters { uint counters[]; }; // 0: lookups, 1: hits
+// Hybrid (Params.frame.z >= 16 adds it to the mode): the primary hit of each pixel from the raster pass,
+// (t bits, primitive or ~0u for none, u bits, v bits).
+layout(std430, binding = 12) readonly buffer GBuffer { uvec4 gbuffer[]; };
+// One flag per block of 1024 texel-buffer elements that a store went to this frame: the end-frame pass
+// visits only those blocks (every other pending word is still empty).
+layout(std430, binding = 11) buffer Dirty { uint dirty[]; };
+const uint BLOCK_SHIFT = 10u;
+
+void mark_dirty(raycache_gpu_cube cube, vec3 key) {
+    uint i = raycache_cube_texel(cube, key);
+    if (i != RAYCACHE_NO_TEXEL && (i >> BLOCK_SHIFT) < uint(dirty.length())) dirty[i >> BLOCK_SHIFT] = 1u;
+}
+
+const int MODE_OFF = 0, MODE_CCT = 1, MODE_CDCT = 2, MODE_CEILING = 3;
+
+// ---- shading -----------------------------------------------------------------------------------------
+
+float surface_epsilon(vec3 p) {
+    vec3 a = abs(p);
+    return 1e-4 * max(1.0, max(a.x, max(a.y, a.z)));
+}
+
+float schlick(float n1, float n2, float cos_i, float cos_t) {
+    precise float r0 = (n1 - n2) / (n1 + n2);
+    float c = n1 <= n2 ? cos_i : cos_t;
+    precise float x = 1.0 - c;
+    precise float r = r0 * r0 + (1.0 - r0 * r0) * x * x * x * x * x;
+    return r;
+}
+
+// A ray spawned by a hit: its weight in the parent's colour; leaving: it leaves the (cached) object.
+struct Child {
+    vec3 o;
+    vec3 d;
+    vec3 w;
+    bool leaving;
+};
+
+// tracer.cpp's shade(): the local colour of the hit, and the reflected/refracted rays (none at max depth).
+vec3 shade(Hit h, vec3 origin, vec3 d, int depth, out Child children[3], out int count, out uint object) {
+    count = 0;
+    Prim prim = prims[h.prim];
+    object = prim.info.y;
+    Object m = objects[object];
+    precise vec3 p = origin + h.t * d;
+    vec3 ng, ns;
+    if (prim.info.x == 0u) {
+        ng = ns = pnormalize(p - prim.p0.xyz);
+    } else {
+        precise vec3 interp = (1.0 - h.u - h.v) * prim.n0.xyz + h.u * prim.n1.xyz + h.v * prim.n2.xyz;
+        ns = pnormalize(interp);
+        ng = pcross(prim.p1.xyz - prim.p0.xyz, prim.p2.xyz - prim.p0.xyz);
+        ng = pnormalize(pdot(ng, ns) < 0.0 ? -ng : ng);
+    }
+    bool inside = pdot(d, ng) > 0.0;
+    vec3 nf = inside ? -ng : ng;
+    vec3 n = inside ? -ns : ns;
+    if (pdot(n, d) >= 0.0) n = nf;
+    float eps = surface_epsilon(p);
+    precise vec3 above = p + eps * nf;
+    precise vec3 below = p - eps * nf;
+
+    vec3 base = m.m0.xyz;
+    if (m.m3.x != 0.0) {
+        float s = m.m2.w > 0.0 ? m.m2.w : 1.0;
+        int cell = int(floor(p.x / s)) + int(floor(p.z / s));
+        if ((cell & 1) != 0) base = m.m1.xyz;
+    }
+    float reflectivity = m.m2.x, transparency = m.m2.y, ior = m.m2.z;
+    float local = max(0.0, 1.0 - reflectivity - transparency);
+
+    vec3 color = vec3(0.0);
+    if (!inside) {
+        color += light_position.w * local * base;
+        precise vec3 to_light = light_position.xyz - p;
+        float distance = plength(to_light);
+        precise vec3 l = to_light / distance;
+        float n_dot_l = pdot(n, l);
+        if (n_dot_l > 0.0 && pdot(nf, l) > 0.0 && intersect(above, l, distance - eps, true).prim < 0) {
+            color += light_intensity.xyz * (local * n_dot_l) * base;
+            if (m.m0.w > 0.0) {
+                precise vec3 refl = -l - 2.0 * pdot(n, -l) * n;
+                float r_dot_v = pdot(refl, -d);
+                if (r_dot_v > 0.0) color += light_intensity.xyz * (m.m0.w * pow(r_dot_v, m.m1.w));
+            }
+        }
+    }
+    if (depth >= frame.w) return color;
+
+    float cos_i = -pdot(d, n);
+    precise vec3 mirrored = pnormalize(d + 2.0 * cos_i * n);
+    if (reflectivity > 0.0 && !inside) children[count++] = Child(above, mirrored, vec3(reflectivity), true);
+    if (transparency > 0.0) {
+        float n1 = inside ? ior : 1.0, n2 = inside ? 1.0 : ior;
+        precise float eta = n1 / n2;
+        precise float sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+        float fresnel = 1.0;
+        if (sin2_t < 1.0) {
+            precise float cos_t = sqrt(1.0 - sin2_t);
+            fresnel = schlick(n1, n2, cos_i, cos_t);
+            precise vec3 t_dir = pnormalize(eta * d + (eta * cos_i - cos_t) * n);
+            children[count++] = Child(below, t_dir, vec3(transparency * (1.0 - fresnel)), inside);
+        }
+        if (fresnel > 0.0) children[count++] = Child(above, mirrored, vec3(transparency * fresnel), !inside);
+    }
+    return color;
+}
+
+const int STACK = 24;
+
+// The colour of the ray (o, d) at `depth` and its first hit distance (INF: escaped); caches are not
+// consulted (in ceiling mode cached leaving rays still get the constant).
+vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
+    vec3 so[STACK], sd[STACK], sw[STACK];
+    int sdepth[STACK];
+    int top = 0;
+    so[0] = o0; sd[0] = d0; sw[0] = vec3(1.0); sdepth[0] = depth0; top = 1;
+    vec3 sum = vec3(0.0);
+    float first_t = INF;
+    bool first = true;
+    while (top > 0) {
+        --top;
+        vec3 o = so[top], d = sd[top], w = sw[top];
+        int depth = sdepth[top];
+        Hit h = intersect(o, d, INF, false);
+        if (first) first_t = h.prim < 0 ? INF : h.t;
+        first = false;
+        if (h.prim < 0) { sum += w * environment.xyz; continue; }
+        Child c[3];
+        int count;
+        uint object;
+        sum += w * shade(h, o, d, depth, c, count, object);
+        bool cached = objects[object].m3.y != 0.0;
+        for (int i = count - 1; i >= 0; --i) {
+            if (c[i].leaving && cached && (frame.z & 15) == MODE_CEILING) { sum += w * c[i].w * environment.xyz; continue; }
+            if (top < STACK) { so[top] = c[i].o; sd[top] = c[i].d; sw[top] = w * c[i].w; sdepth[top] = depth + 1; ++top; }
+        }
+    }
+    return vec4(sum, first_t);
+}
+
+// The colour of a ray leaving cached object `object` from o in unit direction d (tracer.cpp's leaving()).
+vec3 leaving(uint object, vec3 o, vec3 d, int depth, inout uint lookups, inout uint hits) {
+    raycache_gpu_cube cube = cubes[object];
+    ++lookups;
+#ifdef WHITTED_CDCT
+    raycache_relief_parameters rp = raycache_relief_parameters(relief.x, relief.y, relief_i.x, relief.z, relief.w);
+    raycache_relief_result f = raycache_relief_search(cube, o, d, rp);
+    if (f.hit) { ++hits; return f.color; }
+    vec4 r = trace_subtree(o, d, depth + 1);
+    if (isinf(r.w)) {
+        mark_dirty(cube, d);
+        raycache_cdct_store_escape(cube, d, r.rgb, rp);
+    } else {
+        precise vec3 hit_point = o + r.w * d;
+        precise vec3 from_centre = hit_point - cube.centre; // the key raycache_cdct_store_hit uses
+        mark_dirty(cube, from_centre);
+        raycache_cdct_store_hit(cube, hit_point, r.rgb, rp);
+    }
+    return r.rgb;
+#else
+    raycache_cct_result c = raycache_cct_lookup(cube, d);
+    if (c.hit) { ++hits; return c.color; }
+    vec4 r = trace_subtree(o, d, depth + 1);
+    mark_dirty(cube, d);
+    raycache_cct_store(cube, d, r.rgb);
+    return r.rgb;
+#endif
+}
+
+// A primary ray's tree: as trace_subtree, but rays leaving cached objects go through their cubes (and
+// their subtrees are summed separately in every mode).
+vec3 trace_primary(vec3 o0, vec3 d0, uint pixel, inout uint lookups, inout uint hits) {
+    vec3 so[STACK], sd[STACK], sw[STACK];
+    int sdepth[STACK];
+    int top = 0;
+    so[0] = o0; sd[0] = d0; sw[0] = vec3(1.0); sdepth[0] = 0; top = 1;
+    vec3 sum = vec3(0.0);
+    int mode = frame.z & 15;
+    bool raster = frame.z >= 16;
+    while (top > 0) {
+        --top;
+        vec3 o = so[top], d = sd[top], w = sw[top];
+        int depth = sdepth[top];
+        Hit h;
+        if (raster && depth == 0) { // the primary ray: its hit comes from the raster pass
+            uvec4 g = gbuffer[pixel];
+            h.t = uintBitsToFloat(g.x);
+            h.prim = g.y == 0xFFFFFFFFu ? -1 : int(g.y);
+            h.u = uintBitsToFloat(g.z);
+            h.v = uintBitsToFloat(g.w);
+        } else {
+            h = intersect(o, d, INF, false);
+        }
+        if (h.prim < 0) { sum += w * environment.xyz; continue; }
+        Child c[3];
+        int count;
+        uint object;
+        sum += w * shade(h, o, d, depth, c, count, object);
+        bool cached = objects[object].m3.y != 0.0;
+        for (int i = count - 1; i >= 0; --i) {
+            if (c[i].leaving && cached) {
+                // With the cache off the leaving ray's subtree is summed on its own too, as leaving() sums
+                // a miss, so that a cold cached frame equals the uncached frame bit for bit.
+                if (mode == MODE_OFF) sum += w * c[i].w * trace_subtree(c[i].o, c[i].d, depth + 1).rgb;
+                else if (mode == MODE_CEILING) sum += w * c[i].w * environment.xyz;
+#ifdef WHITTED_CDCT
+                else if (mode == MODE_CDCT)
+#else
+                else if (mode == MODE_CCT)
+#endif
+                    sum += w * c[i].w * leaving(object, c[i].o, c[i].d, depth, lookups, hits);
+                continue;
+            }
+            if (top < STACK) { so[top] = c[i].o; sd[top] = c[i].d; sw[top] = w * c[i].w; sdepth[top] = depth + 1; ++top; }
+        }
+    }
+    return sum;
+}
+
+void main() {
+    int width = frame.x, height = frame.y;
+    int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+    if (x >= width || y >= height) return;
+    vec3 d = primary_direction(x, y);
+    uint lookups = 0u, hits = 0u;
+    vec3 color = trace_primary(eye.xyz, d, uint(y * width + x), lookups, hits);
+    pixels[y * width + x] = vec4(color, 1.0);
+    if (lookups != 0u) atomicAdd(counters[0], lookups);
+    if (hits != 0u) atomicAdd(counters[1], hits);
+}
