@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Turns the benchmark outputs in docs/results/ into plots (PNG) and docs/RESULTS.md.
 
-Reads: tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench) and
-micro.json (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
+Reads: tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
+vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench) and micro.json
+(raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
 import csv
 import json
@@ -48,6 +49,35 @@ def plot_table_5_2(results, out):
     fig.tight_layout()
     fig.savefig(os.path.join(out, "table_5_2.png"), dpi=110)
     plt.close(fig)
+
+
+def plot_table_5_1(results, out):
+    """The Vulkan tracer's speed-ups against N, hybrid and compute, beside the thesis's Table 5.1."""
+    path = os.path.join(results, "table_5_1.csv")
+    if not os.path.exists(path):
+        return False
+    data = rows(path)
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for pipeline, marker in [("hybrid", "o"), ("compute", "s")]:
+        part = [r for r in data if r["pipeline"] == pipeline]
+        n = [int(r["n"]) for r in part]
+        ax.plot(n, [float(r["ceiling_speedup"]) for r in part], "--", marker=marker, color="black", alpha=0.5,
+                label=f"{pipeline}: ceiling")
+        ax.plot(n, [float(r["cct_speedup"]) for r in part], "-", marker=marker, color="tab:blue", label=f"{pipeline}: CCT")
+        if any(float(r["cdct_speedup"]) > 0 for r in part):
+            ax.plot(n, [float(r["cdct_speedup"]) for r in part], "-", marker=marker, color="tab:orange", label=f"{pipeline}: CDCT")
+    thesis = [(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["pipeline"] == "hybrid" and r["thesis_cct_speedup"]]
+    if thesis:
+        ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis hybrid CCT (Table 5.1)")
+    ax.axhline(1.0, color="lightgray", lw=1)
+    ax.set_xlabel("N reflective spheres behind the camera")
+    ax.set_ylabel("speed-up over the cache off")
+    ax.set_title("Vulkan tracer, behind-N, warm caches (Table 5.1)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "table_5_1.png"), dpi=110)
+    plt.close(fig)
+    return True
 
 
 def plot_figure_5_9(results, out):
@@ -135,11 +165,17 @@ def main():
     results, output = sys.argv[1], sys.argv[2]
     plot_table_5_2(results, results)
     plot_figure_5_9(results, results)
+    vulkan = plot_table_5_1(results, results)
     rel = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
     with open(os.path.join(results, "tables.md")) as f:
         tables = f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
+    if vulkan:
+        with open(os.path.join(results, "vulkan_tables.md")) as f:
+            tables += "\n" + f.read() + f"![Vulkan behind-N speed-ups]({rel}/table_5_1.png)\n\n"
+    else:
+        tables += "\n## Table 5.1: the Vulkan tracer\n\nNot measured in this run (no Vulkan device or no Vulkan build).\n\n"
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 5 minutes on 2 cores). Every speed-up is a ratio of "
+          "Regenerate everything with `scripts/bench.sh` (about 10 minutes on 2 cores). Every speed-up is a ratio of "
           "medians of renders interleaved in one process on the same frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", "", "## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):

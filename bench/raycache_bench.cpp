@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_common.hpp"
 #include "tracer.hpp"
 
 namespace fs = std::filesystem;
@@ -31,6 +32,11 @@ using raycache::embree::SceneCacheStatistics;
 using raycache::embree::Technique;
 using rcx::CacheMode;
 using rcx::Image;
+using rcx::bench::csv_text;
+using rcx::bench::fmt;
+using rcx::bench::machine_name;
+using rcx::bench::median;
+using rcx::bench::progress;
 
 namespace {
 
@@ -49,29 +55,6 @@ std::vector<int> parse_list(const std::string& text) {
     std::string item;
     while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
     return values;
-}
-
-std::string machine_name() {
-    std::ifstream cpuinfo("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(cpuinfo, line))
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    return "unknown CPU";
-}
-
-// A CSV text field: quoted, so labels may contain commas.
-std::string csv_text(const std::string& text) { return "\"" + text + "\""; }
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-std::string fmt(double value, int digits = 2) {
-    if (std::isinf(value)) return "inf";
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-    return buffer;
 }
 
 // One way of rendering a frame: a mode and, for the cached modes, its own caches.
@@ -143,11 +126,6 @@ struct Report {
     }
     void png(const std::string& name, const Image& image) { rcx::write_png(dir + "/" + name, image); }
 };
-
-void progress(const std::string& what) {
-    std::fprintf(stderr, "[bench] %s\n", what.c_str());
-    std::fflush(stderr);
-}
 
 // Table 5.2: conventional ray tracing of behind-N with warm caches.
 void table_5_2(const Config& c, Report& out) {
