@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,42 @@ inline std::string machine_name() {
     while (std::getline(cpuinfo, line))
         if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
     return "unknown CPU";
+}
+
+// The options every benchmark program takes: --quick (small images, one round), --out DIR, --rounds N,
+// --ns LIST (the behind-N rows; empty: the program's default).
+struct CommonOptions {
+    bool quick = false;
+    std::string out = "docs/results";
+    int rounds = 1;
+    std::vector<int> ns;
+};
+
+inline std::vector<int> parse_list(const std::string& text) {
+    std::vector<int> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
+    return values;
+}
+
+// Takes argv[i] (and its value, advancing i) when it is one of the common options; false otherwise.
+inline bool parse_common_option(int argc, char** argv, int& i, CommonOptions& o) {
+    const std::string a = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (a == "--quick") {
+        o.quick = true;
+        o.rounds = 1;
+    } else if (a == "--out" && has_value) {
+        o.out = argv[++i];
+    } else if (a == "--rounds" && has_value) {
+        o.rounds = std::max(1, std::atoi(argv[++i]));
+    } else if (a == "--ns" && has_value) {
+        o.ns = parse_list(argv[++i]);
+    } else {
+        return false;
+    }
+    return true;
 }
 
 inline void progress(const std::string& what) {

@@ -30,6 +30,18 @@ def micro(path):
     return medians or {r["name"]: r for r in runs if r.get("run_type", "iteration") == "iteration"}
 
 
+def speedup_plot(ax, fig, title, path):
+    """The common frame of the speed-up plots: the 1x line, axes, legend, saved as PNG."""
+    ax.axhline(1.0, color="lightgray", lw=1)
+    ax.set_xlabel("N reflective spheres behind the camera")
+    ax.set_ylabel("speed-up over the cache off")
+    ax.set_title(title)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_table_5_2(results, out):
     data = rows(os.path.join(results, "table_5_2.csv"))
     n = [int(r["n"]) for r in data]
@@ -41,14 +53,7 @@ def plot_table_5_2(results, out):
     thesis = [(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["thesis_cct_speedup"]]
     if thesis:
         ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis CCT (Table 5.2)")
-    ax.axhline(1.0, color="lightgray", lw=1)
-    ax.set_xlabel("N reflective spheres behind the camera")
-    ax.set_ylabel("speed-up over the cache off")
-    ax.set_title("behind-N, warm caches (Table 5.2)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "table_5_2.png"), dpi=110)
-    plt.close(fig)
+    speedup_plot(ax, fig, "Embree tracer, behind-N, warm caches (Table 5.2)", os.path.join(out, "table_5_2.png"))
 
 
 def plot_table_5_1(results, out):
@@ -69,14 +74,7 @@ def plot_table_5_1(results, out):
     thesis = [(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["pipeline"] == "hybrid" and r["thesis_cct_speedup"]]
     if thesis:
         ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis hybrid CCT (Table 5.1)")
-    ax.axhline(1.0, color="lightgray", lw=1)
-    ax.set_xlabel("N reflective spheres behind the camera")
-    ax.set_ylabel("speed-up over the cache off")
-    ax.set_title("Vulkan tracer, behind-N, warm caches (Table 5.1)")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "table_5_1.png"), dpi=110)
-    plt.close(fig)
+    speedup_plot(ax, fig, "Vulkan tracer, behind-N, warm caches (Table 5.1)", os.path.join(out, "table_5_1.png"))
     return True
 
 

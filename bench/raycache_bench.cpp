@@ -40,22 +40,11 @@ using rcx::bench::progress;
 
 namespace {
 
-struct Config {
-    bool quick = false;
-    std::string out = "docs/results";
-    int rounds = 5;
-    std::string only;     // empty: every experiment
-    std::vector<int> ns;  // empty: the default rows
+struct Config : rcx::bench::CommonOptions {
+    Config() { rounds = 5; }
+    std::string only; // empty: every experiment
     bool wants(const std::string& name) const { return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos; }
 };
-
-std::vector<int> parse_list(const std::string& text) {
-    std::vector<int> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
-    return values;
-}
 
 // One way of rendering a frame: a mode and, for the cached modes, its own caches.
 struct Variant {
@@ -372,17 +361,9 @@ int main(int argc, char** argv) {
     Config c;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--quick") {
-            c.quick = true;
-            c.rounds = 1;
-        } else if (a == "--out" && i + 1 < argc) {
-            c.out = argv[++i];
-        } else if (a == "--rounds" && i + 1 < argc) {
-            c.rounds = std::max(1, std::atoi(argv[++i]));
-        } else if (a == "--only" && i + 1 < argc) {
+        if (rcx::bench::parse_common_option(argc, argv, i, c)) continue;
+        if (a == "--only" && i + 1 < argc) {
             c.only = argv[++i];
-        } else if (a == "--ns" && i + 1 < argc) {
-            c.ns = parse_list(argv[++i]);
         } else {
             std::fprintf(stderr, "usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST]\n");
             return a == "--help" ? 0 : 2;

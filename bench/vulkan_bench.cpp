@@ -37,13 +37,10 @@ using rcx::bench::fmt;
 using rcx::bench::median;
 using rcx::bench::progress;
 
-struct Config {
-    bool quick = false;
-    std::string out = "docs/results";
-    int rounds = 3;
+struct Config : rcx::bench::CommonOptions {
+    Config() { rounds = 3; }
     int size = 1024;
     int face = 512;
-    std::vector<int> ns{0, 1, 2, 4, 8, 16, 32};
 };
 
 // One way of rendering: a pipeline (compute or hybrid) and a cache mode, with its own tracer and cubes.
@@ -63,14 +60,6 @@ double render(Variant& v, const rcx::Camera& camera, int size) {
 
 double hit_rate(const Variant& v) {
     return v.last_stats.lookups ? double(v.last_stats.hits) / double(v.last_stats.lookups) : 0.0;
-}
-
-std::vector<int> parse_list(const std::string& text) {
-    std::vector<int> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
-    return values;
 }
 
 void run(const Config& c, rcx::vk::Context& context) {
@@ -171,29 +160,19 @@ int main(int argc, char** argv) {
     Config c;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--quick") {
-            c.quick = true;
-            c.rounds = 1;
-            c.size = 96;
-            c.face = 32;
-            c.ns = {0, 32};
-        } else if (a == "--out" && i + 1 < argc) {
-            c.out = argv[++i];
-        } else if (a == "--rounds" && i + 1 < argc) {
-            c.rounds = std::max(1, std::atoi(argv[++i]));
-        } else if (a == "--size" && i + 1 < argc) {
+        if (rcx::bench::parse_common_option(argc, argv, i, c)) continue;
+        if (a == "--size" && i + 1 < argc) {
             c.size = std::max(1, std::atoi(argv[++i]));
-        } else if (a == "--ns" && i + 1 < argc) {
-            c.ns = parse_list(argv[++i]);
         } else {
             std::fprintf(stderr, "usage: raycache_vulkan_bench [--quick] [--out DIR] [--rounds N] [--ns LIST] [--size N]\n");
             return a == "--help" ? 0 : 2;
         }
     }
-    if (c.ns.empty()) {
-        std::fprintf(stderr, "raycache_vulkan_bench: --ns needs at least one N\n");
-        return 2;
+    if (c.quick) {
+        c.size = std::min(c.size, 96);
+        c.face = 32;
     }
+    if (c.ns.empty()) c.ns = c.quick ? std::vector<int>{0, 32} : std::vector<int>{0, 1, 2, 4, 8, 16, 32};
     std::unique_ptr<rcx::vk::Context> context;
     try {
         rcx::vk::ContextOptions options;

@@ -99,3 +99,10 @@ TEST_CASE("write_png writes the tone-mapped pixels and throws with the path when
                          std::runtime_error);
     CHECK_THROWS_AS(rcx::write_png((dir / "empty.png").string(), rcx::Image()), std::runtime_error);
 }
+
+TEST_CASE("psnr_text is six characters wide, two decimals, and says inf for identical images") {
+    CHECK(rcx::psnr_text(std::numeric_limits<double>::infinity()) == "   inf");
+    CHECK(rcx::psnr_text(37.912) == " 37.91");
+    CHECK(rcx::psnr_text(5.0) == "  5.00");
+    CHECK(rcx::psnr_text(104.5) == "104.50");
+}

@@ -51,19 +51,10 @@ std::string percent(double fraction) {
     return text;
 }
 
-std::string psnr_text(double db) {
-    if (std::isinf(db)) return "   inf";
-    char text[32];
-    std::snprintf(text, sizeof text, "%6.2f", db);
-    return text;
-}
-
 int run(const rcx::Options& o) {
     rcx::Scene scene;
     try {
-        scene = rcx::make_scene(o.scene, rcx::scene_params(o));
-        rcx::apply_options(scene, o);
-        rcx::ensure_writable_directory(o.out);
+        scene = rcx::scene_from_options(o);
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
@@ -159,7 +150,7 @@ int run(const rcx::Options& o) {
                         percent(r.hit_rate).c_str(), percent(filled).c_str());
             if (o.compare)
                 std::printf(" %12.2f %8.2fx   %s  %8.5f %8.4f   %s", r.uncached_ms, r.uncached_ms / r.cached_ms,
-                            psnr_text(r.psnr_db).c_str(), r.mean_error, r.max_error,
+                            rcx::psnr_text(r.psnr_db).c_str(), r.mean_error, r.max_error,
                             percent(static_cast<double>(diff.differing_pixels) / static_cast<double>(diff.pixels)).c_str());
             std::printf("\n");
             std::fflush(stdout);
@@ -190,7 +181,7 @@ int run(const rcx::Options& o) {
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame;"
                     " PSNR min %s dB, mean of finite %s dB (%d of %zu frames identical)\n",
                     plain_all / n, records.size() > 1 ? plain_warm / warm : plain_all / n, speedup,
-                    psnr_text(psnr_min).c_str(), psnr_finite ? psnr_text(psnr_sum / psnr_finite).c_str() : "     -",
+                    rcx::psnr_text(psnr_min).c_str(), psnr_finite ? rcx::psnr_text(psnr_sum / psnr_finite).c_str() : "     -",
                     static_cast<int>(records.size()) - psnr_finite, records.size());
     }
     return 0;

@@ -465,33 +465,14 @@ private:
 
     void make_image(VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, VkImage& image,
                     VkDeviceMemory& memory, VkImageView& view) {
-        VkImageCreateInfo info{};
-        info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
-        info.imageType = VK_IMAGE_TYPE_2D;
-        info.format = format;
-        info.extent = {static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_), 1};
-        info.mipLevels = 1;
-        info.arrayLayers = 1;
-        info.samples = VK_SAMPLE_COUNT_1_BIT;
-        info.tiling = VK_IMAGE_TILING_OPTIMAL;
-        info.usage = usage;
-        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        check(vkCreateImage(device_, &info, nullptr, &image), "vkCreateImage");
-        VkMemoryRequirements req{};
-        vkGetImageMemoryRequirements(device_, image, &req);
-        VkMemoryAllocateInfo alloc{};
-        alloc.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
-        alloc.allocationSize = req.size;
-        alloc.memoryTypeIndex = context_.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-        check(vkAllocateMemory(device_, &alloc, nullptr, &memory), "vkAllocateMemory");
-        check(vkBindImageMemory(device_, image, memory, 0), "vkBindImageMemory");
-        VkImageViewCreateInfo view_info{};
-        view_info.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
-        view_info.image = image;
-        view_info.viewType = VK_IMAGE_VIEW_TYPE_2D;
-        view_info.format = format;
-        view_info.subresourceRange = {aspect, 0, 1, 0, 1};
-        check(vkCreateImageView(device_, &view_info, nullptr, &view), "vkCreateImageView");
+        vk::ImageDescription d;
+        d.format = format;
+        d.width = static_cast<std::uint32_t>(width_);
+        d.height = static_cast<std::uint32_t>(height_);
+        d.usage = usage;
+        d.aspect = aspect;
+        d.memory = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        vk::create_image(context_, d, image, memory, view);
     }
 
     void destroy_images() noexcept {

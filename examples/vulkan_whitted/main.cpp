@@ -39,20 +39,11 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const st
     return (std::filesystem::path(o.out) / name).string();
 }
 
-std::string psnr_text(double db) {
-    if (std::isinf(db)) return "   inf";
-    char text[32];
-    std::snprintf(text, sizeof text, "%6.2f", db);
-    return text;
-}
-
 int run(const rcx::Options& o, bool hybrid) {
     if (o.prefill) throw InputError("--prefill is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     rcx::Scene scene;
     try {
-        scene = rcx::make_scene(o.scene, rcx::scene_params(o));
-        rcx::apply_options(scene, o);
-        rcx::ensure_writable_directory(o.out);
+        scene = rcx::scene_from_options(o);
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
@@ -145,7 +136,7 @@ int run(const rcx::Options& o, bool hybrid) {
             if (caching && stats.lookups > 0)
                 std::snprintf(hit, sizeof hit, "%5.1f%%", 100.0 * static_cast<double>(stats.hits) / static_cast<double>(stats.lookups));
             std::printf("%5d %10.2f %13.2f   %s", f, stats.milliseconds, stats.end_frame_milliseconds, hit);
-            if (o.compare) std::printf(" %14.2f %8.2fx   %s", plain_ms, plain_ms / ms, psnr_text(psnr).c_str());
+            if (o.compare) std::printf(" %14.2f %8.2fx   %s", plain_ms, plain_ms / ms, rcx::psnr_text(psnr).c_str());
             std::printf("\n");
             std::fflush(stdout);
         }
@@ -158,7 +149,7 @@ int run(const rcx::Options& o, bool hybrid) {
     if (o.compare)
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame; PSNR min %s dB\n",
                     sum_plain / n, frames > 1 ? warm_plain / warm : sum_plain / n,
-                    frames > 1 ? warm_plain / warm_ms : sum_plain / sum_ms, psnr_text(psnr_min).c_str());
+                    frames > 1 ? warm_plain / warm_ms : sum_plain / sum_ms, rcx::psnr_text(psnr_min).c_str());
     tracer.reset();
     reference.reset();
     const std::uint64_t errors = context->validation_errors();

@@ -78,6 +78,13 @@ void write_png(const std::string& path, const Image& image) {
                                  (!ok ? std::string("PNG encoding failed") : std::string("write error (disk full?)")));
 }
 
+std::string psnr_text(double db) {
+    if (std::isinf(db)) return "   inf";
+    char text[32];
+    std::snprintf(text, sizeof text, "%6.2f", db);
+    return text;
+}
+
 ImageDifference compare(const Image& a, const Image& b) {
     check_same_size(a, b, "compare");
     ImageDifference d;

@@ -181,6 +181,13 @@ void apply_options(Scene& scene, const Options& options) {
     if (options.depth) scene.max_depth = *options.depth;
 }
 
+Scene scene_from_options(const Options& options) {
+    Scene scene = make_scene(options.scene, scene_params(options));
+    apply_options(scene, options);
+    ensure_writable_directory(options.out);
+    return scene;
+}
+
 void ensure_writable_directory(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;

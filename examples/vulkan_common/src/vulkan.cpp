@@ -530,6 +530,41 @@ void Buffer::fill(std::uint32_t word) noexcept {
     std::fill(words, words + size_ / 4, word);
 }
 
+// ---- images --------------------------------------------------------------------------------------
+
+void create_image(Context& context, const ImageDescription& d, VkImage& image, VkDeviceMemory& memory, VkImageView& view) {
+    const VkDevice device = context.device();
+    VkImageCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+    info.flags = d.flags;
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = d.format;
+    info.extent = {d.width, d.height, 1};
+    info.mipLevels = 1;
+    info.arrayLayers = d.layers;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = d.usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    check(vkCreateImage(device, &info, nullptr, &image), "vkCreateImage");
+    VkMemoryRequirements needs;
+    vkGetImageMemoryRequirements(device, image, &needs);
+    VkMemoryAllocateInfo allocate{};
+    allocate.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+    allocate.allocationSize = needs.size;
+    allocate.memoryTypeIndex = context.memory_type(needs.memoryTypeBits, d.memory);
+    check(vkAllocateMemory(device, &allocate, nullptr, &memory), "vkAllocateMemory (image)");
+    check(vkBindImageMemory(device, image, memory, 0), "vkBindImageMemory");
+    VkImageViewCreateInfo view_info{};
+    view_info.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
+    view_info.image = image;
+    view_info.viewType = d.view_type;
+    view_info.format = d.format;
+    view_info.subresourceRange = {d.aspect, 0, 1, 0, d.layers};
+    check(vkCreateImageView(device, &view_info, nullptr, &view), "vkCreateImageView");
+}
+
 // ---- SampledCubeImage ------------------------------------------------------------------------------
 
 SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format)
@@ -539,36 +574,14 @@ SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, Vk
                     std::to_string(context.properties().limits.maxImageDimensionCube) + " on " + context.device_name());
     const VkDevice device = context.device();
     try {
-        VkImageCreateInfo info{};
-        info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
-        info.flags = VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
-        info.imageType = VK_IMAGE_TYPE_2D;
-        info.format = format;
-        info.extent = {face_size, face_size, 1};
-        info.mipLevels = 1;
-        info.arrayLayers = 6;
-        info.samples = VK_SAMPLE_COUNT_1_BIT;
-        info.tiling = VK_IMAGE_TILING_OPTIMAL;
-        info.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        check(vkCreateImage(device, &info, nullptr, &image_), "vkCreateImage (cube)");
-        VkMemoryRequirements needs;
-        vkGetImageMemoryRequirements(device, image_, &needs);
-        VkMemoryAllocateInfo allocate{};
-        allocate.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
-        allocate.allocationSize = needs.size;
-        allocate.memoryTypeIndex = context.memory_type(needs.memoryTypeBits, 0);
-        check(vkAllocateMemory(device, &allocate, nullptr, &memory_), "vkAllocateMemory (cube image)");
-        check(vkBindImageMemory(device, image_, memory_, 0), "vkBindImageMemory");
-
-        VkImageViewCreateInfo view{};
-        view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
-        view.image = image_;
-        view.viewType = VK_IMAGE_VIEW_TYPE_CUBE;
-        view.format = format;
-        view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 6};
-        check(vkCreateImageView(device, &view, nullptr, &view_), "vkCreateImageView (cube)");
+        ImageDescription cube;
+        cube.format = format;
+        cube.width = cube.height = face_size;
+        cube.layers = 6;
+        cube.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+        cube.flags = VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
+        cube.view_type = VK_IMAGE_VIEW_TYPE_CUBE;
+        create_image(context, cube, image_, memory_, view_);
 
         VkSamplerCreateInfo sampler{};
         sampler.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;

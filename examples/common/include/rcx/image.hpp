@@ -42,6 +42,9 @@ struct ImageDifference {
 // Throws std::invalid_argument when the sizes differ.
 ImageDifference compare(const Image& a, const Image& b);
 
+// A PSNR for a table column: six characters, "   inf" for identical images.
+std::string psnr_text(double db);
+
 // Per pixel, t = the largest channel |a - b| of the tone-mapped values (0..1), shown blue (t = 0, equal)
 // -> green (t = 0.5) -> red (t = 1, completely different). Throws std::invalid_argument when sizes differ.
 Image difference_image(const Image& a, const Image& b);

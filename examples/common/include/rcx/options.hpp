@@ -71,4 +71,9 @@ void apply_options(Scene& scene, const Options& options);
 // Throws std::runtime_error with the path and the reason otherwise.
 void ensure_writable_directory(const std::string& path);
 
+// What every example tracer does first: the scene the options name (make_scene, scene_params), with
+// apply_options done, after ensure_writable_directory(options.out). Throws what those throw: each
+// message names the bad input.
+Scene scene_from_options(const Options& options);
+
 } // namespace rcx

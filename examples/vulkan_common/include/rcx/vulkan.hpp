@@ -81,6 +81,22 @@ private:
     void* mapped_ = nullptr;
 };
 
+// An optimally tiled image with memory of its own and one view of all its layers (one mip level).
+struct ImageDescription {
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    std::uint32_t width = 1, height = 1, layers = 1;
+    VkImageUsageFlags usage = 0;
+    VkImageCreateFlags flags = 0;
+    VkImageViewType view_type = VK_IMAGE_VIEW_TYPE_2D;
+    VkImageAspectFlags aspect = VK_IMAGE_ASPECT_COLOR_BIT;
+    VkMemoryPropertyFlags memory = 0;
+};
+
+// Creates the image, binds it to new memory and makes the view, writing each handle as soon as it
+// exists, so that the caller's clean-up releases what was made when this throws Error (naming the call).
+void create_image(Context& context, const ImageDescription& description, VkImage& image, VkDeviceMemory& memory,
+                  VkImageView& view);
+
 // A cube-compatible image (6 layers of face_size x face_size), sampled through a cube view with a
 // NEAREST, CLAMP_TO_EDGE sampler: what a `samplerCube` / `usamplerCube` binding sees.
 class SampledCubeImage {
