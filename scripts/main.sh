@@ -24,4 +24,6 @@ echo "===== CDCT: colour + depth, relief search over a min-depth pyramid ====="
 "$tracer" "${common[@]}" --cache cdct --out out/main/cdct "$@"
 echo
 echo "Images: out/main/{cct,cdct}/ (frames, uncached references, difference images: blue = equal, red = different)."
-echo "Full benchmarks (thesis Tables 5.2, 5.3, Figure 5.9, quality, memory): scripts/bench.sh -> docs/RESULTS.md"
+echo "The same on Vulkan (lavapipe): cmake --build build-release --target raycache_vulkan_whitted, then"
+echo "  RCX_VULKAN_VALIDATION=0 build-release/examples/vulkan_whitted/raycache_vulkan_whitted --scene behind-32 --size 512x512 --path fixed --frames 4 --cache cct --compare [--hybrid]"
+echo "Full benchmarks (thesis Tables 5.1 on Vulkan, 5.2, 5.3, Figure 5.9, quality, memory): scripts/bench.sh -> docs/RESULTS.md"
