@@ -41,7 +41,7 @@ public:
 
     int face_size() const noexcept { return face_size_; }
     // 6 * N * N.
-    std::size_t texel_count() const noexcept { return std::size_t{6} * face_size_ * face_size_; }
+    std::size_t texel_count() const noexcept { return std::size_t{RAYCACHE_FACE_COUNT} * face_size_ * face_size_; }
     // Bytes of texel storage, 6 * N * N * sizeof(Word): the thesis's memory per cube.
     std::size_t texel_bytes() const noexcept { return texel_count() * sizeof(Word); }
     // Every byte the cube holds: texels, the frame's written-texel bits, counters.
@@ -163,10 +163,7 @@ public:
         return static_cast<double>(valid_texels()) / static_cast<double>(texel_count());
     }
 
-    bool contains(const TexelAddress& t) const noexcept {
-        return t.face >= 0 && t.face < 6 && t.column >= 0 && t.column < face_size_ && t.row >= 0 &&
-               t.row < face_size_;
-    }
+    bool contains(const TexelAddress& t) const noexcept { return is_on_cube(t, face_size_); }
 
 private:
     enum Counter : std::size_t { hits, misses, stores, refused_stores, counter_count };

@@ -2,6 +2,7 @@
 // hit, and the relief search (thesis Algorithm 4) that finds a ray's hit in the cube's depth image.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -84,10 +85,6 @@ inline float box_exit_distance(const glm::vec3& o, const glm::vec3& d, const Cub
     }
     return std::max(exit, 0.0f);
 }
-
-} // namespace detail
-
-namespace detail {
 
 // The relief search's state along one ray origin + t * d (d unit), shared by the linear and the pyramid walk.
 class ReliefWalk {
@@ -208,7 +205,8 @@ private:
         const float v0 = 2.0f * first_row / n - 1.0f, v1 = 2.0f * std::min(first_row + (1 << level), n) / n - 1.0f;
         const glm::vec3 p = from_centre(t);
         // sc, tc and m as linear forms of the vector from the centre (the face table).
-        const glm::vec3 m_axis = face_axis(a.face, 0), u_axis = face_axis(a.face, 1), v_axis = face_axis(a.face, 2);
+        const FaceAxes& axes = face_axes(a.face);
+        const glm::vec3 &m_axis = axes.m, &u_axis = axes.sc, &v_axis = axes.tc;
         float exit = std::numeric_limits<float>::infinity();
         auto leave = [&](const glm::vec3& normal) { // the ray stays where dot(normal, p) >= 0
             const float rate = glm::dot(normal, d_);
@@ -221,18 +219,27 @@ private:
         return exit;
     }
 
-    // For face f: which = 0 gives the vector whose dot with v is the major coordinate m, 1 gives sc, 2 gives tc.
-    static glm::vec3 face_axis(int face, int which) {
-        static const float table[6][3][3] = {
-            {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},  // +X: m = x, sc = -z, tc = -y
-            {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},  // -X: m = -x, sc = z, tc = -y
-            {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},    // +Y: m = y, sc = x, tc = z
-            {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},  // -Y: m = -y, sc = x, tc = -z
-            {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},   // +Z: m = z, sc = x, tc = -y
-            {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}}, // -Z: m = -z, sc = -x, tc = -y
-        };
-        const float* e = table[face][which];
-        return glm::vec3(e[0], e[1], e[2]);
+    // For a face, the vectors whose dot product with v gives its major coordinate m, sc and tc: read once off
+    // the shared face table (sc and tc are linear in v; m points along the face's axis, with its sign).
+    struct FaceAxes {
+        glm::vec3 m, sc, tc;
+    };
+    static const FaceAxes& face_axes(int face) {
+        static const std::array<FaceAxes, RAYCACHE_FACE_COUNT> table = [] {
+            std::array<FaceAxes, RAYCACHE_FACE_COUNT> axes{};
+            for (int f = 0; f < RAYCACHE_FACE_COUNT; ++f) {
+                axes[f].m[f / 2] = f % 2 == 0 ? 1.0f : -1.0f;
+                for (int axis = 0; axis < 3; ++axis) {
+                    glm::vec3 e(0.0f);
+                    e[axis] = 1.0f;
+                    const glm::vec2 st = shared::raycache_face_coordinates(e, f);
+                    axes[f].sc[axis] = st.x;
+                    axes[f].tc[axis] = st.y;
+                }
+            }
+            return axes;
+        }();
+        return table[static_cast<std::size_t>(face)];
     }
 
     const CacheCube<CdctTexel>& cube_;

@@ -41,6 +41,12 @@ inline bool is_valid_face_size(int face_size) noexcept {
     return face_size >= RAYCACHE_MIN_FACE_SIZE && face_size <= RAYCACHE_MAX_FACE_SIZE;
 }
 
+// True when `texel` lies on a cube with `face_size` texels along each edge.
+inline bool is_on_cube(const TexelAddress& texel, int face_size) noexcept {
+    return texel.face >= 0 && texel.face < RAYCACHE_FACE_COUNT && texel.column >= 0 && texel.column < face_size &&
+           texel.row >= 0 && texel.row < face_size;
+}
+
 // The texel that `direction` falls in on a cube with `face_size` texels along each edge.
 // direction need not be unit length; std::nullopt when it is not a direction (zero, NaN, infinite).
 // face_size must be valid (asserted).
@@ -55,16 +61,16 @@ inline std::optional<TexelAddress> texel_of(const glm::vec3& direction, int face
 // texel_of(texel_direction(t, N), N) == t for every texel t; `texel` must lie on the cube (asserted).
 inline glm::vec3 texel_direction(const TexelAddress& texel, int face_size) noexcept {
     RAYCACHE_ASSERT(is_valid_face_size(face_size));
-    RAYCACHE_ASSERT(texel.face >= 0 && texel.face < 6 && texel.column >= 0 && texel.column < face_size &&
-                    texel.row >= 0 && texel.row < face_size);
+    RAYCACHE_ASSERT(is_on_cube(texel, face_size));
     return shared::raycache_texel_direction(shared::raycache_texel_address{texel.face, texel.column, texel.row},
                                             face_size);
 }
 
 // Index of `texel` in a cube stored face by face, row by row: (face * N + row) * N + column.
+// (At most 6 * 4096^2 - 1, so the shared 32-bit formula cannot overflow.)
 inline std::size_t texel_linear_index(const TexelAddress& texel, int face_size) noexcept {
-    return (static_cast<std::size_t>(texel.face) * face_size + texel.row) * static_cast<std::size_t>(face_size) +
-           texel.column;
+    return shared::raycache_texel_linear_index(shared::raycache_texel_address{texel.face, texel.column, texel.row},
+                                               face_size);
 }
 
 } // namespace raycache

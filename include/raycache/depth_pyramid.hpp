@@ -26,7 +26,7 @@ public:
             size = (size + 1) / 2;
             offsets_.push_back(values_.size());
             sizes_.push_back(size);
-            values_.resize(values_.size() + std::size_t{6} * size * size, 0.0f);
+            values_.resize(values_.size() + std::size_t{RAYCACHE_FACE_COUNT} * size * size, 0.0f);
         }
     }
 
@@ -46,7 +46,7 @@ public:
     void rebuild(const CdctCube& cube) {
         RAYCACHE_ASSERT(cube.face_size() == face_size_);
         for (int level = 1; level <= levels(); ++level)
-            for (int face = 0; face < 6; ++face)
+            for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
                 for (int row = 0; row < blocks(level); ++row)
                     for (int column = 0; column < blocks(level); ++column) recompute(cube, face, level, column, row);
     }

@@ -29,7 +29,7 @@ std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const 
                   "RayCache prefill_row: trace must be callable as `TracedRay trace(glm::vec3 origin, glm::vec3 direction)`");
     static_assert(std::is_same_v<Texel, CctTexel> || std::is_same_v<Texel, CdctTexel>, "RayCache prefill_row: CCT or CDCT cubes");
     const int n = cube.face_size();
-    RAYCACHE_ASSERT(face >= 0 && face < 6 && row >= 0 && row < n);
+    RAYCACHE_ASSERT(is_on_cube(TexelAddress{face, 0, row}, n));
     std::size_t stored = 0;
     for (int column = 0; column < n; ++column) {
         const TexelAddress texel{face, column, row};
@@ -55,7 +55,7 @@ std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const 
 template <class Texel, class Trace>
 std::size_t prefill(CacheCube<Texel>& cube, const CubeBounds& bounds, const ReliefParameters& p, Trace&& trace) {
     std::size_t stored = 0;
-    for (int face = 0; face < 6; ++face)
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
         for (int row = 0; row < cube.face_size(); ++row) stored += prefill_row(cube, bounds, p, face, row, trace);
     return stored;
 }
