@@ -41,9 +41,10 @@ struct Fixture {
         const std::vector<unsigned> cached = tracer.cached_geometries();
         std::mt19937 rng(1);
         std::uniform_int_distribution<int> pixel(0, 1023);
+        const rcx::CameraBasis camera = rcx::camera_basis(scene.camera, 1024, 1024);
         while (rays.size() < 4096) {
             const glm::vec3 eye = scene.camera.eye;
-            const glm::vec3 d = rcx::embree::Tracer::primary_direction(scene.camera, 1024, 1024, pixel(rng), pixel(rng));
+            const glm::vec3 d = rcx::primary_direction(camera, pixel(rng), pixel(rng));
             const RTCRayHit rh = intersect(eye, d);
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
             if (std::find(cached.begin(), cached.end(), rh.hit.geomID) == cached.end()) continue;

@@ -63,7 +63,7 @@ Variant make_variant(const rcx::embree::Tracer& tracer, std::string label, Cache
     Variant v;
     v.label = std::move(label);
     v.mode = mode;
-    if (mode == CacheMode::cct || mode == CacheMode::cdct) {
+    if (rcx::uses_caches(mode)) {
         v.caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, relief, pyramid);
         tracer.attach_caches(*v.caches, face_size);
         if (prefill) {

@@ -102,7 +102,7 @@ void run(const Config& c, rcx::vk::Context& context) {
                 variants.push_back(std::move(v));
             }
         for (auto& v : variants)
-            if (v->mode == CacheMode::cct || v->mode == CacheMode::cdct)
+            if (rcx::uses_caches(v->mode))
                 for (int warm = 0; warm < 2; ++warm) render(*v, camera, c.size);
         for (int r = 0; r < c.rounds; ++r)
             for (std::size_t k = 0; k < variants.size(); ++k) {

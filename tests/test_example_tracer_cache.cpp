@@ -38,7 +38,7 @@ constexpr Variant ceiling{"ceiling", rcx::CacheMode::ceiling, false};
 constexpr Variant all_variants[] = {off, cct, cdct_pyramid, cdct_linear, ceiling};
 constexpr Variant cached_variants[] = {cct, cdct_pyramid, cdct_linear};
 
-bool uses_caches(const Variant& v) { return v.mode == rcx::CacheMode::cct || v.mode == rcx::CacheMode::cdct; }
+bool uses_caches(const Variant& v) { return rcx::uses_caches(v.mode); }
 
 // The scene's cubes for `v` (face_size texels per edge on every cached object), with the relief search
 // parameters the example's command line uses by default; nullptr for the modes without caches.

@@ -67,7 +67,7 @@ int run(const rcx::Options& o) {
     settings.threads = o.threads;
 
     std::unique_ptr<raycache::embree::SceneCache> caches;
-    if (o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct) {
+    if (rcx::uses_caches(o.cache)) {
         raycache::ReliefParameters relief;
         relief.step = o.delta;
         relief.epsilon = o.epsilon;
@@ -97,7 +97,7 @@ int run(const rcx::Options& o) {
                     o.width, o.height, scene.max_depth, rcx::to_string(scene.path.kind), frames,
                     static_cast<double>(scene.path.step_degrees));
         std::printf("cache %s", rcx::to_string(o.cache));
-        if (o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct) std::printf(", faces %dx%d", o.face_size, o.face_size);
+        if (rcx::uses_caches(o.cache)) std::printf(", faces %dx%d", o.face_size, o.face_size);
         if (o.cache == rcx::CacheMode::cdct)
             std::printf(", delta %g, epsilon %g, max steps %d", static_cast<double>(o.delta), static_cast<double>(o.epsilon), o.max_steps);
         std::printf("; threads %s; PNGs in %s\n", o.threads > 0 ? std::to_string(o.threads).c_str() : "all", o.out.c_str());

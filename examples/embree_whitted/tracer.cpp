@@ -58,11 +58,22 @@ struct Tracer::Impl {
     RTCScene rtc = nullptr;
     std::vector<ObjectRef> objects; // by Embree geometry id
 
-    void check(const char* what) const {
-        if (!error.empty()) throw std::runtime_error(std::string("Embree tracer: ") + what + ": " + error);
+    Impl() = default;
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
+    // Here rather than in ~Tracer, so that a constructor that throws half-way releases them too.
+    ~Impl() {
+        if (rtc) rtcReleaseScene(rtc);
+        if (device) rtcReleaseDevice(device);
+    }
+
+    // Throws when Embree reported an error, releasing `unattached` (a geometry not yet in the scene) first.
+    void check(const char* what, RTCGeometry unattached = nullptr) const {
         const RTCError e = rtcGetDeviceError(device);
-        if (e != RTC_ERROR_NONE)
-            throw std::runtime_error(std::string("Embree tracer: ") + what + ": Embree error " + std::to_string(static_cast<int>(e)));
+        if (error.empty() && e == RTC_ERROR_NONE) return;
+        if (unattached) rtcReleaseGeometry(unattached);
+        if (!error.empty()) throw std::runtime_error(std::string("Embree tracer: ") + what + ": " + error);
+        throw std::runtime_error(std::string("Embree tracer: ") + what + ": Embree error " + std::to_string(static_cast<int>(e)));
     }
 
     void attach(RTCGeometry g, ObjectRef ref) {
@@ -255,7 +266,7 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
         const Sphere& s = t.scene.spheres[i];
         RTCGeometry g = rtcNewGeometry(t.device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
         auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-        t.check("sphere vertex buffer");
+        t.check("sphere vertex buffer", g);
         v[0] = s.centre.x;
         v[1] = s.centre.y;
         v[2] = s.centre.z;
@@ -274,7 +285,7 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
                                                               3 * sizeof(float), m.positions.size()));
         auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(unsigned), m.triangles.size()));
-        t.check("mesh buffers");
+        t.check("mesh buffers", g);
         for (std::size_t k = 0; k < m.positions.size(); ++k)
             for (int c = 0; c < 3; ++c) v[3 * k + static_cast<std::size_t>(c)] = m.positions[k][c];
         for (std::size_t k = 0; k < m.triangles.size(); ++k)
@@ -285,10 +296,7 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     t.check("building the scene");
 }
 
-Tracer::~Tracer() {
-    if (impl_->rtc) rtcReleaseScene(impl_->rtc);
-    if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+Tracer::~Tracer() = default;
 
 const Scene& Tracer::scene() const noexcept { return impl_->scene; }
 RTCScene Tracer::rtc_scene() const noexcept { return impl_->rtc; }
@@ -302,17 +310,6 @@ std::vector<unsigned> Tracer::cached_geometries() const {
 
 void Tracer::attach_caches(raycache::embree::SceneCache& caches, int face_size) const {
     for (unsigned id : cached_geometries()) caches.attach(impl_->rtc, raycache::embree::ObjectId{id}, face_size);
-}
-
-glm::vec3 Tracer::primary_direction(const Camera& camera, int width, int height, int x, int y) {
-    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::vec3 up = glm::cross(right, forward);
-    const float tan_half = std::tan(0.5f * camera.fov_y_degrees * 3.14159265358979f / 180.0f);
-    const float aspect = static_cast<float>(width) / static_cast<float>(height);
-    const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f) * tan_half * aspect;
-    const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height)) * tan_half;
-    return glm::normalize(forward + sx * right + sy * up);
 }
 
 std::size_t Tracer::prefill(raycache::embree::SceneCache& caches, int threads, double* milliseconds) const {
@@ -349,12 +346,12 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     if (settings.width < 1 || settings.height < 1)
         throw std::invalid_argument("Embree tracer: image size must be at least 1x1, got " +
                                     std::to_string(settings.width) + "x" + std::to_string(settings.height));
-    const bool needs_cache = settings.mode == CacheMode::cct || settings.mode == CacheMode::cdct;
-    if (needs_cache && !settings.caches)
+    if (uses_caches(settings.mode) && !settings.caches)
         throw std::invalid_argument(std::string("Embree tracer: cache mode ") + to_string(settings.mode) +
                                     " needs a SceneCache");
 
     Image image(settings.width, settings.height);
+    const CameraBasis basis = camera_basis(camera, settings.width, settings.height);
     const int tiles_x = (settings.width + tile_size - 1) / tile_size;
     const int tiles_y = (settings.height + tile_size - 1) / tile_size;
     std::vector<FrameStats> tile_stats(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
@@ -366,7 +363,7 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
             const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x)
-                    image.at(x, y) = shader.trace(camera.eye, primary_direction(camera, settings.width, settings.height, x, y), 0).color;
+                    image.at(x, y) = shader.trace(basis.eye, primary_direction(basis, x, y), 0).color;
             tile_stats[static_cast<std::size_t>(tile)] = shader.stats;
         }
     };

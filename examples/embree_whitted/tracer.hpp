@@ -67,9 +67,6 @@ public:
     // Throws std::invalid_argument for a size < 1 or a cct/cdct mode without caches.
     Image render(const Camera& camera, const RenderSettings& settings, FrameStats* stats = nullptr) const;
 
-    // The unit direction of the primary ray through the centre of pixel (x, y); row 0 is the top.
-    static glm::vec3 primary_direction(const Camera& camera, int width, int height, int x, int y);
-
     struct Impl; // the Embree objects and the scene copy; defined in tracer.cpp
 
 private:

@@ -566,7 +566,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     const std::string suffix = t.cdct ? "_cdct" : "";
     std::vector<VkDescriptorType> bindings(13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     t.whitted = std::make_unique<vk::ComputePipeline>(context, spirv_dir + "/whitted" + suffix + ".spv", bindings, 0);
-    if (settings.mode == CacheMode::cct || t.cdct)
+    if (uses_caches(settings.mode))
         t.end_frame = std::make_unique<vk::ComputePipeline>(
             context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
             4);
@@ -575,7 +575,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     // Objects: materials, and a cube descriptor for each cached one (face size 0: none).
     std::vector<GpuObject> objects;
     std::vector<raycache::shared::raycache_gpu_cube> cubes;
-    const bool caching = settings.mode == CacheMode::cct || settings.mode == CacheMode::cdct;
+    const bool caching = uses_caches(settings.mode);
     if (caching && (settings.face_size < 1 || settings.face_size > RAYCACHE_MAX_FACE_SIZE))
         throw std::invalid_argument("Vulkan tracer: --face-size must be 1.." + std::to_string(RAYCACHE_MAX_FACE_SIZE));
     // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage
@@ -663,20 +663,17 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     if (!t.output || t.output->size() < pixels * 16) t.output = std::make_unique<vk::Buffer>(t.context, pixels * 16);
     if (t.raster && (!t.gbuffer || t.gbuffer->size() < pixels * 16)) t.gbuffer = std::make_unique<vk::Buffer>(t.context, pixels * 16);
 
-    // The camera basis exactly as the Embree tracer computes it (on the CPU, with glm).
-    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::vec3 up = glm::cross(right, forward);
-    const float tan_half = std::tan(0.5f * camera.fov_y_degrees * 3.14159265358979f / 180.0f);
-    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    // The camera basis as the Embree tracer computes it (on the CPU, with glm); the shaders finish
+    // rcx::primary_direction per pixel.
+    const CameraBasis basis = camera_basis(camera, width, height);
     GpuParams p{};
-    set4(p.eye, camera.eye, 0.0f);
-    set4(p.forward, forward, 0.0f);
-    set4(p.right, right, 0.0f);
-    set4(p.up, up, 0.0f);
+    set4(p.eye, basis.eye, 0.0f);
+    set4(p.forward, basis.forward, 0.0f);
+    set4(p.right, basis.right, 0.0f);
+    set4(p.up, basis.up, 0.0f);
     set4(p.light_position, t.scene.light.position, t.scene.ambient);
-    set4(p.light_intensity, t.scene.light.intensity, tan_half);
-    set4(p.environment, t.scene.environment, aspect);
+    set4(p.light_intensity, t.scene.light.intensity, basis.tan_half_fov);
+    set4(p.environment, t.scene.environment, basis.aspect);
     p.frame[0] = width, p.frame[1] = height, p.frame[2] = mode_number(t.settings.mode) + (t.raster ? 16 : 0), p.frame[3] = t.scene.max_depth;
     p.relief[0] = t.settings.delta, p.relief[1] = t.settings.epsilon, p.relief[2] = 100.0f;
     p.relief[3] = t.settings.max_gap > 0.0f ? t.settings.max_gap : std::numeric_limits<float>::infinity();

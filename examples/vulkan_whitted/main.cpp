@@ -82,14 +82,13 @@ int run(const rcx::Options& o, bool hybrid) {
         throw InputError(e.what());
     }
 
-    const bool caching_mode = o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct;
-    if (caching_mode && tracer->face_size() != o.face_size)
+    const bool caching = rcx::uses_caches(o.cache);
+    if (caching && tracer->face_size() != o.face_size)
         std::fprintf(stderr, "%s: note: --face-size %d: the cubes do not fit in one storage buffer of this device "
                              "(maxStorageBufferRange %llu bytes); using face size %d\n",
                      "raycache_vulkan_whitted", o.face_size,
                      static_cast<unsigned long long>(context->properties().limits.maxStorageBufferRange), tracer->face_size());
     const int frames = scene.path.frames;
-    const bool caching = o.cache == rcx::CacheMode::cct || o.cache == rcx::CacheMode::cdct;
     if (!o.quiet) {
         std::printf("device %s (validation %s); scene %s: %zu spheres, %zu meshes, %d cached objects, BVH %zu nodes; "
                     "%dx%d, depth %d, %s path, %d frames of %.2f deg\n",

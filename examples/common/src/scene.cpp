@@ -209,6 +209,25 @@ const char* const valid_names =
 
 } // namespace
 
+CameraBasis camera_basis(const Camera& camera, int width, int height) {
+    CameraBasis b;
+    b.eye = camera.eye;
+    b.forward = glm::normalize(camera.target - camera.eye);
+    b.right = glm::normalize(glm::cross(b.forward, camera.up));
+    b.up = glm::cross(b.right, b.forward);
+    b.tan_half_fov = std::tan(0.5f * camera.fov_y_degrees * 3.14159265358979f / 180.0f);
+    b.aspect = static_cast<float>(width) / static_cast<float>(height);
+    b.width = width;
+    b.height = height;
+    return b;
+}
+
+glm::vec3 primary_direction(const CameraBasis& b, int x, int y) {
+    const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(b.width) - 1.0f) * b.tan_half_fov * b.aspect;
+    const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(b.height)) * b.tan_half_fov;
+    return glm::normalize(b.forward + sx * b.right + sy * b.up);
+}
+
 Camera CameraPath::at(const Camera& start, int frame) const {
     Camera c = start;
     const float angle = step_degrees * static_cast<float>(frame);

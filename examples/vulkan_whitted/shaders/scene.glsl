@@ -154,7 +154,7 @@ Hit intersect(vec3 o, vec3 d, float tfar, bool any) {
 }
 
 // The unit direction of the primary ray through the centre of pixel (x, y), row 0 at the top (as
-// rcx::embree::Tracer::primary_direction, with the camera basis computed on the CPU).
+// rcx::primary_direction, with the camera basis from rcx::camera_basis on the CPU).
 vec3 primary_direction(int x, int y) {
     int width = frame.x, height = frame.y;
     float tan_half = light_intensity.w, aspect = environment.w;

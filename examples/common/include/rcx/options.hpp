@@ -20,6 +20,8 @@ enum class CacheMode {
 
 // "off", "cct", "cdct", "ceiling"; parse_cache_mode throws UsageError for anything else.
 const char* to_string(CacheMode mode);
+// True for the modes that read and write caching cubes (cct, cdct).
+inline bool uses_caches(CacheMode mode) { return mode == CacheMode::cct || mode == CacheMode::cdct; }
 CacheMode parse_cache_mode(const std::string& text);
 
 // A command line that cannot be run as given; what() says what to change. main() prints it and exits 2.
@@ -71,9 +73,9 @@ void apply_options(Scene& scene, const Options& options);
 // Throws std::runtime_error with the path and the reason otherwise.
 void ensure_writable_directory(const std::string& path);
 
-// What every example tracer does first: the scene the options name (make_scene, scene_params), with
-// apply_options done, after ensure_writable_directory(options.out). Throws what those throw: each
-// message names the bad input.
+// What every example tracer does first: builds the scene the options name (make_scene, scene_params),
+// applies the options to it, then checks the output folder (ensure_writable_directory(options.out)).
+// Throws what those throw: each message names the bad input.
 Scene scene_from_options(const Options& options);
 
 } // namespace rcx

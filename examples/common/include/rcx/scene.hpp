@@ -55,6 +55,19 @@ struct Camera {
     float fov_y_degrees = 45.0f;      // vertical field of view
 };
 
+// A camera's basis and image-plane scale for one image size: what every primary ray of a frame shares,
+// so tracers compute it once a frame (the Vulkan tracer hands it to its shaders).
+struct CameraBasis {
+    glm::vec3 eye, forward, right, up;
+    float tan_half_fov; // tan(fov_y / 2)
+    float aspect;       // width / height
+    int width, height;
+};
+CameraBasis camera_basis(const Camera& camera, int width, int height);
+
+// The unit direction of the primary ray through the centre of pixel (x, y), row 0 at the top.
+glm::vec3 primary_direction(const CameraBasis& basis, int x, int y);
+
 // How the camera moves from frame to frame, starting at the scene's camera (frame 0).
 struct CameraPath {
     enum class Kind { fixed, orbit, pan };
