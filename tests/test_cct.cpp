@@ -26,12 +26,6 @@ using raycache::CctCube;
 using raycache::CubeStatistics;
 using raycache::TexelAddress;
 
-std::uint32_t bits_of(float x) {
-    std::uint32_t u;
-    std::memcpy(&u, &x, sizeof u);
-    return u;
-}
-
 // True when `text` contains `number` as a whole token (not part of a longer number, sign included).
 bool mentions_number(const std::string& text, const std::string& number) {
     for (std::size_t at = text.find(number); at != std::string::npos; at = text.find(number, at + 1)) {
@@ -450,16 +444,16 @@ TEST_CASE("cached_trace on a miss calls trace once and returns its exact, unquan
     };
     const glm::vec3 first = raycache::cached_trace(cube, dir_a, trace);
     CHECK(calls == 1);
-    CHECK(bits_of(first.x) == bits_of(0.123456789f));
-    CHECK(bits_of(first.y) == bits_of(0.987654321f));
-    CHECK(bits_of(first.z) == bits_of(0.5f));
+    CHECK(glm::floatBitsToUint(first.x) == glm::floatBitsToUint(0.123456789f));
+    CHECK(glm::floatBitsToUint(first.y) == glm::floatBitsToUint(0.987654321f));
+    CHECK(glm::floatBitsToUint(first.z) == glm::floatBitsToUint(0.5f));
     CHECK(cube.statistics().misses == 1u);
     CHECK(cube.statistics().stores == 1u);
 
     SUBCASE("a second call in the same frame traces again") {
         const glm::vec3 again = raycache::cached_trace(cube, dir_a_too, trace);
         CHECK(calls == 2);
-        CHECK(bits_of(again.x) == bits_of(0.123456789f));
+        CHECK(glm::floatBitsToUint(again.x) == glm::floatBitsToUint(0.123456789f));
         CHECK(cube.statistics().misses == 2u);
         CHECK(cube.statistics().refused_stores == 1u); // the same word again
     }

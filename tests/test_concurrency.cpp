@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "raycache/raycache.hpp"
+#include "test_bits.hpp"
 
 namespace {
 
@@ -32,16 +33,6 @@ using raycache::TexelAddress;
 constexpr int face_size = 64;
 constexpr int texel_count = 6 * face_size * face_size;
 constexpr int thread_count = 4;
-
-std::uint32_t bits_of(float x) {
-    std::uint32_t u;
-    std::memcpy(&u, &x, sizeof u);
-    return u;
-}
-
-bool same_bits(const glm::vec3& a, const glm::vec3& b) {
-    return bits_of(a.x) == bits_of(b.x) && bits_of(a.y) == bits_of(b.y) && bits_of(a.z) == bits_of(b.z);
-}
 
 // The direction through the centre of texel (face, column, row), from the spec's face table:
 // sc = 2 (column + 0.5) / N - 1 is t'u / |m|, tc likewise t'v / |m|, with |m| = 1.

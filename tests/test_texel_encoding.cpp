@@ -34,18 +34,6 @@ constexpr std::uint32_t rgb9e5(std::uint32_t r, std::uint32_t g, std::uint32_t b
     return r | g << 9 | b << 18 | exponent << 27;
 }
 
-std::uint32_t bits_of(float x) {
-    std::uint32_t u;
-    std::memcpy(&u, &x, sizeof u);
-    return u;
-}
-
-float float_of(std::uint32_t u) {
-    float x;
-    std::memcpy(&x, &u, sizeof x);
-    return x;
-}
-
 // The documented round-trip bound (texel_encoding.h, texel.hpp): at most max(r, g, b) * 2^-9 per channel,
 // or 2^-25 absolute for colours under 2^-16, measured against the clamped colour.
 double documented_bound(double brightest) {
@@ -173,7 +161,7 @@ TEST_CASE("colour channels clamp: above 65280 and +inf to 65280, negatives, -inf
     SUBCASE("NaN") {
         CHECK(raycache_pack_rgb9e5(glm::vec3(nan_value, 1.0f, 0.0f)) == 0x80020000u);
         CHECK(raycache_pack_rgb9e5(glm::vec3(nan_value)) == 0u);
-        CHECK(raycache_pack_rgb9e5(glm::vec3(-nan_value, float_of(0x7FC12345u), float_of(0xFFFFFFFFu))) == 0u);
+        CHECK(raycache_pack_rgb9e5(glm::vec3(-nan_value, glm::uintBitsToFloat(0x7FC12345u), glm::uintBitsToFloat(0xFFFFFFFFu))) == 0u);
     }
 }
 
@@ -201,14 +189,14 @@ TEST_CASE("RGB9E5 round trips stay within the documented bound over a dense swee
     RoundTripSweep sweep;
     SUBCASE("one channel, every 509th float from 0 to +inf, in each position") {
         for (std::uint32_t u = 0; u <= 0x7F800000u; u += 509u) {
-            const float x = float_of(u);
+            const float x = glm::uintBitsToFloat(u);
             sweep.check(glm::vec3(x, 0.0f, 0.0f));
             sweep.check(glm::vec3(0.0f, x, 0.0f));
             sweep.check(glm::vec3(0.0f, 0.0f, x));
         }
     }
     SUBCASE("grey levels, every 997th float up to 2^17") {
-        for (std::uint32_t u = 0; u <= bits_of(131072.0f); u += 997u) sweep.check(glm::vec3(float_of(u)));
+        for (std::uint32_t u = 0; u <= glm::floatBitsToUint(131072.0f); u += 997u) sweep.check(glm::vec3(glm::uintBitsToFloat(u)));
     }
     SUBCASE("mantissas 256 to 512 in 1/16 steps across binades, with dimmer channels") {
         for (int k = -20; k <= 16; k += 3) {
@@ -265,7 +253,7 @@ TEST_CASE("the encoder never produces the CCT invalid word 0xFFFFFFFF") {
     // Every 257th float bit pattern, positive and negative, NaNs and infinities included, in all channels at once
     // and alone.
     for (std::uint64_t u = 0; u <= 0xFFFFFFFFull; u += 257u) {
-        const float x = float_of(static_cast<std::uint32_t>(u));
+        const float x = glm::uintBitsToFloat(static_cast<std::uint32_t>(u));
         check(glm::vec3(x));
         check(glm::vec3(x, 0.0f, 0.0f));
     }
@@ -279,7 +267,7 @@ TEST_CASE("the encoder never produces the CCT invalid word 0xFFFFFFFF") {
 }
 
 TEST_CASE("a CDCT word holds the colour in its low 32 bits and the distance's float bits in the high 32") {
-    CHECK(bits_of(3.75f) == 0x40700000u); // 1.875 * 2^1: exponent 128, fraction 0.875
+    CHECK(glm::floatBitsToUint(3.75f) == 0x40700000u); // 1.875 * 2^1: exponent 128, fraction 0.875
     const DepthSample sample{glm::vec3(1.0f, 0.5f, 0.25f), 3.75f};
     CHECK(CdctTexel::encode(sample) == 0x4070000081010100ull);
     const raycache::shared::uvec2 pair = raycache::shared::raycache_cdct_pack(sample.color, sample.distance);
@@ -308,9 +296,9 @@ TEST_CASE("a CDCT sample round-trips: distance exactly, colour within the RGB9E5
             CAPTURE(distance);
             const std::uint64_t word = CdctTexel::encode(DepthSample{colour, distance});
             REQUIRE(CdctTexel::is_valid(word));
-            CHECK((word >> 32) == bits_of(distance));
+            CHECK((word >> 32) == glm::floatBitsToUint(distance));
             const DepthSample back = CdctTexel::decode(word);
-            CHECK(bits_of(back.distance) == bits_of(distance));
+            CHECK(glm::floatBitsToUint(back.distance) == glm::floatBitsToUint(distance));
             const double expected[3] = {clamped(colour.x), clamped(colour.y), clamped(colour.z)};
             const double bound = documented_bound(std::max(expected[0], std::max(expected[1], expected[2])));
             for (int i = 0; i < 3; ++i) CHECK(std::fabs(back.color[i] - expected[i]) <= bound);
@@ -327,9 +315,9 @@ TEST_CASE("a CDCT sample round-trips: distance exactly, colour within the RGB9E5
 
 TEST_CASE("negative, NaN and infinite CDCT distances encode as the invalid word") {
     const float bad[] = {-1.0f, -1e-30f, -1e-45f, -std::numeric_limits<float>::max(), -inf, inf, nan_value,
-                         -nan_value, float_of(0x7F800001u)};
+                         -nan_value, glm::uintBitsToFloat(0x7F800001u)};
     for (float distance : bad) {
-        CAPTURE(bits_of(distance));
+        CAPTURE(glm::floatBitsToUint(distance));
         const std::uint64_t word = CdctTexel::encode(DepthSample{glm::vec3(1.0f), distance});
         CHECK(word == 0xBF80000000000000ull);
         CHECK_FALSE(CdctTexel::is_valid(word));

@@ -13,6 +13,8 @@
 #include <glm/glm.hpp>
 #include <raycache/shared/gpu_layout.h>
 
+#include "rcx/meshes.hpp"
+
 namespace rcx::gpu {
 
 namespace {
@@ -228,12 +230,6 @@ int mode_number(CacheMode mode) {
     return 0;
 }
 
-template <class T>
-vk::Buffer buffer_of(vk::Context& context, const std::vector<T>& values) {
-    vk::Buffer b(context, std::max<std::size_t>(values.size() * sizeof(T), 16));
-    if (!values.empty()) b.upload(values.data(), values.size() * sizeof(T));
-    return b;
-}
 
 // ---- the raster pass of the hybrid mode ---------------------------------------------------------------
 
@@ -295,20 +291,9 @@ public:
     }
 
 private:
-    VkShaderModule module(const std::string& path) {
-        const std::vector<std::uint32_t> code = vk::read_spirv(path);
-        VkShaderModuleCreateInfo info{};
-        info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
-        info.codeSize = code.size() * 4;
-        info.pCode = code.data();
-        VkShaderModule m = VK_NULL_HANDLE;
-        check(vkCreateShaderModule(device_, &info, nullptr, &m), ("vkCreateShaderModule " + path).c_str());
-        return m;
-    }
-
     void create(const std::string& spirv_dir, std::initializer_list<const vk::Buffer*> scene_buffers) {
-        vs_ = module(spirv_dir + "/gbuffer_vert.spv");
-        fs_ = module(spirv_dir + "/gbuffer_frag.spv");
+        vs_ = vk::create_shader_module(context_, spirv_dir + "/gbuffer_vert.spv");
+        fs_ = vk::create_shader_module(context_, spirv_dir + "/gbuffer_frag.spv");
 
         // Set 0: the scene buffers at bindings 5.. (as in scene.glsl).
         std::vector<VkDescriptorSetLayoutBinding> bindings;
@@ -583,9 +568,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     const std::uint64_t word_bytes = t.cdct ? 8 : 4;
     const std::uint64_t range = context.properties().limits.maxStorageBufferRange;
     if (caching) {
-        std::uint64_t cached = 0;
-        for (const Sphere& s : scene.spheres) cached += s.material.cached ? 1 : 0;
-        for (const Mesh& m : scene.meshes) cached += m.material.cached ? 1 : 0;
+        const std::uint64_t cached = static_cast<std::uint64_t>(scene.cached_object_count());
         while (t.settings.face_size > 1 &&
                cached * raycache::shared::raycache_gpu_cube_texel_count(t.settings.face_size) * word_bytes > range)
             --t.settings.face_size;
@@ -612,9 +595,8 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     for (const Sphere& s : scene.spheres)
         add_object(s.material, true, s.centre, s.radius, s.centre - glm::vec3(s.radius), s.centre + glm::vec3(s.radius));
     for (const Mesh& m : scene.meshes) {
-        glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-        for (const glm::vec3& p : m.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-        add_object(m.material, false, glm::vec3(0.0f), 0.0f, lo, hi);
+        const Bounds b = mesh_bounds(m);
+        add_object(m.material, false, glm::vec3(0.0f), 0.0f, b.min, b.max);
     }
 
     if (texels * word_bytes > range || texels > std::numeric_limits<std::uint32_t>::max())
@@ -623,10 +605,10 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
                                     std::to_string(range) + "); use a smaller --face-size");
     t.texel_count = static_cast<std::uint32_t>(texels);
 
-    t.nodes = std::make_unique<vk::Buffer>(buffer_of(context, t.bvh.nodes));
-    t.primitives = std::make_unique<vk::Buffer>(buffer_of(context, t.bvh.primitives));
-    t.objects = std::make_unique<vk::Buffer>(buffer_of(context, objects));
-    t.cubes = std::make_unique<vk::Buffer>(buffer_of(context, cubes));
+    t.nodes = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.nodes, 16));
+    t.primitives = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
+    t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
+    t.cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, cubes, 16));
     t.params = std::make_unique<vk::Buffer>(context, sizeof(GpuParams));
     t.counters = std::make_unique<vk::Buffer>(context, 16);
     t.dummy = std::make_unique<vk::Buffer>(context, 16);

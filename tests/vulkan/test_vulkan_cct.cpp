@@ -32,12 +32,6 @@ struct Query {
 };
 static_assert(sizeof(Query) == 32, "Query must match the std430 layout in cct_cross.comp");
 
-std::uint32_t bits(float x) {
-    std::uint32_t b;
-    std::memcpy(&b, &x, 4);
-    return b;
-}
-
 // Directions of every kind: random, near axes, ties, signed zeros, and a few that are not directions.
 glm::vec3 any_direction(std::mt19937& rng) {
     std::normal_distribution<float> g;
@@ -95,15 +89,13 @@ std::vector<std::uint32_t> buffer_words(const Setup& s) {
     return words;
 }
 
-const std::vector<VkDescriptorType> cross_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 
 } // namespace
 
 TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), cross_bindings, 4);
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), rcx_test::cross_bindings, 4);
     std::mt19937 rng(11);
     Setup s = make_cubes(rng, 1.0);
 
@@ -123,8 +115,8 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     std::size_t same = 0, hits = 0;
     for (std::size_t i = 0; i < queries.size(); ++i) {
         const auto expected = s.cubes[queries[i].cube].lookup(queries[i].direction);
-        const bool ok = expected ? r[4 * i] == 1u && r[4 * i + 1] == bits(expected->x) && r[4 * i + 2] == bits(expected->y) &&
-                                       r[4 * i + 3] == bits(expected->z)
+        const bool ok = expected ? r[4 * i] == 1u && r[4 * i + 1] == glm::floatBitsToUint(expected->x) && r[4 * i + 2] == glm::floatBitsToUint(expected->y) &&
+                                       r[4 * i + 3] == glm::floatBitsToUint(expected->z)
                                  : r[4 * i] == 0u;
         same += ok;
         hits += expected.has_value();
@@ -138,8 +130,8 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
 TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word wins, and C++ reads the result") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), cross_bindings, 4);
-    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cct"), end_frame_bindings, 0);
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), rcx_test::cross_bindings, 4);
+    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cct"), rcx_test::end_frame_bindings, 0);
     std::mt19937 rng(12);
     Setup s = make_cubes(rng, 0.2); // some texels visible already: stores into them are refused
 
@@ -205,7 +197,7 @@ TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word w
         } else {
             ++lookup_count;
             const auto& e = expected_lookups[i];
-            lookups_same += e ? r[4 * i] == 1u && r[4 * i + 1] == bits(e->x) : r[4 * i] == 0u;
+            lookups_same += e ? r[4 * i] == 1u && r[4 * i + 1] == glm::floatBitsToUint(e->x) : r[4 * i] == 0u;
         }
     }
     CHECK(lookups_same == lookup_count);
@@ -243,8 +235,8 @@ TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word w
     for (std::size_t i = 0; i < lookups.size(); ++i) {
         const auto e = s.cubes[lookups[i].cube].lookup(lookups[i].direction);
         next_hits += e.has_value();
-        next_same += e ? next[4 * i] == 1u && next[4 * i + 1] == bits(e->x) && next[4 * i + 2] == bits(e->y) &&
-                             next[4 * i + 3] == bits(e->z)
+        next_same += e ? next[4 * i] == 1u && next[4 * i + 1] == glm::floatBitsToUint(e->x) && next[4 * i + 2] == glm::floatBitsToUint(e->y) &&
+                             next[4 * i + 3] == glm::floatBitsToUint(e->z)
                        : next[4 * i] == 0u;
     }
     CHECK(next_same == lookups.size());

@@ -17,6 +17,7 @@
 #include <raycache/raycache.hpp>
 
 #include "vulkan_test.hpp"
+#include "../test_bits.hpp"
 
 using namespace raycache;
 namespace gpu = raycache::shared;
@@ -50,17 +51,6 @@ struct Push {
 };
 static_assert(sizeof(ReliefParameters) == 20 && sizeof(Push) == 24, "ReliefParameters must be 5 4-byte fields");
 
-std::uint32_t bits(float x) {
-    std::uint32_t b;
-    std::memcpy(&b, &x, 4);
-    return b;
-}
-bool same_bits(const glm::vec3& a, const glm::vec3& b) {
-    return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z);
-}
-
-const std::vector<VkDescriptorType> cross_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 
 struct Scene {
     std::vector<CdctCube> cubes;
@@ -165,7 +155,7 @@ Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const R
         const Query& q = queries[i];
         const ReliefResult e = relief_search(s.cubes[q.cube], s.bounds[q.cube], q.origin, q.direction, p);
         const bool ok = (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
-                        bits(r[i].distance) == bits(e.distance) && same_bits(r[i].point, e.point) &&
+                        glm::floatBitsToUint(r[i].distance) == glm::floatBitsToUint(e.distance) && same_bits(r[i].point, e.point) &&
                         same_bits(r[i].color, e.color);
         c.same += ok;
         c.hits += e.hit;
@@ -184,7 +174,8 @@ Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const R
 TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), cross_bindings, sizeof(Push));
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
     std::mt19937 rng(21);
     Scene s = make_scene(rng, true);
     const std::vector<Query> queries = search_queries(s, rng, 1500);
@@ -224,8 +215,8 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
     REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), cross_bindings, sizeof(Push));
-    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), end_frame_bindings, 0);
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), rcx_test::end_frame_bindings, 0);
     std::mt19937 rng(22);
     // The scene filled, then 3 of every 4 texels emptied: stores into the rest are refused.
     Scene s = make_scene(rng, true);
@@ -345,7 +336,7 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
             ++searches;
             const ReliefResult& e = frame_searches[i];
             searches_same += (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
-                             bits(r[i].distance) == bits(e.distance) && same_bits(r[i].color, e.color);
+                             glm::floatBitsToUint(r[i].distance) == glm::floatBitsToUint(e.distance) && same_bits(r[i].color, e.color);
         } else if (refused_for_sure[i]) {
             ++refusals;
             refusals_kept += r[i].hit == 0u;

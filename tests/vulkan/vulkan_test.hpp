@@ -23,13 +23,12 @@ rcx::vk::Context* context();
 // Path of a SPIR-V file built from tests/vulkan/shaders/ ("face_map" -> ".../shaders/face_map.spv").
 std::string spirv(const std::string& name);
 
-// A storage buffer holding a copy of `values` (at least one element's worth of bytes).
-template <class T>
-rcx::vk::Buffer buffer_of(rcx::vk::Context& vk, const std::vector<T>& values) {
-    rcx::vk::Buffer buffer(vk, std::max<std::size_t>(values.size(), 1) * sizeof(T));
-    buffer.upload(values.data(), values.size() * sizeof(T));
-    return buffer;
-}
+using rcx::vk::buffer_of;
+
+// Bindings of the cross-check shaders (shaders/*_cross.comp: five storage buffers) and of the
+// end-frame pass (texels and pending).
+inline const std::vector<VkDescriptorType> cross_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+inline const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 
 // The words of a C++ cube in buffer order ((face * N + row) * N + column), read with CacheCube::load()
 // and re-encoded; empty texels give Texel::invalid.

@@ -666,12 +666,22 @@ std::vector<std::uint32_t> read_spirv(const std::string& path) {
     return words;
 }
 
+VkShaderModule create_shader_module(Context& context, const std::string& path) {
+    const std::vector<std::uint32_t> code = read_spirv(path);
+    VkShaderModuleCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
+    info.codeSize = code.size() * 4;
+    info.pCode = code.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    check(vkCreateShaderModule(context.device(), &info, nullptr, &module), ("vkCreateShaderModule(" + path + ")").c_str());
+    return module;
+}
+
 ComputePipeline::ComputePipeline(Context& context, const std::string& spirv_path, std::vector<VkDescriptorType> bindings,
                                  std::uint32_t push_constant_bytes)
     : context_(context), bindings_(std::move(bindings)), push_constant_bytes_(push_constant_bytes) {
-    const std::vector<std::uint32_t> code = read_spirv(spirv_path);
     const VkDevice device = context.device();
-    VkShaderModule module = VK_NULL_HANDLE;
+    VkShaderModule module = create_shader_module(context, spirv_path); // a missing or bad file: nothing made yet
     try {
         std::vector<VkDescriptorSetLayoutBinding> layout_bindings(bindings_.size());
         for (std::uint32_t i = 0; i < bindings_.size(); ++i)
@@ -690,13 +700,6 @@ ComputePipeline::ComputePipeline(Context& context, const std::string& spirv_path
         layout_info.pushConstantRangeCount = push_constant_bytes_ ? 1 : 0;
         layout_info.pPushConstantRanges = &range;
         check(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout_), "vkCreatePipelineLayout");
-
-        VkShaderModuleCreateInfo module_info{};
-        module_info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
-        module_info.codeSize = code.size() * 4;
-        module_info.pCode = code.data();
-        check(vkCreateShaderModule(device, &module_info, nullptr, &module),
-              ("vkCreateShaderModule(" + spirv_path + ")").c_str());
 
         VkComputePipelineCreateInfo pipeline_info{};
         pipeline_info.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO;

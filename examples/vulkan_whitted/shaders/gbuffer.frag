@@ -13,7 +13,7 @@ void main() {
     vec3 o = eye.xyz;
     Prim p = prims[primitive];
     float t = 0.0, u = 0.0, v = 0.0;
-    bool found = p.info.x == 0u ? hit_sphere(p.p0, o, d, INF, t) : hit_triangle(p, o, d, INF, t, u, v);
+    bool found = p.info.x == 0u ? hit_sphere(p.p0, o, d, RAYCACHE_INFINITY, t) : hit_triangle(p, o, d, RAYCACHE_INFINITY, t, u, v);
     if (!found) discard;
     hit = uvec4(floatBitsToUint(t), uint(primitive), floatBitsToUint(u), floatBitsToUint(v));
     gl_FragDepth = t / (t + 1.0);

@@ -4,7 +4,7 @@
 #ifndef WHITTED_SCENE_GLSL
 #define WHITTED_SCENE_GLSL
 
-#define INF uintBitsToFloat(0x7F800000u)
+#include "raycache/cube.glsl" // RAYCACHE_INFINITY, raycache_length (glm's order); declares no buffers
 
 struct Node {        // 32 bytes; leaf: b > 0 primitives from a; inner: b == 0, children a and a + 1
     vec3 lo;
@@ -49,10 +49,6 @@ float pdot(vec3 a, vec3 b) {
 vec3 pnormalize(vec3 v) {
     precise float s = 1.0 / sqrt(pdot(v, v));
     precise vec3 r = v * s;
-    return r;
-}
-float plength(vec3 v) {
-    precise float r = sqrt(pdot(v, v));
     return r;
 }
 vec3 pcross(vec3 x, vec3 y) {

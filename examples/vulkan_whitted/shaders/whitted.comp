@@ -100,7 +100,7 @@ vec3 shade(Hit h, vec3 origin, vec3 d, int depth, out Child children[3], out int
     if (!inside) {
         color += light_position.w * local * base;
         precise vec3 to_light = light_position.xyz - p;
-        float distance = plength(to_light);
+        float distance = raycache_length(to_light);
         precise vec3 l = to_light / distance;
         float n_dot_l = pdot(n, l);
         if (n_dot_l > 0.0 && pdot(nf, l) > 0.0 && intersect(above, l, distance - eps, true).prim < 0) {
@@ -135,7 +135,7 @@ vec3 shade(Hit h, vec3 origin, vec3 d, int depth, out Child children[3], out int
 
 const int STACK = 24;
 
-// The colour of the ray (o, d) at `depth` and its first hit distance (INF: escaped); caches are not
+// The colour of the ray (o, d) at `depth` and its first hit distance (infinity: escaped); caches are not
 // consulted (in ceiling mode cached leaving rays still get the constant).
 vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
     vec3 so[STACK], sd[STACK], sw[STACK];
@@ -143,14 +143,14 @@ vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
     int top = 0;
     so[0] = o0; sd[0] = d0; sw[0] = vec3(1.0); sdepth[0] = depth0; top = 1;
     vec3 sum = vec3(0.0);
-    float first_t = INF;
+    float first_t = RAYCACHE_INFINITY;
     bool first = true;
     while (top > 0) {
         --top;
         vec3 o = so[top], d = sd[top], w = sw[top];
         int depth = sdepth[top];
-        Hit h = intersect(o, d, INF, false);
-        if (first) first_t = h.prim < 0 ? INF : h.t;
+        Hit h = intersect(o, d, RAYCACHE_INFINITY, false);
+        if (first) first_t = h.prim < 0 ? RAYCACHE_INFINITY : h.t;
         first = false;
         if (h.prim < 0) { sum += w * environment.xyz; continue; }
         Child c[3];
@@ -175,22 +175,21 @@ vec3 leaving(uint object, vec3 o, vec3 d, int depth, inout uint lookups, inout u
     raycache_relief_result f = raycache_relief_search(cube, o, d, rp);
     if (f.hit) { ++hits; return f.color; }
     vec4 r = trace_subtree(o, d, depth + 1);
+    // Only a store that lowered the pending word flags its block: one that lost to a smaller word
+    // finds the block flagged by the store that beat it.
     if (isinf(r.w)) {
-        mark_dirty(cube, d);
-        raycache_cdct_store_escape(cube, d, r.rgb, rp);
+        if (raycache_cdct_store_escape(cube, d, r.rgb, rp)) mark_dirty(cube, d);
     } else {
         precise vec3 hit_point = o + r.w * d;
         precise vec3 from_centre = hit_point - cube.centre; // the key raycache_cdct_store_hit uses
-        mark_dirty(cube, from_centre);
-        raycache_cdct_store_hit(cube, hit_point, r.rgb, rp);
+        if (raycache_cdct_store_hit(cube, hit_point, r.rgb, rp)) mark_dirty(cube, from_centre);
     }
     return r.rgb;
 #else
     raycache_cct_result c = raycache_cct_lookup(cube, d);
     if (c.hit) { ++hits; return c.color; }
     vec4 r = trace_subtree(o, d, depth + 1);
-    mark_dirty(cube, d);
-    raycache_cct_store(cube, d, r.rgb);
+    if (raycache_cct_store(cube, d, r.rgb)) mark_dirty(cube, d);
     return r.rgb;
 #endif
 }
@@ -217,7 +216,7 @@ vec3 trace_primary(vec3 o0, vec3 d0, uint pixel, inout uint lookups, inout uint 
             h.u = uintBitsToFloat(g.z);
             h.v = uintBitsToFloat(g.w);
         } else {
-            h = intersect(o, d, INF, false);
+            h = intersect(o, d, RAYCACHE_INFINITY, false);
         }
         if (h.prim < 0) { sum += w * environment.xyz; continue; }
         Child c[3];

@@ -16,6 +16,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <algorithm>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -80,6 +81,14 @@ private:
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
 };
+
+// A buffer holding a copy of `values`, at least `min_bytes` long (a Vulkan buffer cannot be empty).
+template <class T>
+Buffer buffer_of(Context& context, const std::vector<T>& values, std::size_t min_bytes = sizeof(T)) {
+    Buffer buffer(context, std::max(values.size() * sizeof(T), min_bytes));
+    if (!values.empty()) buffer.upload(values.data(), values.size() * sizeof(T));
+    return buffer;
+}
 
 // An optimally tiled image with memory of its own and one view of all its layers (one mip level).
 struct ImageDescription {
@@ -240,6 +249,10 @@ private:
 
 // Reads a SPIR-V file; Error naming the path when it is missing, unreadable, or not SPIR-V.
 std::vector<std::uint32_t> read_spirv(const std::string& path);
+
+// A shader module made from a SPIR-V file (read_spirv); Error naming the path when the file cannot be
+// read or the driver rejects it. The caller destroys it.
+VkShaderModule create_shader_module(Context& context, const std::string& path);
 
 // Validation errors reported by every Context of this process so far, destroyed ones included (an error
 // can come while a device or instance is destroyed).
