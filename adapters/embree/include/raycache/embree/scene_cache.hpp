@@ -98,6 +98,25 @@ inline CubeBounds bounds_of(RTCScene scene, ObjectId id) {
 // Threads: leaving_ray() from any number of threads at once; attach(), begin_frame() and clear()
 // between frames, on one thread.
 class SceneCache {
+    // One attached object: where its cube sits, and the cube of the cache's technique.
+    struct Entry {
+        ObjectId id;
+        CubeBounds bounds;
+        std::unique_ptr<CctCube> cct;
+        std::unique_ptr<CdctCube> cdct;
+        std::unique_ptr<DepthPyramid> pyramid; // CDCT with depth_pyramid only
+    };
+
+    // f(cube) on the entry's cube, whichever technique it holds (f is instantiated for both).
+    template <class F>
+    static decltype(auto) with_cube(Entry& e, F&& f) {
+        return e.cct ? f(*e.cct) : f(*e.cdct);
+    }
+    template <class F>
+    static decltype(auto) with_cube(const Entry& e, F&& f) {
+        return e.cct ? f(static_cast<const CctCube&>(*e.cct)) : f(static_cast<const CdctCube&>(*e.cdct));
+    }
+
 public:
     // Throws std::invalid_argument for bad relief parameters (used by the CDCT only). With depth_pyramid
     // (the default), each CDCT cube keeps a DepthPyramid so its searches skip empty space; without, the
@@ -153,8 +172,7 @@ public:
     int face_size(ObjectId id) const noexcept {
         const int index = find(id);
         if (index < 0) return 0;
-        const Entry& e = entries_[static_cast<std::size_t>(index)];
-        return e.cct ? e.cct->face_size() : e.cdct->face_size();
+        return with_cube(entries_[static_cast<std::size_t>(index)], [](const auto& cube) { return cube.face_size(); });
     }
 
     // Pre-fills one row of one face of object `id`'s cube (see raycache/prefill.hpp): every empty texel is
@@ -167,7 +185,7 @@ public:
         const int index = find(id);
         if (index < 0) return 0;
         Entry& e = entries_[static_cast<std::size_t>(index)];
-        return e.cct ? prefill_row_impl(*e.cct, e.bounds, face, row, trace) : prefill_row_impl(*e.cdct, e.bounds, face, row, trace);
+        return with_cube(e, [&](auto& cube) { return raycache::prefill_row(cube, e.bounds, relief_, face, row, trace); });
     }
 
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
@@ -200,7 +218,7 @@ public:
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
             if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
-            add(total, e.cct ? e.cct->begin_frame() : e.cdct->begin_frame());
+            add(total, with_cube(e, [](auto& cube) { return cube.begin_frame(); }));
         }
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
@@ -213,7 +231,7 @@ public:
     // The current frame's totals so far, without ending it.
     SceneCacheStatistics statistics() const {
         SceneCacheStatistics total;
-        for (const Entry& e : entries_) add(total, e.cct ? e.cct->statistics() : e.cdct->statistics());
+        for (const Entry& e : entries_) add(total, with_cube(e, [](const auto& cube) { return cube.statistics(); }));
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.load(std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
@@ -225,8 +243,7 @@ public:
     std::optional<CubeStatistics> object_statistics(ObjectId id) const {
         const int index = find(id);
         if (index < 0) return std::nullopt;
-        const Entry& e = entries_[static_cast<std::size_t>(index)];
-        return e.cct ? e.cct->statistics() : e.cdct->statistics();
+        return with_cube(entries_[static_cast<std::size_t>(index)], [](const auto& cube) { return cube.statistics(); });
     }
 
     // Where object `id`'s cube sits; std::nullopt when it has none.
@@ -239,7 +256,7 @@ public:
     // Empties every cube (the objects keep their cubes).
     void clear() {
         for (Entry& e : entries_) {
-            e.cct ? e.cct->clear() : e.cdct->clear();
+            with_cube(e, [](auto& cube) { cube.clear(); });
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
         }
         texels_read_.reset();
@@ -249,7 +266,7 @@ public:
     // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
     std::size_t texel_bytes() const noexcept {
         std::size_t bytes = 0;
-        for (const Entry& e : entries_) bytes += e.cct ? e.cct->texel_bytes() : e.cdct->texel_bytes();
+        for (const Entry& e : entries_) bytes += with_cube(e, [](const auto& cube) { return cube.texel_bytes(); });
         return bytes;
     }
 
@@ -261,19 +278,6 @@ public:
     }
 
 private:
-    struct Entry {
-        ObjectId id;
-        CubeBounds bounds;
-        std::unique_ptr<CctCube> cct;
-        std::unique_ptr<CdctCube> cdct;
-        std::unique_ptr<DepthPyramid> pyramid; // CDCT with depth_pyramid only
-    };
-
-    template <class Texel, class Trace>
-    std::size_t prefill_row_impl(CacheCube<Texel>& cube, const CubeBounds& bounds, int face, int row, Trace& trace) {
-        return raycache::prefill_row(cube, bounds, relief_, face, row, trace);
-    }
-
     int find(ObjectId id) const noexcept {
         if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return id.geom_id < direct_.size() ? direct_[id.geom_id] : -1;
         const auto it = instanced_.find({id.inst_id, id.geom_id});
