@@ -3,8 +3,9 @@
 // difference images. Every speed-up is a ratio of medians of renders interleaved in this one process
 // (off, CCT, CDCT, ceiling, off, ...), on the same frames, so machine noise hits all modes alike.
 //
-// Usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST]
+// Usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST]
 //   --quick   small images, few rounds: a smoke test that every experiment runs and writes its files
+//   --rounds  interleaved rounds of Table 5.2 (default 5; Table 5.3's 1080p frames always take 3)
 //   --only    comma-separated experiments: table_5_2, table_5_3, figure_5_9, quality, memory (default: all)
 //   --ns      comma-separated N for table_5_2 (default 0,1,2,4,8,16,32)
 #include <algorithm>
@@ -39,6 +40,10 @@ using rcx::bench::median;
 using rcx::bench::progress;
 
 namespace {
+
+// The CDCT settings our results use wherever one CDCT stands for all: the thesis's (0.2, 0.02), the depth
+// pyramid (chosen per variant) and crossings more than 0.5 behind the cached surface rejected.
+const raycache::ReliefParameters our_relief{0.2f, 0.02f, 1024, 100.0f, 0.5f};
 
 struct Config : rcx::bench::CommonOptions {
     Config() { rounds = 5; }
@@ -143,9 +148,9 @@ void table_5_2(const Config& c, Report& out) {
         rcx::embree::Tracer tracer(scene);
         Variant off = make_variant(tracer, "off", CacheMode::off, face);
         Variant cct = make_variant(tracer, "cct", CacheMode::cct, face);
-        Variant cdct = make_variant(tracer, "cdct", CacheMode::cdct, face, raycache::ReliefParameters{0.2f, 0.02f, 1024, 100.0f, 0.5f});
+        Variant cdct = make_variant(tracer, "cdct", CacheMode::cdct, face, our_relief);
         Variant cdct_prefilled = make_variant(tracer, "cdct prefilled", CacheMode::cdct, face,
-                                              raycache::ReliefParameters{0.2f, 0.02f, 1024, 100.0f, 0.5f}, true, true);
+                                              our_relief, true, true);
         Variant ceiling = make_variant(tracer, "ceiling", CacheMode::ceiling, face);
         const rcx::Camera camera = scene.camera_at(0);
         for (int warm = 0; warm < 2; ++warm) {
@@ -198,9 +203,8 @@ void table_5_3(const Config& c, Report& out) {
         {"thesis (0.2, 0.02)", {0.2f, 0.02f, 2048, 100.0f}, false},
         {"thesis (0.02, 0.002)", {0.02f, 0.002f, 2048, 100.0f}, false},
         {"pyramid, eps 0.02", {0.2f, 0.02f, 1024, 100.0f}, true},
-        {"pyramid, eps 0.02, max_gap 0.5", {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true},
+        {"pyramid, eps 0.02, max_gap 0.5", our_relief, true},
     };
-    const raycache::ReliefParameters ours{0.2f, 0.02f, 1024, 100.0f, 0.5f};
     const std::map<std::string, std::vector<double>> thesis_fps = {
         {"diffuse-31", {76.0, 69.6, 49.5, 35.3, 30.7, 19.0}}, {"reflective-32", {68.2, 30.1, 13.5, 12.7, 12.1, 9.5}}};
     std::ofstream csv = out.csv("table_5_3.csv", "scene,setting,ms,speedup,texels_per_lookup,max_texels,hit_rate,psnr,thesis_speedup");
@@ -221,7 +225,7 @@ void table_5_3(const Config& c, Report& out) {
         variants.push_back(make_variant(tracer, "CCT", CacheMode::cct, face));
         for (const Setting& s : settings)
             variants.push_back(make_variant(tracer, "CDCT " + s.label, CacheMode::cdct, face, s.relief, s.pyramid));
-        variants.push_back(make_variant(tracer, "CDCT pyramid, max_gap 0.5, prefilled", CacheMode::cdct, face, ours, true, true));
+        variants.push_back(make_variant(tracer, "CDCT pyramid, max_gap 0.5, prefilled", CacheMode::cdct, face, our_relief, true, true));
         std::vector<Variant*> all;
         for (Variant& v : variants) {
             for (int warm = 0; warm < 2 && v.caches; ++warm) render(tracer, v, camera, width, height);
@@ -304,9 +308,9 @@ void quality(const Config& c, Report& out) {
         std::vector<Variant> techniques;
         techniques.push_back(make_variant(tracer, "CCT", CacheMode::cct, face));
         techniques.push_back(make_variant(tracer, "CDCT thesis (0.2, 0.02)", CacheMode::cdct, face, {0.2f, 0.02f, 2048, 100.0f}, false));
-        techniques.push_back(make_variant(tracer, "CDCT pyramid + max_gap", CacheMode::cdct, face, {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true));
+        techniques.push_back(make_variant(tracer, "CDCT pyramid + max_gap", CacheMode::cdct, face, our_relief, true));
         techniques.push_back(make_variant(tracer, "CDCT pyramid + max_gap, prefilled", CacheMode::cdct, face,
-                                          {0.2f, 0.02f, 1024, 100.0f, 0.5f}, true, true));
+                                          our_relief, true, true));
         for (int f = 0; f < fill_frames; ++f)
             for (Variant& v : techniques) v.last = render(tracer, v, scene.camera_at(f), size, size);
         const Image filled_reference = render(tracer, off, scene.camera_at(fill_frames - 1), size, size);

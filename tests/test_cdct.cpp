@@ -47,6 +47,20 @@ void fill(CdctCube& cube, Depth depth) {
     cube.begin_frame();
 }
 
+// Distance along unit d from o, inside the sphere of `radius` around the centre, to where it leaves it:
+// |o + t d - C| = R  =>  t = -b + sqrt(b^2 - c), b = d.(o - C), c = |o - C|^2 - R^2.
+float sphere_exit(const glm::vec3& o, const glm::vec3& d, float radius) {
+    const glm::vec3 oc = o - centre;
+    const float b = glm::dot(d, oc);
+    return -b + std::sqrt(b * b - (glm::dot(oc, oc) - radius * radius));
+}
+
+// Depth seen from the centre in unit direction d with the floor y = centre.y - height below it and the
+// environment (stored at max_depth) everywhere else.
+auto floor_depth(float height, float max_depth) {
+    return [=](const glm::vec3& d) { return d.y < 0 ? std::min(height / -d.y, max_depth) : max_depth; };
+}
+
 glm::vec3 random_origin(std::mt19937& rng) {
     std::uniform_real_distribution<float> u(-0.9f, 0.9f);
     return centre + glm::vec3(u(rng), u(rng), u(rng));
@@ -74,10 +88,7 @@ TEST_CASE("inside a sphere of constant depth the search finds the ray's exit wit
         for (int i = 0; i < 300; ++i) {
             const glm::vec3 o = random_origin(rng);
             const glm::vec3 d = random_direction(rng);
-            // |o + t d - C| = R  =>  t = -b + sqrt(b^2 - c), b = d.(o - C), c = |o - C|^2 - R^2.
-            const glm::vec3 oc = o - centre;
-            const float b = glm::dot(d, oc);
-            const float t_exact = -b + std::sqrt(b * b - (glm::dot(oc, oc) - radius * radius));
+            const float t_exact = sphere_exit(o, d, radius);
             const glm::vec3 exact = o + t_exact * d;
             const ReliefResult r = relief_search(cube, bounds, o, d, p);
             REQUIRE(r.hit);
@@ -115,7 +126,7 @@ TEST_CASE("above a plane the search finds the ray's hit on the plane") {
     const float height = 2.0f;
     const ReliefParameters p{0.05f, 0.005f, 4096, 100.0f};
     CdctCube cube(1024);
-    fill(cube, [&](const glm::vec3& d) { return d.y < 0 ? std::min(height / -d.y, p.max_depth) : p.max_depth; });
+    fill(cube, floor_depth(height, p.max_depth));
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(-0.5f, 0.5f);
     float worst = 0.0f;
@@ -275,9 +286,7 @@ TEST_CASE("with a depth pyramid the search finds the same sphere hits within eps
         for (int i = 0; i < 300; ++i) {
             const glm::vec3 o = random_origin(rng);
             const glm::vec3 d = random_direction(rng);
-            const glm::vec3 oc = o - centre;
-            const float b = glm::dot(d, oc);
-            const float t_exact = -b + std::sqrt(b * b - (glm::dot(oc, oc) - radius * radius));
+            const float t_exact = sphere_exit(o, d, radius);
             const ReliefResult r = relief_search(cube, bounds, o, d, p, &pyramid);
             REQUIRE(r.hit);
             CHECK(std::abs(r.distance - t_exact) <= p.epsilon + 1e-4f);
@@ -293,7 +302,7 @@ TEST_CASE("with a depth pyramid the search finds the hits on a plane and misses 
     const float height = 2.0f;
     const ReliefParameters p{0.05f, 0.005f, 4096, 100.0f};
     CdctCube cube(512);
-    fill(cube, [&](const glm::vec3& d) { return d.y < 0 ? std::min(height / -d.y, p.max_depth) : p.max_depth; });
+    fill(cube, floor_depth(height, p.max_depth));
     DepthPyramid pyramid(512);
     pyramid.rebuild(cube);
     std::mt19937 rng(5);

@@ -106,3 +106,17 @@ TEST_CASE("psnr_text is six characters wide, two decimals, and says inf for iden
     CHECK(rcx::psnr_text(5.0) == "  5.00");
     CHECK(rcx::psnr_text(104.5) == "104.50");
 }
+
+TEST_CASE("bit_identical compares every float bit: one ulp, a signed zero or a size differs") {
+    rcx::Image a(3, 2, glm::vec3(0.25f, 0.5f, 0.75f));
+    rcx::Image b = a;
+    CHECK(rcx::bit_identical(a, b));
+    b.pixels[4].y = std::nextafter(0.5f, 1.0f);
+    CHECK_FALSE(rcx::bit_identical(a, b));
+    CHECK(rcx::compare(a, b).differing_pixels == 0); // invisible after tone mapping, yet not identical
+    b = a;
+    a.pixels[0].x = 0.0f;
+    b.pixels[0].x = -0.0f;
+    CHECK_FALSE(rcx::bit_identical(a, b));
+    CHECK_FALSE(rcx::bit_identical(rcx::Image(3, 2), rcx::Image(2, 3)));
+}

@@ -11,7 +11,7 @@
 
 namespace {
 
-const char* const wuson = "/usr/share/assimp/models/PLY/Wuson.ply";
+const std::string wuson = rcx::SceneParams{}.mesh_path;
 
 float angle_degrees(glm::vec3 a, glm::vec3 b) {
     const float c = glm::dot(glm::normalize(a), glm::normalize(b));

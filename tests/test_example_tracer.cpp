@@ -40,17 +40,12 @@ void check_close(const glm::vec3& got, const glm::vec3& want) {
     for (int c = 0; c < 3; ++c) CHECK(got[c] == doctest::Approx(want[c]).epsilon(1e-5));
 }
 
-bool bit_identical(const rcx::Image& a, const rcx::Image& b) {
-    return a.width == b.width && a.height == b.height &&
-           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) == 0;
-}
-
 } // namespace
 
 TEST_CASE("a tiny render of every scene runs with the cache off") {
     for (const std::string& name : rcx::scene_names()) {
         CAPTURE(name);
-        if (name == "concave" && !std::filesystem::exists("/usr/share/assimp/models/PLY/Wuson.ply")) continue;
+        if (name == "concave" && !std::filesystem::exists(rcx::SceneParams{}.mesh_path)) continue;
         const rcx::Scene scene = rcx::make_scene(name);
         const rcx::embree::Tracer tracer(scene);
         CHECK(tracer.cached_geometries().size() == static_cast<std::size_t>(scene.cached_object_count()));
@@ -124,7 +119,7 @@ TEST_CASE("one and two threads render bit-identical images with the same ray cou
         rcx::embree::FrameStats one_stats, two_stats;
         const rcx::Image one = tracer.render(scene.camera_at(2), tiny(61, 37, 1), &one_stats);
         const rcx::Image two = tracer.render(scene.camera_at(2), tiny(61, 37, 2), &two_stats);
-        CHECK(bit_identical(one, two));
+        CHECK(rcx::bit_identical(one, two));
         CHECK(one_stats.rays == two_stats.rays);
         CHECK(one_stats.shadow_rays == two_stats.shadow_rays);
     }

@@ -38,12 +38,10 @@ constexpr Variant ceiling{"ceiling", rcx::CacheMode::ceiling, false};
 constexpr Variant all_variants[] = {off, cct, cdct_pyramid, cdct_linear, ceiling};
 constexpr Variant cached_variants[] = {cct, cdct_pyramid, cdct_linear};
 
-bool uses_caches(const Variant& v) { return rcx::uses_caches(v.mode); }
-
 // The scene's cubes for `v` (face_size texels per edge on every cached object), with the relief search
 // parameters the example's command line uses by default; nullptr for the modes without caches.
 std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const Variant& v, int face_size) {
-    if (!uses_caches(v)) return nullptr;
+    if (!rcx::uses_caches(v.mode)) return nullptr;
     const rcx::Options defaults;
     raycache::ReliefParameters relief;
     relief.step = defaults.delta;
@@ -65,11 +63,6 @@ rcx::embree::RenderSettings settings(int size, const Variant& v, SceneCache* cac
     return s;
 }
 
-bool bit_identical(const rcx::Image& a, const rcx::Image& b) {
-    return a.width == b.width && a.height == b.height && a.pixels.size() == b.pixels.size() &&
-           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) == 0;
-}
-
 bool all_finite(const rcx::Image& image) {
     for (const glm::vec3& p : image.pixels)
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.x < 0 || p.y < 0 || p.z < 0) return false;
@@ -78,18 +71,10 @@ bool all_finite(const rcx::Image& image) {
 
 bool wuson_missing() { return !std::filesystem::exists(rcx::SceneParams{}.mesh_path); }
 
-// scene_names() plus the scenes this file needs, each once.
-std::vector<std::string> every_scene() {
-    std::vector<std::string> names = rcx::scene_names();
-    for (const char* extra : {"glass", "cone-cylinder", "concave"})
-        if (std::find(names.begin(), names.end(), extra) == names.end()) names.emplace_back(extra);
-    return names;
-}
-
 } // namespace
 
 TEST_CASE("every scene renders two frames of its path in every cache mode with finite pixels, and its caches see lookups") {
-    for (const std::string& name : every_scene()) {
+    for (const std::string& name : rcx::scene_names()) {
         CAPTURE(name);
         if (name == "concave" && wuson_missing()) continue; // assimp-testmodels not installed
         const rcx::Scene scene = rcx::make_scene(name);
@@ -138,7 +123,7 @@ TEST_CASE("a frame rendered with cold caches equals the uncached frame bit for b
             const std::unique_ptr<SceneCache> caches = make_caches(tracer, v, 64);
             rcx::embree::FrameStats cold_stats;
             const rcx::Image cold = tracer.render(scene.camera, settings(48, v, caches.get()), &cold_stats);
-            CHECK(bit_identical(cold, uncached));
+            CHECK(rcx::bit_identical(cold, uncached));
             CHECK(cold_stats.rays == uncached_stats.rays);
             CHECK(cold_stats.shadow_rays == uncached_stats.shadow_rays);
             CHECK(cold_stats.leaving_rays == uncached_stats.leaving_rays);
@@ -221,7 +206,7 @@ TEST_CASE("one and two threads give bit-identical frames and cache counters over
                 rcx::embree::FrameStats one_stats, two_stats;
                 const rcx::Image a = tracer.render(scene.camera_at(frame), settings(40, v, one.get(), 1), &one_stats);
                 const rcx::Image b = tracer.render(scene.camera_at(frame), settings(40, v, two.get(), 2), &two_stats);
-                CHECK(bit_identical(a, b));
+                CHECK(rcx::bit_identical(a, b));
                 CHECK(one_stats.rays == two_stats.rays);
                 CHECK(one_stats.shadow_rays == two_stats.shadow_rays);
                 CHECK(one_stats.leaving_rays == two_stats.leaving_rays);
@@ -267,7 +252,7 @@ TEST_CASE("pre-filling stores six N x N texels per cached object and leaves ever
             // Pre-filled with one or two threads, the cubes answer a frame identically.
             const rcx::Image a = tracer.render(scene.camera, settings(32, v, one.get()));
             const rcx::Image b = tracer.render(scene.camera, settings(32, v, two.get()));
-            CHECK(bit_identical(a, b));
+            CHECK(rcx::bit_identical(a, b));
             CHECK(one->begin_frame().hits > 0);
         }
     }

@@ -28,11 +28,6 @@ void check(bool ok, const std::string& what) {
     if (!ok) ++failures;
 }
 
-bool bit_identical(const rcx::Image& a, const rcx::Image& b) {
-    return a.width == b.width && a.height == b.height && a.pixels.size() == b.pixels.size() &&
-           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(a.pixels[0])) == 0;
-}
-
 std::string format(const char* pattern, double a, double b = 0.0) {
     char text[160];
     std::snprintf(text, sizeof text, pattern, a, b);
@@ -83,7 +78,7 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         const rcx::Image twin = b.render(scene.camera, size, size, &twin_stats);
 
         const rcx::ImageDifference cold_difference = rcx::compare(cold, uncached);
-        check(bit_identical(cold, uncached), name + ": the cold frame equals the uncached frame bit for bit" +
+        check(rcx::bit_identical(cold, uncached), name + ": the cold frame equals the uncached frame bit for bit" +
                                                  format(" (%.0f pixels differ, PSNR %.2f dB)", double(cold_difference.differing_pixels), cold_difference.psnr_db));
         check(cold_stats.lookups > 0 && cold_stats.hits == 0, name + ": the cold frame looked up and hit nothing");
         const double hit_rate = warm_stats.lookups > 0 ? double(warm_stats.hits) / double(warm_stats.lookups) : 0.0;
@@ -98,9 +93,9 @@ void run_case(rcx::vk::Context& context, const Case& c) {
             check(hit_rate >= c.cdct_min_hit_rate, name + format(": warm hit rate %.4f >= %.2f", hit_rate, c.cdct_min_hit_rate));
             check(psnr >= c.cdct_min_psnr, name + format(": warm PSNR %.2f dB >= %.0f dB", psnr, c.cdct_min_psnr));
         }
-        check(bit_identical(warm, twin) && warm_stats.hits == twin_stats.hits,
+        check(rcx::bit_identical(warm, twin) && warm_stats.hits == twin_stats.hits,
               name + ": two tracers fed the same frames give the same warm pixels and hits");
-        if (!bit_identical(cold, uncached) || psnr < 10.0) {
+        if (!rcx::bit_identical(cold, uncached) || psnr < 10.0) {
             rcx::write_png("vulkan-cache-" + std::string(c.scene) + "-" + rcx::to_string(mode) + "-warm.png", warm);
             rcx::write_png("vulkan-cache-" + std::string(c.scene) + "-uncached.png", uncached);
         }

@@ -53,6 +53,15 @@ void check_same_size(const Image& a, const Image& b, const char* what) {
                                     std::to_string(b.height) + ")");
 }
 
+// |a - b| of every tone-mapped channel, in to_rgb8's order: what compare() and difference_image() measure.
+std::vector<int> channel_errors(const Image& a, const Image& b, const char* what) {
+    check_same_size(a, b, what);
+    const std::vector<std::uint8_t> ra = to_rgb8(a), rb = to_rgb8(b);
+    std::vector<int> errors(ra.size());
+    for (std::size_t k = 0; k < ra.size(); ++k) errors[k] = std::abs(int(ra[k]) - int(rb[k]));
+    return errors;
+}
+
 } // namespace
 
 void write_png(const std::string& path, const Image& image) {
@@ -78,6 +87,11 @@ void write_png(const std::string& path, const Image& image) {
                                  (!ok ? std::string("PNG encoding failed") : std::string("write error (disk full?)")));
 }
 
+bool bit_identical(const Image& a, const Image& b) {
+    return a.width == b.width && a.height == b.height && a.pixels.size() == b.pixels.size() &&
+           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) == 0;
+}
+
 std::string psnr_text(double db) {
     if (std::isinf(db)) return "   inf";
     char text[32];
@@ -86,15 +100,15 @@ std::string psnr_text(double db) {
 }
 
 ImageDifference compare(const Image& a, const Image& b) {
-    check_same_size(a, b, "compare");
+    const std::vector<int> errors = channel_errors(a, b, "compare");
     ImageDifference d;
     d.pixels = a.pixels.size();
     double squared = 0.0, absolute = 0.0;
     int largest = 0;
     for (std::size_t i = 0; i < a.pixels.size(); ++i) {
         bool differs = false;
-        for (int c = 0; c < 3; ++c) {
-            const int e = std::abs(int(tone_map(a.pixels[i][c])) - int(tone_map(b.pixels[i][c])));
+        for (std::size_t c = 0; c < 3; ++c) {
+            const int e = errors[3 * i + c];
             squared += double(e) * e;
             absolute += e;
             largest = std::max(largest, e);
@@ -111,12 +125,11 @@ ImageDifference compare(const Image& a, const Image& b) {
 }
 
 Image difference_image(const Image& a, const Image& b) {
-    check_same_size(a, b, "difference_image");
+    const std::vector<int> errors = channel_errors(a, b, "difference_image");
     Image out(a.width, a.height);
     const glm::vec3 blue(0.0f, 0.0f, 1.0f), green(0.0f, 1.0f, 0.0f), red(1.0f, 0.0f, 0.0f);
     for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-        int e = 0;
-        for (int c = 0; c < 3; ++c) e = std::max(e, std::abs(int(tone_map(a.pixels[i][c])) - int(tone_map(b.pixels[i][c]))));
+        const int e = std::max({errors[3 * i], errors[3 * i + 1], errors[3 * i + 2]});
         const float t = static_cast<float>(e) / 255.0f;
         out.pixels[i] = t < 0.5f ? glm::mix(blue, green, 2.0f * t) : glm::mix(green, red, 2.0f * t - 1.0f);
     }

@@ -42,6 +42,10 @@ struct ImageDifference {
 // Throws std::invalid_argument when the sizes differ.
 ImageDifference compare(const Image& a, const Image& b);
 
+// True when both images have the same size and every pixel the same float bits (-0 differs from +0):
+// stricter than compare(), which sees only the tone-mapped 8-bit values.
+bool bit_identical(const Image& a, const Image& b);
+
 // A PSNR for a table column: six characters, "   inf" for identical images.
 std::string psnr_text(double db);
 
