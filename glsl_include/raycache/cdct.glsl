@@ -73,7 +73,7 @@ uvec2 raycache_cdct_invalid_texel() {
 
 /* True when the cube's box can be searched: finite centre, finite half-size > 0. */
 bool raycache_cube_box_is_usable(raycache_gpu_cube cube) {
-    return raycache_is_finite3(cube.centre) && cube.half_size > 0.0 && raycache_is_finite(cube.half_size);
+    return raycache_box_is_usable(cube.centre, cube.half_size);
 }
 
 /* The texel that the vector v from the cube's centre points at (empty when none). */
@@ -81,27 +81,6 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
     uint i = raycache_cube_texel(cube, v);
     if (i >= uint(raycache_cdct_texels.length())) return raycache_cdct_invalid_texel();
     return raycache_cdct_texels[i];
-}
-
-/* Unit vector along a direction, scaled by its major magnitude first (C++ detail::unit). */
-vec3 raycache_unit(vec3 direction) {
-    vec3 a = abs(direction);
-    float major = max(a.x, max(a.y, a.z));
-    precise vec3 scaled = direction / major;
-    precise vec3 unit = scaled / raycache_length(scaled);
-    return unit;
-}
-
-/* Distance along unit d from o to where the ray leaves the box (0 if behind o; C++ detail::box_exit_distance). */
-float raycache_box_exit_distance(vec3 o, vec3 d, vec3 centre, float half_size) {
-    float exit = RAYCACHE_INFINITY;
-    for (int axis = 0; axis < 3; ++axis) {
-        if (d[axis] == 0.0) continue; /* parallel to this slab: it never bounds the exit */
-        precise float face = centre[axis] + (d[axis] > 0.0 ? half_size : -half_size);
-        precise float t = (face - o[axis]) / d[axis];
-        exit = (t < exit) ? t : exit;
-    }
-    return (exit < 0.0) ? 0.0 : exit;
 }
 
 /* The ray's point at t, from the cube's centre: (o + t * d) - centre, without FMA. */

@@ -17,6 +17,7 @@
 #include "raycache/shared/cube_face.h"
 #include "raycache/shared/texel_encoding.h"
 #include "raycache/shared/gpu_layout.h"
+#include "raycache/shared/ray_box.h"
 
 #ifndef RAYCACHE_SET
 #define RAYCACHE_SET 0
@@ -52,18 +53,6 @@ uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
     raycache_texel_address a = raycache_texel_of(s, cube.face_size);
     if (a.face == RAYCACHE_NO_FACE) return RAYCACHE_NO_TEXEL;
     return cube.first_texel + raycache_texel_linear_index(a, cube.face_size);
-}
-
-/* True when no component of v is infinite or NaN. */
-bool raycache_is_finite3(vec3 v) {
-    return raycache_is_finite(v.x) && raycache_is_finite(v.y) && raycache_is_finite(v.z);
-}
-
-/* |v| as the C++ side computes it (glm::length: sqrt((x*x + y*y) + z*z)), never fused into FMAs. */
-float raycache_length(vec3 v) {
-    precise float squared = (v.x * v.x + v.y * v.y) + v.z * v.z;
-    precise float length = sqrt(squared);
-    return length;
 }
 
 #endif /* RAYCACHE_CUBE_GLSL */

@@ -14,6 +14,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/depth_pyramid.hpp"
+#include "raycache/shared/ray_box.h"
 
 namespace raycache {
 
@@ -60,31 +61,29 @@ struct ReliefResult {
 
 namespace detail {
 
-inline bool is_finite(const glm::vec3& v) noexcept {
-    return shared::raycache_is_finite(v.x) && shared::raycache_is_finite(v.y) && shared::raycache_is_finite(v.z);
-}
-
-inline bool is_usable(const CubeBounds& b) noexcept {
-    return is_finite(b.centre) && b.half_size > 0.0f && shared::raycache_is_finite(b.half_size);
-}
-
-// Unit vector along a direction (scaled by its major magnitude first, so its length cannot overflow).
-inline glm::vec3 unit(const glm::vec3& direction) noexcept {
-    const glm::vec3 a = glm::abs(direction);
-    const glm::vec3 scaled = direction / glm::max(a.x, glm::max(a.y, a.z));
-    return scaled / glm::length(scaled);
-}
-
-// Distance along unit `d` from `o` to where the ray leaves the box (0 if that is behind `o`).
-inline float box_exit_distance(const glm::vec3& o, const glm::vec3& d, const CubeBounds& b) noexcept {
-    float exit = std::numeric_limits<float>::infinity();
-    for (int axis = 0; axis < 3; ++axis) {
-        if (d[axis] == 0.0f) continue; // parallel to this slab: it never bounds the exit
-        const float face = b.centre[axis] + (d[axis] > 0.0f ? b.half_size : -b.half_size);
-        exit = std::min(exit, (face - o[axis]) / d[axis]);
+// For each face, the vectors whose dot product with v gives its major coordinate m, sc and tc: read once,
+// at start-up, off the shared face table (sc and tc are linear in v; m points along the face's axis).
+struct FaceAxes {
+    glm::vec3 m{0.0f}, sc{0.0f}, tc{0.0f};
+};
+inline std::array<FaceAxes, RAYCACHE_FACE_COUNT> make_face_axes() {
+    std::array<FaceAxes, RAYCACHE_FACE_COUNT> axes{};
+    for (int f = 0; f < RAYCACHE_FACE_COUNT; ++f) {
+        axes[static_cast<std::size_t>(f)].m[f / 2] = f % 2 == 0 ? 1.0f : -1.0f;
+        for (int axis = 0; axis < 3; ++axis) {
+            glm::vec3 e(0.0f);
+            e[axis] = 1.0f;
+            const glm::vec2 st = shared::raycache_face_coordinates(e, f);
+            axes[static_cast<std::size_t>(f)].sc[axis] = st.x;
+            axes[static_cast<std::size_t>(f)].tc[axis] = st.y;
+        }
     }
-    return std::max(exit, 0.0f);
+    return axes;
 }
+inline const std::array<FaceAxes, RAYCACHE_FACE_COUNT> face_axes = make_face_axes();
+
+// True when the box can be searched (shared/ray_box.h, as the GLSL search decides).
+inline bool is_usable(const CubeBounds& b) noexcept { return shared::raycache_box_is_usable(b.centre, b.half_size); }
 
 // The relief search's state along one ray origin + t * d (d unit), shared by the linear and the pyramid walk.
 class ReliefWalk {
@@ -205,7 +204,7 @@ private:
         const float v0 = 2.0f * first_row / n - 1.0f, v1 = 2.0f * std::min(first_row + (1 << level), n) / n - 1.0f;
         const glm::vec3 p = from_centre(t);
         // sc, tc and m as linear forms of the vector from the centre (the face table).
-        const FaceAxes& axes = face_axes(a.face);
+        const FaceAxes& axes = face_axes[static_cast<std::size_t>(a.face)];
         const glm::vec3 &m_axis = axes.m, &u_axis = axes.sc, &v_axis = axes.tc;
         float exit = std::numeric_limits<float>::infinity();
         auto leave = [&](const glm::vec3& normal) { // the ray stays where dot(normal, p) >= 0
@@ -219,28 +218,6 @@ private:
         return exit;
     }
 
-    // For a face, the vectors whose dot product with v gives its major coordinate m, sc and tc: read once off
-    // the shared face table (sc and tc are linear in v; m points along the face's axis, with its sign).
-    struct FaceAxes {
-        glm::vec3 m, sc, tc;
-    };
-    static const FaceAxes& face_axes(int face) {
-        static const std::array<FaceAxes, RAYCACHE_FACE_COUNT> table = [] {
-            std::array<FaceAxes, RAYCACHE_FACE_COUNT> axes{};
-            for (int f = 0; f < RAYCACHE_FACE_COUNT; ++f) {
-                axes[f].m[f / 2] = f % 2 == 0 ? 1.0f : -1.0f;
-                for (int axis = 0; axis < 3; ++axis) {
-                    glm::vec3 e(0.0f);
-                    e[axis] = 1.0f;
-                    const glm::vec2 st = shared::raycache_face_coordinates(e, f);
-                    axes[f].sc[axis] = st.x;
-                    axes[f].tc[axis] = st.y;
-                }
-            }
-            return axes;
-        }();
-        return table[static_cast<std::size_t>(face)];
-    }
 
     const CacheCube<CdctTexel>& cube_;
     const CubeBounds& bounds_;
@@ -262,15 +239,15 @@ private:
 inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p,
                                   const DepthPyramid* pyramid = nullptr) noexcept {
-    if (!is_direction(direction) || !detail::is_finite(origin) || !detail::is_usable(bounds) || !(p.step > 0.0f) ||
+    if (!is_direction(direction) || !shared::raycache_is_finite3(origin) || !detail::is_usable(bounds) || !(p.step > 0.0f) ||
         !(p.epsilon > 0.0f)) {
         cube.record_lookup(false);
         return ReliefResult{};
     }
     RAYCACHE_ASSERT(!pyramid || pyramid->face_size() == cube.face_size());
-    const glm::vec3 d = detail::unit(direction);
+    const glm::vec3 d = shared::raycache_unit(direction);
     detail::ReliefWalk walk(cube, bounds, origin, d, p);
-    const float start = detail::box_exit_distance(origin, d, bounds);
+    const float start = shared::raycache_box_exit_distance(origin, d, bounds.centre, bounds.half_size);
     ReliefResult result;
     if (!walk.read(start))
         result = walk.miss();
@@ -289,7 +266,7 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
 // CacheCube::store refuses. Thread-safe as CacheCube::store.
 inline bool store_hit(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& hit_point,
                       const glm::vec3& color, const ReliefParameters& p) noexcept {
-    if (!detail::is_finite(hit_point) || !detail::is_usable(bounds)) return cube.store(glm::vec3(0.0f), DepthSample{});
+    if (!shared::raycache_is_finite3(hit_point) || !detail::is_usable(bounds)) return cube.store(glm::vec3(0.0f), DepthSample{});
     const glm::vec3 from_centre = hit_point - bounds.centre;
     return cube.store(from_centre, DepthSample{color, std::min(glm::length(from_centre), p.max_depth)});
 }
@@ -322,7 +299,7 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     const TracedRay traced = std::forward<Trace>(trace)();
     if (!is_direction(direction)) return traced.color;
     if (std::isfinite(traced.distance))
-        store_hit(cube, bounds, origin + traced.distance * detail::unit(direction), traced.color, p);
+        store_hit(cube, bounds, origin + traced.distance * shared::raycache_unit(direction), traced.color, p);
     else
         store_escape(cube, direction, traced.color, p);
     return traced.color;
