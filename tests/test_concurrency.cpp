@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -357,4 +358,56 @@ TEST_CASE("cached_trace from many threads: a cold frame returns trace's exact va
     CHECK(warm.hits == calls_per_frame);
     CHECK(warm.misses == 0u);
     CHECK(warm.stores + warm.refused_stores == 0u);
+}
+
+TEST_CASE("cubes sharing a budget never exceed it under random concurrent stores, and lose no stored tile") {
+    // Three cubes of 64 x 64 faces (16 tiles a face, 288 tiles in all) on a budget that holds about a third
+    // of their tiles; four threads store random texels into random cubes while a fifth watches the budget.
+    using raycache::MemoryBudget;
+    constexpr int cubes_n = 3;
+    const std::size_t tables = cubes_n * 6 * 16 * sizeof(void*);
+    const std::size_t limit = tables + 100 * CctCube::tile_bytes() + CctCube::tile_bytes() / 2;
+    auto budget = std::make_shared<MemoryBudget>(limit);
+    std::vector<std::unique_ptr<CctCube>> cubes;
+    for (int c = 0; c < cubes_n; ++c) cubes.push_back(std::make_unique<CctCube>(face_size, budget));
+    std::atomic<bool> done{false};
+    std::atomic<std::size_t> worst{0};
+    std::thread watcher([&] {
+        while (!done.load()) {
+            const std::size_t used = budget->used();
+            if (used > worst.load()) worst.store(used);
+        }
+    });
+    std::atomic<std::uint64_t> accepted{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < thread_count; ++t)
+        threads.emplace_back([&, t] {
+            Lcg random{0x5eed0000u + static_cast<std::uint64_t>(t)};
+            for (int i = 0; i < 20000; ++i) {
+                CctCube& cube = *cubes[random.next() % cubes_n];
+                const TexelAddress texel{static_cast<int>(random.next() % 6), static_cast<int>(random.next() % face_size),
+                                         static_cast<int>(random.next() % face_size)};
+                if (cube.store_at(texel, glm::vec3(random.uniform()))) accepted.fetch_add(1);
+            }
+        });
+    for (std::thread& th : threads) th.join();
+    done.store(true);
+    watcher.join();
+    CHECK(worst.load() <= limit);
+    CHECK(budget->used() <= limit);
+    std::size_t tiles = 0, valid = 0;
+    for (const auto& cube : cubes) {
+        tiles += cube->allocated_tiles();
+        valid += cube->valid_texels();
+    }
+    CHECK(tiles == 100u); // the budget's whole room, and not a tile more
+    CHECK(budget->used() == tables + tiles * CctCube::tile_bytes());
+    // Every accepted store is in a tile that stayed: the valid texels are the distinct texels accepted,
+    // and each can be loaded back.
+    std::size_t loadable = 0;
+    for (const auto& cube : cubes) cube->for_each_valid_texel([&](const TexelAddress& t) { loadable += cube->load(t).has_value(); });
+    CHECK(loadable == valid);
+    CHECK(valid <= accepted.load());
+    cubes.clear();
+    CHECK(budget->used() == 0u);
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <raycache/embree/scene_cache.hpp>
 
@@ -102,7 +103,7 @@ TEST_CASE("only attached ids have cubes, plain and instanced ids are told apart,
     CHECK(caches.object_count() == 2);
     CHECK(caches.texel_bytes() == 6 * 16 * 16 * 4 + 6 * 8 * 8 * 4);
     CHECK_THROWS_WITH_AS(caches.attach(w.scene, {w.mirror}, 16), doctest::Contains("already"), std::invalid_argument);
-    CHECK_THROWS_WITH_AS(caches.attach(w.scene, {w.floor}, 0), doctest::Contains("face size"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach(w.scene, {w.floor}, -1), doctest::Contains("face size"), std::invalid_argument);
     rtcDetachGeometry(w.scene, w.floor);
     rtcCommitScene(w.scene);
     CHECK_THROWS_WITH_AS(caches.attach(w.scene, {w.floor}, 16), doctest::Contains("no geometry"), std::invalid_argument);
@@ -208,4 +209,83 @@ TEST_CASE("pre-filling an object's cube through the adapter traces every texel o
     const glm::vec3 c = caches.leaving_ray({w.mirror}, {1, 1.5f, 3}, {0.1f, -1, 0}, [&] { ++traces; return TracedRay{}; });
     CHECK(traces == 0);
     CHECK(c.x == doctest::Approx(0.5f).epsilon(0.01));
+}
+
+TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the next frame hits on every one of them") {
+    World w;
+    SceneCache caches(Technique::cct);
+    caches.attach(w.scene, {w.mirror}); // adaptive: starts at AdaptiveResolution::first_face_size
+    CHECK(caches.face_size({w.mirror}) == 256);
+    // One ray through each texel centre of a 32 x 32 cube: 6144 rays over every direction, so one ray a
+    // texel at N = 32 (6 * 32^2 = 6144), the size the cube must take.
+    std::vector<glm::vec3> directions;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 32; ++row)
+            for (int column = 0; column < 32; ++column)
+                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
+    auto colour_of = [](glm::vec3 d) { return 0.5f + 0.5f * d; };
+    int traced = 0;
+    auto frame = [&] {
+        for (const glm::vec3& d : directions) {
+            const glm::vec3 c = caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] {
+                ++traced;
+                return TracedRay{colour_of(d), 1.0f};
+            });
+            CHECK(glm::length(c - colour_of(d)) < 0.01f);
+        }
+        return caches.begin_frame();
+    };
+    const auto first = frame();
+    CHECK(first.misses == 6144u);
+    CHECK(first.resized_cubes == 1u);
+    CHECK(caches.face_size({w.mirror}) == 32);
+    traced = 0;
+    const auto second = frame();
+    CHECK(traced == 0);
+    CHECK(second.hits == 6144u);
+    CHECK(second.resized_cubes == 0u);
+    CHECK(caches.face_size({w.mirror}) == 32);
+}
+
+TEST_CASE("a cube attached with an explicit face size keeps it whatever the rays") {
+    World w;
+    SceneCache caches(Technique::cct);
+    caches.attach(w.scene, {w.mirror}, 128);
+    for (int i = 0; i < 50; ++i)
+        caches.leaving_ray({w.mirror}, glm::vec3(0), glm::vec3(1, 0.01f * static_cast<float>(i), 0), [] { return TracedRay{glm::vec3(1), 1.0f}; });
+    CHECK(caches.begin_frame().resized_cubes == 0u);
+    CHECK(caches.face_size({w.mirror}) == 128);
+}
+
+TEST_CASE("an instance attached by its own id caches every geometry reached through it") {
+    World w;
+    // A second scene holding one sphere, instanced into a new top-level scene.
+    RTCScene inner = rtcNewScene(w.device);
+    const unsigned inner_sphere = w.add_sphere(inner, {0, 0, 0}, 1.0f);
+    rtcCommitScene(inner);
+    RTCScene top = rtcNewScene(w.device);
+    RTCGeometry instance = rtcNewGeometry(w.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(instance, inner);
+    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 5, 0, 0}; // column-major 3x4: moved to x = 5
+    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    rtcCommitGeometry(instance);
+    const unsigned instance_id = rtcAttachGeometry(top, instance);
+    rtcReleaseGeometry(instance);
+    rtcCommitScene(top);
+    {
+        SceneCache caches(Technique::cct);
+        caches.attach(top, {instance_id}, 16); // as the README shows for any object
+        const auto bounds = caches.object_bounds({instance_id});
+        REQUIRE(bounds);
+        CHECK(bounds->centre.x == doctest::Approx(5.0f));
+        // A hit reports (geomID = the sphere inside, instID[0] = the instance): it must find the cube.
+        const ObjectId hit{inner_sphere, instance_id};
+        CHECK(caches.has_cache(hit));
+        caches.leaving_ray(hit, glm::vec3(6, 0, 0), glm::vec3(1, 0, 0), [] { return TracedRay{glm::vec3(0.5f), 2.0f}; });
+        const auto s = caches.begin_frame();
+        CHECK(s.lookups == 1u);
+        CHECK(s.stores == 1u);
+    }
+    rtcReleaseScene(top);
+    rtcReleaseScene(inner);
 }

@@ -74,9 +74,13 @@ int run(const rcx::Options& o) {
         relief.max_steps = o.max_steps;
         relief.max_gap = o.max_gap > 0.0f ? o.max_gap : std::numeric_limits<float>::infinity();
         try {
+            raycache::embree::SceneCacheSettings cache_settings;
+            cache_settings.relief = relief;
+            cache_settings.depth_pyramid = o.pyramid;
+            cache_settings.adaptive.rays_per_texel = o.rays_per_texel;
             caches = std::make_unique<raycache::embree::SceneCache>(
-                o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct, relief,
-                o.pyramid);
+                o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct,
+                cache_settings);
             tracer.attach_caches(*caches, o.face_size);
         } catch (const std::invalid_argument& e) {
             throw InputError(e.what());
@@ -97,7 +101,10 @@ int run(const rcx::Options& o) {
                     o.width, o.height, scene.max_depth, rcx::to_string(scene.path.kind), frames,
                     static_cast<double>(scene.path.step_degrees));
         std::printf("cache %s", rcx::to_string(o.cache));
-        if (rcx::uses_caches(o.cache)) std::printf(", faces %dx%d", o.face_size, o.face_size);
+        if (rcx::uses_caches(o.cache)) {
+            if (o.face_size > 0) std::printf(", faces %dx%d", o.face_size, o.face_size);
+            else std::printf(", adaptive faces, budget %zu MiB", caches->budget().limit() >> 20);
+        }
         if (o.cache == rcx::CacheMode::cdct)
             std::printf(", delta %g, epsilon %g, max steps %d", static_cast<double>(o.delta), static_cast<double>(o.epsilon), o.max_steps);
         std::printf("; threads %s; PNGs in %s\n", o.threads > 0 ? std::to_string(o.threads).c_str() : "all", o.out.c_str());
@@ -121,7 +128,7 @@ int run(const rcx::Options& o) {
             const raycache::embree::SceneCacheStatistics s = settings.caches->begin_frame();
             r.hit_rate = s.hit_rate();
             filled = s.valid_fraction();
-            cache_bytes = s.texel_bytes;
+            cache_bytes = s.allocated_bytes + s.pyramid_bytes;
         }
         rcx::write_png(frame_path(o, scene.name, rcx::to_string(o.cache), f), image);
 

@@ -60,7 +60,7 @@ int run(const rcx::Options& o, bool hybrid) {
 
     rcx::gpu::TracerSettings settings;
     settings.mode = o.cache;
-    settings.face_size = o.face_size;
+    settings.face_size = o.face_size > 0 ? o.face_size : 512; // auto: the largest up to 512 that fits
     settings.delta = o.delta;
     settings.epsilon = o.epsilon;
     settings.max_steps = o.max_steps;
@@ -83,7 +83,7 @@ int run(const rcx::Options& o, bool hybrid) {
     }
 
     const bool caching = rcx::uses_caches(o.cache);
-    if (caching && tracer->face_size() != o.face_size)
+    if (caching && o.face_size > 0 && tracer->face_size() != o.face_size)
         std::fprintf(stderr, "%s: note: --face-size %d: the cubes do not fit in one storage buffer of this device "
                              "(maxStorageBufferRange %llu bytes); using face size %d\n",
                      "raycache_vulkan_whitted", o.face_size,

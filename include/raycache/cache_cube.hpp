@@ -6,14 +6,22 @@
 // the cache. When several stores reach one texel in the same frame, the smallest packed word wins.
 // A texel that is already visible keeps its value until clear() or invalidate().
 //
+// Memory. Texels live in tiles of 16 x 16 (smaller faces: one tile per face), allocated on a tile's
+// first store, so a cube costs what its rays have touched, not 6 N^2 texels: most of a large cube is
+// never reached. With a MemoryBudget, a tile that does not fit is not allocated and its stores are
+// refused (the ray is traced as without a cache). clear() gives every tile back.
+//
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
-// locks (lookups are wait-free). begin_frame(), clear() and invalidate() must run between frames, when
-// no other thread uses the cube.
+// locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
+// begin_frame(), clear() and invalidate() must run between frames, when no other thread uses the cube.
 #pragma once
 
+#include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -22,6 +30,7 @@
 
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"
+#include "raycache/memory_budget.hpp"
 #include "raycache/statistics.hpp"
 #include "raycache/texel.hpp"
 
@@ -35,19 +44,50 @@ public:
     using Word = typename Traits::Word;
     using Value = typename Traits::Value;
 
-    // A cube of six face_size x face_size faces, every texel invalid.
+    // Texels along a tile's edge (faces smaller than this have one tile each).
+    static constexpr int tile_edge = 16;
+
+    // A cube of six face_size x face_size faces, every texel invalid and no tile allocated yet.
+    // budget: optional, shared with other cubes; its limit bounds the tiles this cube allocates (the
+    // tile table, 8 bytes per tile, is charged whatever the limit). May be null: no limit.
     // Throws std::invalid_argument unless 1 <= face_size <= 4096.
-    explicit CacheCube(int face_size) : face_size_(checked_face_size(face_size)), state_(new State(texel_count())) {}
+    explicit CacheCube(int face_size, std::shared_ptr<MemoryBudget> budget = nullptr)
+        : face_size_(checked_face_size(face_size)),
+          tiles_per_edge_((face_size + tile_edge - 1) / tile_edge),
+          state_(new State(tile_count())),
+          budget_(std::move(budget)) {
+        if (budget_) budget_->reserve_always(table_bytes());
+    }
+    ~CacheCube() { give_back(); }
+    CacheCube(const CacheCube&) = delete;
+    CacheCube& operator=(const CacheCube&) = delete;
+    // A moved-from cube may only be destroyed or assigned to.
+    CacheCube(CacheCube&&) noexcept = default;
+    CacheCube& operator=(CacheCube&& other) noexcept {
+        if (this != &other) {
+            give_back();
+            face_size_ = other.face_size_;
+            tiles_per_edge_ = other.tiles_per_edge_;
+            state_ = std::move(other.state_);
+            budget_ = std::move(other.budget_);
+        }
+        return *this;
+    }
 
     int face_size() const noexcept { return face_size_; }
     // 6 * N * N.
     std::size_t texel_count() const noexcept { return std::size_t{RAYCACHE_FACE_COUNT} * face_size_ * face_size_; }
-    // Bytes of texel storage, 6 * N * N * sizeof(Word): the thesis's memory per cube.
+    // Bytes that 6 * N * N texels take, 6 * N * N * sizeof(Word): the thesis's memory per cube, and what this
+    // cube would hold with every tile allocated (see allocated_bytes() for what it holds).
     std::size_t texel_bytes() const noexcept { return texel_count() * sizeof(Word); }
-    // Every byte the cube holds: texels, the frame's written-texel bits, counters.
-    std::size_t bytes() const noexcept {
-        return sizeof(*this) + sizeof(State) + texel_bytes() + bit_word_count() * sizeof(std::uint64_t);
-    }
+    // Every byte the cube holds now: its allocated tiles, its tile table, counters.
+    std::size_t bytes() const noexcept { return sizeof(*this) + sizeof(State) + table_bytes() + allocated_bytes(); }
+    // Bytes of the tiles allocated so far (each tile_bytes()).
+    std::size_t allocated_bytes() const noexcept { return allocated_tiles() * sizeof(Tile); }
+    std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
+    // Bytes of one tile: 16 x 16 words and their written-this-frame bits.
+    static constexpr std::size_t tile_bytes() noexcept { return sizeof(Tile); }
+    const std::shared_ptr<MemoryBudget>& budget() const noexcept { return budget_; }
 
     // The value cached for `direction`, counted as a hit or a miss. std::nullopt (a miss) when the
     // texel is empty, was written this frame, or `direction` is not a direction. Thread-safe, wait-free.
@@ -61,7 +101,15 @@ public:
     std::optional<Value> peek(const glm::vec3& direction) const noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE) return std::nullopt;
-        return visible_value(shared::raycache_texel_linear_index(a, face_size_));
+        return visible_value(TexelAddress{a.face, a.column, a.row});
+    }
+
+    // The value of `texel` as a lookup would see it (empty, or written this frame: std::nullopt), without
+    // counting: for filters and searches that read texels by address. `texel` must lie on the cube (asserted).
+    std::optional<Value> peek_at(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        if (!contains(texel)) return std::nullopt;
+        return visible_value(texel);
     }
 
     // Counts one lookup made of peek() calls as a hit or a miss.
@@ -71,12 +119,12 @@ public:
 
     // Caches `value` in the texel of `direction`; returns whether it was written. Refused (false) when
     // `direction` is not a direction, the value cannot be encoded, the texel already holds a visible
-    // value, or a smaller word was stored into it this frame. Visible from the next begin_frame().
-    // Thread-safe, lock-free.
+    // value, a smaller word was stored into it this frame, or its tile does not fit the budget.
+    // Visible from the next begin_frame(). Thread-safe, lock-free.
     bool store(const glm::vec3& direction, const Value& value) noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE) return refuse();
-        return store_word(shared::raycache_texel_linear_index(a, face_size_), Texel::encode(value));
+        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -84,7 +132,7 @@ public:
     bool store_at(const TexelAddress& texel, const Value& value) noexcept {
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return refuse();
-        return store_word(texel_linear_index(texel, face_size_), Texel::encode(value));
+        return store_word(texel, Texel::encode(value));
     }
 
     // The value in `texel` whether or not it is visible yet; std::nullopt when empty. No counting.
@@ -92,7 +140,9 @@ public:
     std::optional<Value> load(const TexelAddress& texel) const noexcept {
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return std::nullopt;
-        const Word word = state_->texels[texel_linear_index(texel, face_size_)].load(std::memory_order_acquire);
+        const Tile* tile = tile_of(texel);
+        if (!tile) return std::nullopt;
+        const Word word = tile->texels[slot_of(texel)].load(std::memory_order_acquire);
         if (!Texel::is_valid(word)) return std::nullopt;
         return Texel::decode(word);
     }
@@ -101,15 +151,16 @@ public:
     void invalidate(const TexelAddress& texel) noexcept {
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return;
-        const std::size_t index = texel_linear_index(texel, face_size_);
-        if (Texel::is_valid(state_->texels[index].exchange(Texel::invalid, std::memory_order_relaxed)))
+        Tile* tile = tile_of(texel);
+        if (!tile) return;
+        if (Texel::is_valid(tile->texels[slot_of(texel)].exchange(Texel::invalid, std::memory_order_relaxed)))
             state_->valid_texels.fetch_sub(1, std::memory_order_relaxed);
     }
 
-    // Empties every texel and resets the counters. Between frames only.
+    // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
     void clear() noexcept {
-        for (std::size_t i = 0; i < texel_count(); ++i) state_->texels[i].store(Texel::invalid, std::memory_order_relaxed);
-        clear_written_bits();
+        free_tiles();
+        state_->written_this_frame.store(false, std::memory_order_relaxed);
         state_->valid_texels.store(0, std::memory_order_relaxed);
         state_->counters.reset();
     }
@@ -143,16 +194,15 @@ public:
     template <class F>
     void for_each_written_texel(F&& f) const {
         if (!state_->written_this_frame.load(std::memory_order_relaxed)) return;
-        const std::size_t n = static_cast<std::size_t>(face_size_);
-        for (std::size_t w = 0; w < bit_word_count(); ++w) {
-            std::uint64_t bits = state_->written[w].load(std::memory_order_relaxed);
-            while (bits) {
-                const std::size_t index = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
-                bits &= bits - 1;
-                f(TexelAddress{static_cast<int>(index / (n * n)), static_cast<int>(index % n),
-                               static_cast<int>(index / n % n)});
-            }
-        }
+        for_each_texel_where([](const Tile& tile, int slot) { return written(tile, slot); }, f);
+    }
+
+    // Calls f(address) for every texel holding a value (visible or written this frame), in linear-index
+    // order. Between frames only.
+    template <class F>
+    void for_each_valid_texel(F&& f) const {
+        for_each_texel_where(
+            [](const Tile& tile, int slot) { return Texel::is_valid(tile.texels[slot].load(std::memory_order_relaxed)); }, f);
     }
 
     // Texels holding a value, visible or written this frame.
@@ -168,15 +218,25 @@ public:
 private:
     enum Counter : std::size_t { hits, misses, stores, refused_stores, counter_count };
 
-    struct State {
-        explicit State(std::size_t count)
-            : texels(new std::atomic<Word>[count]), written(new std::atomic<std::uint64_t>[(count + 63) / 64]) {
-            for (std::size_t i = 0; i < count; ++i) texels[i].store(Texel::invalid, std::memory_order_relaxed);
-            for (std::size_t i = 0; i < (count + 63) / 64; ++i) written[i].store(0, std::memory_order_relaxed);
+    static constexpr int tile_texels = tile_edge * tile_edge;
+    static constexpr int bit_words = tile_texels / 64;
+
+    struct Tile {
+        Tile() noexcept {
+            for (auto& t : texels) t.store(Texel::invalid, std::memory_order_relaxed);
+            for (auto& w : written_bits) w.store(0, std::memory_order_relaxed);
         }
-        std::unique_ptr<std::atomic<Word>[]> texels;
+        std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet).
-        std::unique_ptr<std::atomic<std::uint64_t>[]> written;
+        std::atomic<std::uint64_t> written_bits[bit_words];
+    };
+
+    struct State {
+        explicit State(std::size_t tiles) : tiles(new std::atomic<Tile*>[tiles]) {
+            for (std::size_t i = 0; i < tiles; ++i) this->tiles[i].store(nullptr, std::memory_order_relaxed);
+        }
+        std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
+        std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<bool> written_this_frame{false};
         std::atomic<std::int64_t> valid_texels{0};
         detail::StripedCounters<counter_count> counters;
@@ -190,31 +250,98 @@ private:
         return face_size;
     }
 
-    std::size_t bit_word_count() const noexcept { return (texel_count() + 63) / 64; }
+    std::size_t tile_count() const noexcept {
+        return std::size_t{RAYCACHE_FACE_COUNT} * static_cast<std::size_t>(tiles_per_edge_) * static_cast<std::size_t>(tiles_per_edge_);
+    }
+    std::size_t table_bytes() const noexcept { return tile_count() * sizeof(std::atomic<Tile*>); }
 
-    static int count_trailing_zeros(std::uint64_t bits) noexcept {
-        int n = 0;
-        while (!(bits & 1u)) {
-            bits >>= 1;
-            ++n;
+    std::size_t tile_index(const TexelAddress& t) const noexcept {
+        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+        return (static_cast<std::size_t>(t.face) * per_edge + static_cast<std::size_t>(t.row / tile_edge)) * per_edge +
+               static_cast<std::size_t>(t.column / tile_edge);
+    }
+    static int slot_of(const TexelAddress& t) noexcept { return (t.row % tile_edge) * tile_edge + t.column % tile_edge; }
+
+    Tile* tile_of(const TexelAddress& t) const noexcept { return state_->tiles[tile_index(t)].load(std::memory_order_acquire); }
+
+    // The tile of `t`, allocated (within the budget) if it has none yet; null when it does not fit.
+    Tile* tile_for_store(const TexelAddress& t) noexcept {
+        std::atomic<Tile*>& entry = state_->tiles[tile_index(t)];
+        Tile* tile = entry.load(std::memory_order_acquire);
+        if (tile) return tile;
+        if (budget_ && !budget_->try_reserve(sizeof(Tile))) return nullptr;
+        Tile* fresh = new (std::nothrow) Tile();
+        if (!fresh) {
+            if (budget_) budget_->release(sizeof(Tile));
+            return nullptr;
         }
-        return n;
+        if (entry.compare_exchange_strong(tile, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) {
+            state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+            return fresh;
+        }
+        delete fresh; // another thread allocated it first
+        if (budget_) budget_->release(sizeof(Tile));
+        return tile;
     }
 
-    bool written_this_frame(std::size_t index) const noexcept {
-        return (state_->written[index / 64].load(std::memory_order_relaxed) >> (index % 64)) & 1u;
+    // Frees every tile and returns the table's bytes to the budget (destruction, move-assignment).
+    void give_back() noexcept {
+        if (!state_) return;
+        free_tiles();
+        if (budget_) budget_->release(table_bytes());
+        state_.reset();
+    }
+
+    void free_tiles() noexcept {
+        for (std::size_t i = 0; i < tile_count(); ++i) {
+            Tile* tile = state_->tiles[i].exchange(nullptr, std::memory_order_relaxed);
+            if (!tile) continue;
+            delete tile;
+            if (budget_) budget_->release(sizeof(Tile));
+        }
+        state_->allocated_tiles.store(0, std::memory_order_relaxed);
+    }
+
+    static bool written(const Tile& tile, int slot) noexcept {
+        return (tile.written_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
+    }
+
+    // f(address) for each texel of an allocated tile for which keep(tile, slot), in linear-index order.
+    template <class Keep, class F>
+    void for_each_texel_where(Keep&& keep, F&& f) const {
+        for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+            for (int row = 0; row < face_size_; ++row) {
+                const int tile_row = row / tile_edge;
+                for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
+                    const TexelAddress first{face, tile_column * tile_edge, row};
+                    const Tile* tile = tile_of(first);
+                    if (!tile) continue;
+                    const int end = std::min(face_size_, (tile_column + 1) * tile_edge);
+                    for (int column = first.column; column < end; ++column) {
+                        const int slot = (row - tile_row * tile_edge) * tile_edge + column % tile_edge;
+                        if (keep(*tile, slot)) f(TexelAddress{face, column, row});
+                    }
+                }
+            }
     }
 
     void clear_written_bits() noexcept {
-        for (std::size_t i = 0; i < bit_word_count(); ++i) state_->written[i].store(0, std::memory_order_relaxed);
+        for (std::size_t i = 0; i < tile_count(); ++i) {
+            Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
+            if (!tile) continue;
+            for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
+        }
     }
 
-    std::optional<Value> visible_value(std::size_t index) const noexcept {
+    std::optional<Value> visible_value(const TexelAddress& t) const noexcept {
+        const Tile* tile = tile_of(t);
+        if (!tile) return std::nullopt;
         // Acquire pairs with the store's release: a word written this frame comes with its written bit,
         // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.
-        const Word word = state_->texels[index].load(std::memory_order_acquire);
+        const int slot = slot_of(t);
+        const Word word = tile->texels[slot].load(std::memory_order_acquire);
         if (!Texel::is_valid(word)) return std::nullopt;
-        if (state_->written_this_frame.load(std::memory_order_relaxed) && written_this_frame(index)) return std::nullopt;
+        if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return std::nullopt;
         return Texel::decode(word);
     }
 
@@ -223,13 +350,16 @@ private:
         return false;
     }
 
-    bool store_word(std::size_t index, Word word) noexcept {
+    bool store_word(const TexelAddress& t, Word word) noexcept {
         if (!Texel::is_valid(word)) return refuse();
-        std::atomic<Word>& texel = state_->texels[index];
+        Tile* tile = tile_for_store(t);
+        if (!tile) return refuse(); // over the budget
+        const int slot = slot_of(t);
+        std::atomic<Word>& texel = tile->texels[slot];
         Word old = texel.load(std::memory_order_acquire);
-        if (Texel::is_valid(old) && !written_this_frame(index)) return refuse(); // visible: kept
+        if (Texel::is_valid(old) && !written(*tile, slot)) return refuse(); // visible: kept
         // Mark the texel as this frame's before writing it, so no reader can see the new word as visible.
-        state_->written[index / 64].fetch_or(std::uint64_t{1} << (index % 64), std::memory_order_relaxed);
+        tile->written_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         if (!state_->written_this_frame.load(std::memory_order_relaxed))
             state_->written_this_frame.store(true, std::memory_order_relaxed);
         for (;;) {
@@ -243,7 +373,9 @@ private:
     }
 
     int face_size_;
+    int tiles_per_edge_;
     std::unique_ptr<State> state_;
+    std::shared_ptr<MemoryBudget> budget_;
 };
 
 using CctCube = CacheCube<CctTexel>;

@@ -98,7 +98,11 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--width") o.width = static_cast<int>(parse_int(arg, next(), 1, max_image_side));
         else if (arg == "--height") o.height = static_cast<int>(parse_int(arg, next(), 1, max_image_side));
         else if (arg == "--cache") o.cache = parse_cache_mode(next());
-        else if (arg == "--face-size") o.face_size = static_cast<int>(parse_int(arg, next(), 1, 4096));
+        else if (arg == "--face-size") {
+            const std::string v = next();
+            o.face_size = v == "auto" ? 0 : static_cast<int>(parse_int(arg, v, 1, 4096));
+        }
+        else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -150,7 +154,11 @@ std::string help_text(const std::string& program) {
         "Cache\n"
         "  --cache MODE        off, cct (colour), cdct (colour + depth), ceiling (constant colour,\n"
         "                      no tracing: the best any cache could do)               [cct]\n"
-        "  --face-size N       texels per cube face side, 1..4096                     [512]\n"
+        "  --face-size N|auto  texels per cube face side, 1..4096; auto: each cube's size\n"
+        "                      follows the rays its object receives (Vulkan: the largest\n"
+        "                      up to 512 whose cubes fit one storage buffer)          [auto]\n"
+        "  --rays-per-texel F  auto: a frame's leaving rays per covered texel; smaller\n"
+        "                      is sharper and fills more slowly (Embree tracer)       [1]\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
         "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
         "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"

@@ -36,7 +36,8 @@ struct Options {
     int width = 512;
     int height = 512;
     CacheMode cache = CacheMode::cct;
-    int face_size = 512;              // texels per cube face side (the thesis's 512 x 512)
+    int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
+    float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss

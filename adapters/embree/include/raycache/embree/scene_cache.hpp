@@ -4,7 +4,7 @@
 // Adopting it, in a Whitted shader, where a ray hit object `hit` and leaves it at `p` in direction `r`:
 //
 //     raycache::embree::SceneCache caches(raycache::embree::Technique::cct);
-//     caches.attach(scene, {mirror_geom_id}, 256);                     // once, after rtcCommitScene
+//     caches.attach(scene, {mirror_geom_id});   // once, after rtcCommitScene; face size chosen per frame
 //     ...
 //     glm::vec3 reflected = caches.leaving_ray({hit.geomID, hit.instID[0]}, p, r, [&] {
 //         return trace_leaving(p, r, depth + 1);  // your trace: TracedRay{colour, hit distance or inf}
@@ -13,7 +13,12 @@
 //     caches.begin_frame();                                              // between frames
 //
 // For refraction, trace the entry and internal bounces as usual and pass the ray that finally leaves
-// the object: that is the ray the cube caches (SPEC section 2).
+// the object: that is the ray the cube caches.
+//
+// Memory and resolution. By default (attach() without a face size) each cube's face size follows the
+// leaving rays its object received in the last frame (raycache/adaptive_resolution.hpp), and all cubes
+// draw their texel tiles from one MemoryBudget (SceneCacheSettings::budget_bytes); a tile that does not fit
+// is not cached, its rays are traced. An explicit face size keeps a cube at that size.
 #pragma once
 
 #include <atomic>
@@ -40,6 +45,17 @@ namespace embree {
 // Which technique a SceneCache's cubes use.
 enum class Technique { cct, cdct };
 
+// The face size to pass to attach() for a cube whose face size follows its object's rays (the default).
+inline constexpr int adaptive_face_size = 0;
+
+// Everything a SceneCache can be tuned by; the defaults need no tuning.
+struct SceneCacheSettings {
+    ReliefParameters relief{};          // the CDCT's search
+    bool depth_pyramid = true;          // CDCT: search over a min-depth pyramid (false: the thesis's walk)
+    AdaptiveResolution adaptive{};      // how adaptive cubes pick their face size
+    std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
+};
+
 // An object as Embree reports it in a hit: geomID, and instID[0] when it was reached through an instance.
 struct ObjectId {
     unsigned geom_id = RTC_INVALID_GEOMETRY_ID;
@@ -56,8 +72,10 @@ struct SceneCacheStatistics {
     std::uint64_t max_texels_read = 0; // the most one CDCT search read
     std::size_t valid_texels = 0;
     std::size_t texel_count = 0;
-    std::size_t texel_bytes = 0;
-    std::size_t pyramid_bytes = 0; // CDCT depth pyramids
+    std::size_t texel_bytes = 0;     // 6 N^2 texels of every cube, as if every tile were allocated
+    std::size_t allocated_bytes = 0; // what the cubes hold: allocated tiles and tile tables
+    std::size_t pyramid_bytes = 0;   // CDCT depth pyramids
+    std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -104,7 +122,8 @@ class SceneCache {
         CubeBounds bounds;
         std::unique_ptr<CctCube> cct;
         std::unique_ptr<CdctCube> cdct;
-        std::unique_ptr<DepthPyramid> pyramid; // CDCT with depth_pyramid only
+        std::unique_ptr<DepthPyramid> pyramid;       // CDCT with depth_pyramid only
+        std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
     };
 
     // f(cube) on the entry's cube, whichever technique it holds (f is instantiated for both).
@@ -122,18 +141,29 @@ public:
     // (the default), each CDCT cube keeps a DepthPyramid so its searches skip empty space; without, the
     // search is the thesis's fixed-step walk.
     explicit SceneCache(Technique technique, ReliefParameters relief = {}, bool depth_pyramid = true)
-        : technique_(technique), relief_(relief), use_pyramid_(depth_pyramid) {
+        : SceneCache(technique, SceneCacheSettings{relief, depth_pyramid, {}, SceneCacheSettings{}.budget_bytes}) {}
+    // Throws std::invalid_argument naming the field for bad settings.
+    SceneCache(Technique technique, const SceneCacheSettings& settings)
+        : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
+          adaptive_(settings.adaptive), budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
+        validate(adaptive_);
     }
 
     Technique technique() const noexcept { return technique_; }
     const ReliefParameters& relief() const noexcept { return relief_; }
+    const MemoryBudget& budget() const noexcept { return *budget_; }
 
-    // Gives object `id` of the committed `scene` a cube of face_size texels per edge, placed by bounds_of().
+    // Gives object `id` of the committed `scene` a cube placed by bounds_of(), of face_size texels per edge,
+    // or (adaptive_face_size, the default) one whose face size follows the rays its object receives.
+    // `id` may be a plain geometry, an (instance, geometry) pair, or an instance alone ({instance id}): then
+    // every geometry reached through that instance shares the instance's cube.
     // Throws std::invalid_argument for a bad face size, an unknown geometry, or an id attached twice.
-    void attach(RTCScene scene, ObjectId id, int face_size) { attach(id, face_size, bounds_of(scene, id)); }
+    void attach(RTCScene scene, ObjectId id, int face_size = adaptive_face_size) {
+        attach(id, face_size, bounds_of(scene, id));
+    }
 
-    // Gives object `id` a cube of face_size texels per edge around `bounds`.
+    // Gives object `id` a cube around `bounds` (face_size as above).
     void attach(ObjectId id, int face_size, CubeBounds bounds) {
         if (id.geom_id == RTC_INVALID_GEOMETRY_ID)
             throw std::invalid_argument("RayCache: cannot attach a cube to RTC_INVALID_GEOMETRY_ID");
@@ -141,13 +171,10 @@ public:
             throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
         if (has_cache(id))
             throw std::invalid_argument("RayCache: geometry " + std::to_string(id.geom_id) + " already has a cube");
-        Entry entry{id, bounds, nullptr, nullptr, nullptr};
-        if (technique_ == Technique::cct) {
-            entry.cct = std::make_unique<CctCube>(face_size);
-        } else {
-            entry.cdct = std::make_unique<CdctCube>(face_size);
-            if (use_pyramid_) entry.pyramid = std::make_unique<DepthPyramid>(face_size);
-        }
+        const bool adaptive = face_size == adaptive_face_size;
+        Entry entry{id, bounds, nullptr, nullptr, nullptr, nullptr};
+        make_cube(entry, adaptive ? adaptive_.first_face_size : face_size);
+        if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         const int index = static_cast<int>(entries_.size());
         entries_.push_back(std::move(entry));
         if (id.inst_id == RTC_INVALID_GEOMETRY_ID) {
@@ -200,6 +227,7 @@ public:
         const int index = find(id);
         if (index < 0) return std::forward<Trace>(trace)().color;
         Entry& e = entries_[static_cast<std::size_t>(index)];
+        if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) return cached_trace(*e.cct, direction, [&] { return trace().color; });
         int read = 0;
         const glm::vec3 color =
@@ -214,15 +242,20 @@ public:
     }
 
     // Ends a frame on every cube (this frame's stores become visible) and returns the frame's totals.
+    // Adaptive cubes then take the face size their object's rays call for: a smaller one is filled from
+    // the old cube (resample_into), a larger one starts empty.
     SceneCacheStatistics begin_frame() {
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
             if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
-            add(total, with_cube(e, [](auto& cube) { return cube.begin_frame(); }));
+            const CubeStatistics frame = with_cube(e, [](auto& cube) { return cube.begin_frame(); });
+            add(total, frame);
+            if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
         }
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
+        total.allocated_bytes = allocated_bytes();
         total.pyramid_bytes = pyramid_bytes();
         texels_read_.reset();
         return total;
@@ -235,6 +268,7 @@ public:
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.load(std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
+        total.allocated_bytes = allocated_bytes();
         total.pyramid_bytes = pyramid_bytes();
         return total;
     }
@@ -270,6 +304,13 @@ public:
         return bytes;
     }
 
+    // What the cubes hold now: allocated texel tiles and tile tables (see CacheCube::bytes()).
+    std::size_t allocated_bytes() const noexcept {
+        std::size_t bytes = 0;
+        for (const Entry& e : entries_) bytes += with_cube(e, [](const auto& cube) { return cube.bytes(); });
+        return bytes;
+    }
+
     // Memory of the CDCT depth pyramids (about a third of a float per texel).
     std::size_t pyramid_bytes() const noexcept {
         std::size_t bytes = 0;
@@ -278,10 +319,42 @@ public:
     }
 
 private:
+    // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance.
     int find(ObjectId id) const noexcept {
-        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return id.geom_id < direct_.size() ? direct_[id.geom_id] : -1;
+        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return direct(id.geom_id);
         const auto it = instanced_.find({id.inst_id, id.geom_id});
-        return it == instanced_.end() ? -1 : it->second;
+        return it != instanced_.end() ? it->second : direct(id.inst_id);
+    }
+    int direct(unsigned geom_id) const noexcept { return geom_id < direct_.size() ? direct_[geom_id] : -1; }
+
+    // Gives `e` a new, empty cube (and pyramid) of `face_size` drawing on the budget.
+    void make_cube(Entry& e, int face_size) {
+        if (technique_ == Technique::cct) {
+            e.cct = std::make_unique<CctCube>(face_size, budget_);
+        } else {
+            e.cdct = std::make_unique<CdctCube>(face_size, budget_);
+            if (use_pyramid_) e.pyramid = std::make_unique<DepthPyramid>(face_size);
+        }
+    }
+
+    // An adaptive entry after a frame of `rays` leaving rays: moves it to the face size they call for.
+    // Returns whether the size changed. Between frames.
+    bool adapt(Entry& e, std::uint64_t rays) {
+        const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
+        const int next = next_face_size(current, rays, e.coverage->fraction(), adaptive_);
+        e.coverage->reset();
+        if (next == current) return false;
+        Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), std::move(e.pyramid), nullptr};
+        make_cube(e, next);
+        if (next < current) {
+            if (technique_ == Technique::cct)
+                resample_into(*old.cct, *e.cct);
+            else
+                resample_into(*old.cdct, *e.cdct);
+            with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
+            if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+        }
+        return true;
     }
 
     static void add(SceneCacheStatistics& total, const CubeStatistics& s) {
@@ -296,6 +369,8 @@ private:
     Technique technique_;
     ReliefParameters relief_;
     bool use_pyramid_;
+    AdaptiveResolution adaptive_;
+    std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
     std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> entry

@@ -1,0 +1,169 @@
+// raycache/adaptive_resolution.hpp: choosing a cube's face size from the rays that reach it, and moving
+// its contents to a coarser cube without losing a frame.
+//
+// Why: a cube's hit rate along a moving camera is roughly (rays per frame) / (texels those rays spread
+// over). A fixed 512 x 512 cube on a sphere that receives 5,000 leaving rays has 1.5 million texels for
+// them: each frame's rays land on texels no earlier ray touched, and the cache only costs. Matching the
+// texel to the ray's footprint (about `rays_per_texel` rays of a frame per texel) makes the next frame's
+// rays land on texels this frame filled. A mirror sphere seen through a pinhole spreads its pixels
+// almost evenly over the directions it reflects (the mirror-ball property), so rays per covered texel
+// is a good measure of the footprint for the objects RayCache caches.
+//
+// How: DirectionCoverage marks, on a coarse 16 x 16 grid per face, which directions this frame's
+// leaving rays took; the covered fraction times 6 N^2 is the texel area they spread over at face size N.
+// adaptive_face_size() picks N so that area holds rays / rays_per_texel texels, on a ladder of sizes a
+// half octave apart. resample_into() fills a coarser cube from a finer one (each coarse texel takes the
+// valid fine texel nearest its centre), so shrinking a cube keeps it warm.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cache_cube.hpp"
+#include "raycache/cube_face.hpp"
+
+namespace raycache {
+
+// The face sizes an adaptive cube moves between: 8 * 2^(i/2) rounded, up to 4096 (8, 11, 16, 23, 32, ...).
+inline int face_size_step(int i) noexcept {
+    return static_cast<int>(std::lround(8.0 * std::exp2(0.5 * static_cast<double>(i))));
+}
+
+// How an adaptive cube picks its face size.
+struct AdaptiveResolution {
+    float rays_per_texel = 1.0f; // leaving rays of one frame per covered texel aimed at (> 0)
+    int min_face_size = 8;       // never coarser
+    int max_face_size = 1024;    // never finer (the largest step <= this)
+    int first_face_size = 256;   // before any frame has been counted
+    // The face size moves only when the ideal size is this many half-octave steps away (>= 1): a
+    // change costs the finer texels (a shrink keeps the rest) or a cold frame (a growth), so a size
+    // hovering between two steps must not flip back and forth.
+    int hysteresis_steps = 2;
+};
+
+// Throws std::invalid_argument naming the field when `a` cannot be used.
+inline void validate(const AdaptiveResolution& a) {
+    if (!(a.rays_per_texel > 0.0f) || !std::isfinite(a.rays_per_texel))
+        throw std::invalid_argument("RayCache: AdaptiveResolution::rays_per_texel must be a finite number > 0");
+    if (!is_valid_face_size(a.min_face_size) || !is_valid_face_size(a.max_face_size) || a.min_face_size > a.max_face_size)
+        throw std::invalid_argument("RayCache: AdaptiveResolution needs 1 <= min_face_size <= max_face_size <= 4096");
+    if (!is_valid_face_size(a.first_face_size))
+        throw std::invalid_argument("RayCache: AdaptiveResolution::first_face_size must be 1 to 4096");
+    if (a.hysteresis_steps < 1)
+        throw std::invalid_argument("RayCache: AdaptiveResolution::hysteresis_steps must be at least 1");
+}
+
+// Which of 6 x 16 x 16 direction cells a frame's rays took. mark() from any number of threads at once
+// (a relaxed load, and an atomic OR only the first time a cell is met); fraction() and reset() between frames.
+class DirectionCoverage {
+public:
+    static constexpr int cells_per_edge = 16;
+    static constexpr int cell_count = RAYCACHE_FACE_COUNT * cells_per_edge * cells_per_edge;
+
+    void mark(const glm::vec3& direction) noexcept {
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, cells_per_edge);
+        if (a.face == RAYCACHE_NO_FACE) return;
+        const unsigned cell = shared::raycache_texel_linear_index(a, cells_per_edge);
+        const std::uint64_t bit = std::uint64_t{1} << (cell % 64);
+        std::atomic<std::uint64_t>& word = words_[cell / 64];
+        if (!(word.load(std::memory_order_relaxed) & bit)) word.fetch_or(bit, std::memory_order_relaxed);
+    }
+    // The share of the cells marked since the last reset(), 0..1.
+    double fraction() const noexcept {
+        int marked = 0;
+        for (const auto& w : words_) {
+            std::uint64_t bits = w.load(std::memory_order_relaxed);
+            for (; bits; bits &= bits - 1) ++marked;
+        }
+        return static_cast<double>(marked) / cell_count;
+    }
+    void reset() noexcept {
+        for (auto& w : words_) w.store(0, std::memory_order_relaxed);
+    }
+
+private:
+    std::atomic<std::uint64_t> words_[cell_count / 64] = {};
+};
+
+// The ideal face size (not yet on the ladder) for `rays` leaving rays of one frame spread over
+// `covered_fraction` (0..1) of all directions: sqrt(rays / (rays_per_texel * 6 * covered_fraction)).
+// 0 when no ray came (nothing to go by).
+inline double ideal_face_size(std::uint64_t rays, double covered_fraction, float rays_per_texel) noexcept {
+    if (rays == 0 || !(covered_fraction > 0.0)) return 0.0;
+    return std::sqrt(static_cast<double>(rays) / (static_cast<double>(rays_per_texel) * RAYCACHE_FACE_COUNT * covered_fraction));
+}
+
+// The ladder step nearest (in octaves) to `ideal`, clamped to [min_face_size, max_face_size].
+inline int nearest_face_size_step(double ideal, const AdaptiveResolution& a) noexcept {
+    int best = a.min_face_size;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (int i = 0;; ++i) {
+        const int size = face_size_step(i);
+        if (size > a.max_face_size || size > RAYCACHE_MAX_FACE_SIZE) break;
+        if (size < a.min_face_size) continue;
+        const double distance = std::abs(std::log2(static_cast<double>(size) / ideal));
+        if (distance < best_distance) {
+            best_distance = distance;
+            best = size;
+        }
+    }
+    return best;
+}
+
+// The face size an adaptive cube of face size `current` should have after a frame in which `rays`
+// leaving rays covered `covered_fraction` of the directions: `current` unless the ideal size is at
+// least hysteresis_steps half octaves away. A frame without rays keeps `current`.
+inline int next_face_size(int current, std::uint64_t rays, double covered_fraction, const AdaptiveResolution& a) noexcept {
+    const double ideal = ideal_face_size(rays, covered_fraction, a.rays_per_texel);
+    if (ideal <= 0.0) return current;
+    const double half_octaves = 2.0 * std::abs(std::log2(ideal / static_cast<double>(current)));
+    if (half_octaves < static_cast<double>(a.hysteresis_steps) - 1e-9) return current;
+    return nearest_face_size_step(ideal, a);
+}
+
+// Fills the empty texels of `coarse` from `fine` (a cube of a larger face size): each coarse texel takes
+// the value of the valid fine texel whose centre direction falls in it nearest to its centre (ties: the
+// first in linear order), so the value stands for the coarse texel's centre as well as the fine cube
+// allows. The stores become visible at coarse's next begin_frame(). Between frames only (both cubes).
+// Returns the texels stored.
+template <class Texel>
+std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse) {
+    const int n = coarse.face_size();
+    const int fine_n = fine.face_size();
+    struct Best {
+        float distance2 = std::numeric_limits<float>::infinity();
+        TexelAddress source{};
+    };
+    std::vector<Best> best(coarse.texel_count());
+    fine.for_each_valid_texel([&](const TexelAddress& t) {
+        const glm::vec3 d = texel_direction(t, fine_n);
+        const shared::raycache_texel_address a = shared::raycache_texel_of(d, n);
+        if (a.face == RAYCACHE_NO_FACE) return;
+        // Where d falls on the coarse face, in coarse texels: (sc / |m| + 1) / 2 * N.
+        const glm::vec2 st = shared::raycache_face_coordinates(d, a.face);
+        const float m = shared::raycache_major_magnitude(d, a.face);
+        const float u = (st.x / m + 1.0f) * 0.5f * static_cast<float>(n) - (static_cast<float>(a.column) + 0.5f);
+        const float v = (st.y / m + 1.0f) * 0.5f * static_cast<float>(n) - (static_cast<float>(a.row) + 0.5f);
+        Best& b = best[shared::raycache_texel_linear_index(a, n)];
+        const float distance2 = u * u + v * v;
+        if (distance2 < b.distance2) b = Best{distance2, t};
+    });
+    std::size_t stored = 0;
+    for (std::size_t i = 0; i < best.size(); ++i) {
+        if (!std::isfinite(best[i].distance2)) continue;
+        const TexelAddress target{static_cast<int>(i / (static_cast<std::size_t>(n) * n)), static_cast<int>(i % n),
+                                  static_cast<int>(i / n % n)};
+        if (coarse.load(target)) continue;
+        stored += coarse.store_at(target, *fine.load(best[i].source));
+    }
+    return stored;
+}
+
+} // namespace raycache

@@ -1,0 +1,111 @@
+// Adaptive face sizes: the ladder of sizes, the ideal size for a frame's rays, hysteresis, the coverage
+// of directions, and resampling a fine cube into a coarse one. Expected values are worked by hand.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "raycache/raycache.hpp"
+
+namespace {
+
+using raycache::AdaptiveResolution;
+using raycache::CctCube;
+using raycache::DirectionCoverage;
+using raycache::TexelAddress;
+
+} // namespace
+
+TEST_CASE("the face-size ladder goes up by half octaves from 8: 8, 11, 16, 23, 32, 45, 64, 91, 128, 181, 256, 362, 512") {
+    const int expected[] = {8, 11, 16, 23, 32, 45, 64, 91, 128, 181, 256, 362, 512, 724, 1024};
+    for (int i = 0; i < 15; ++i) CHECK(raycache::face_size_step(i) == expected[i]);
+}
+
+TEST_CASE("the ideal face size puts rays_per_texel rays on each covered texel") {
+    // 6144 rays over every direction, one a texel: 6 N^2 = 6144 -> N = 32.
+    CHECK(raycache::ideal_face_size(6144, 1.0, 1.0f) == doctest::Approx(32.0));
+    // The same rays over a quarter of the directions: 6 N^2 / 4 = 6144 -> N = 64.
+    CHECK(raycache::ideal_face_size(6144, 0.25, 1.0f) == doctest::Approx(64.0));
+    // Four rays a texel: 6 N^2 * 4 = 6144 -> N = 16.
+    CHECK(raycache::ideal_face_size(6144, 1.0, 4.0f) == doctest::Approx(16.0));
+    CHECK(raycache::ideal_face_size(0, 1.0, 1.0f) == 0.0);
+    CHECK(raycache::ideal_face_size(100, 0.0, 1.0f) == 0.0);
+}
+
+TEST_CASE("the next face size moves to the nearest step only when the ideal is far enough, within the limits") {
+    AdaptiveResolution a; // hysteresis 2 half octaves, sizes 8..1024
+    // From 256, an ideal of 32 (6144 rays, full coverage) is 6 half octaves away: move to 32.
+    CHECK(raycache::next_face_size(256, 6144, 1.0, a) == 32);
+    // From 32, an ideal of 40 (9600 rays: sqrt(1600)) is 0.64 half octaves away: stay.
+    CHECK(raycache::next_face_size(32, 9600, 1.0, a) == 32);
+    // From 32, an ideal of 64 (24576 rays) is 2 half octaves away: move.
+    CHECK(raycache::next_face_size(32, 24576, 1.0, a) == 64);
+    // An ideal of 50 from 32 (15000 rays): 1.29 half octaves: stay; with hysteresis 1: the nearest step, 45.
+    CHECK(raycache::next_face_size(32, 15000, 1.0, a) == 32);
+    AdaptiveResolution eager = a;
+    eager.hysteresis_steps = 1;
+    CHECK(raycache::next_face_size(32, 15000, 1.0, eager) == 45);
+    // No rays: keep the size. Limits: an ideal of 2 gives the minimum, of 100,000 the largest step <= max.
+    CHECK(raycache::next_face_size(181, 0, 0.0, a) == 181);
+    CHECK(raycache::next_face_size(256, 24, 1.0, a) == 8);
+    AdaptiveResolution capped = a;
+    capped.max_face_size = 600;
+    CHECK(raycache::next_face_size(256, 60000000000ull, 1.0, capped) == 512);
+}
+
+TEST_CASE("adaptive settings are validated with a message naming the field") {
+    AdaptiveResolution a;
+    a.rays_per_texel = 0.0f;
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("rays_per_texel"), std::invalid_argument);
+    a = AdaptiveResolution{};
+    a.min_face_size = 64;
+    a.max_face_size = 32;
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("min_face_size"), std::invalid_argument);
+    a = AdaptiveResolution{};
+    a.hysteresis_steps = 0;
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("hysteresis_steps"), std::invalid_argument);
+}
+
+TEST_CASE("direction coverage counts the 16 x 16 cells per face that rays took, from many threads") {
+    DirectionCoverage coverage;
+    CHECK(coverage.fraction() == 0.0);
+    coverage.mark(glm::vec3(1, 0, 0));
+    coverage.mark(glm::vec3(2, -0.001f, 0)); // same cell: +X, tv = (0.001/2 + 1)/2 -> row 8, column 8
+    coverage.mark(glm::vec3(0, 0, 0));      // not a direction: ignored
+    CHECK(coverage.fraction() == doctest::Approx(1.0 / 1536.0));
+    coverage.reset();
+    // Every cell's centre direction, split over four threads: the whole sphere.
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back([&coverage, t] {
+            for (int face = 0; face < 6; ++face)
+                for (int row = t; row < 16; row += 4)
+                    for (int column = 0; column < 16; ++column) coverage.mark(texel_direction(TexelAddress{face, column, row}, 16));
+        });
+    for (std::thread& th : threads) th.join();
+    CHECK(coverage.fraction() == 1.0);
+}
+
+TEST_CASE("resampling takes, for each coarse texel, the fine texel whose centre is nearest its centre") {
+    // 48 -> 16: each coarse texel covers 3 x 3 fine texels; the middle one's centre is the coarse centre.
+    CctCube fine(48), coarse(16);
+    const glm::vec3 middle(0.25f, 0.5f, 0.75f), side(1.0f, 0.0f, 0.0f), corner(0.0f, 0.0f, 1.0f);
+    // Coarse (2, 5) of +Y: fine (7, 16) is its middle, (6, 15) a corner.
+    fine.store_at(TexelAddress{2, 7, 16}, middle);
+    fine.store_at(TexelAddress{2, 6, 15}, side);
+    // Coarse (0, 0) of -Z: only a corner fine texel, (2, 2).
+    fine.store_at(TexelAddress{5, 2, 2}, corner);
+    CHECK(raycache::resample_into(fine, coarse) == 2u);
+    CHECK_FALSE(coarse.peek_at(TexelAddress{2, 2, 5})); // invisible until the next frame
+    coarse.begin_frame();
+    const auto a = coarse.peek_at(TexelAddress{2, 2, 5});
+    const auto b = coarse.peek_at(TexelAddress{5, 0, 0});
+    REQUIRE(a);
+    REQUIRE(b);
+    CHECK(a->x == doctest::Approx(0.25f).epsilon(0.005));
+    CHECK(a->y == doctest::Approx(0.5f).epsilon(0.005));
+    CHECK(b->z == doctest::Approx(1.0f).epsilon(0.005));
+    CHECK(coarse.valid_texels() == 2u);
+}

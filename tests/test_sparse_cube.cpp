@@ -1,0 +1,130 @@
+// Sparse texel storage and memory budgets: a cube allocates 16 x 16 tiles on their first store, charges
+// them to its MemoryBudget, and refuses stores (never writes) into tiles the budget cannot hold.
+//
+// Directions and their texels by hand from the face table: +X: column = floor((-z/|x| + 1)/2 * N),
+// row = floor((-y/|x| + 1)/2 * N); -Z: column = floor((-x/|z| + 1)/2 * N), row = floor((-y/|z| + 1)/2 * N).
+#include <doctest/doctest.h>
+
+#include <cstddef>
+#include <memory>
+
+#include "raycache/raycache.hpp"
+
+namespace {
+
+using raycache::CctCube;
+using raycache::CdctCube;
+using raycache::MemoryBudget;
+using raycache::TexelAddress;
+
+const glm::vec3 grey(0.5f);
+
+// 16 x 16 words and four 64-bit written masks.
+constexpr std::size_t cct_tile = 16 * 16 * 4 + 4 * 8;
+constexpr std::size_t cdct_tile = 16 * 16 * 8 + 4 * 8;
+
+} // namespace
+
+TEST_CASE("a tile is 16 x 16 texels and their written bits: 1056 bytes for the CCT, 2080 for the CDCT") {
+    CHECK(CctCube::tile_bytes() == cct_tile);
+    CHECK(CdctCube::tile_bytes() == cdct_tile);
+}
+
+TEST_CASE("a new cube holds no tile, and a store allocates exactly the tile of its texel") {
+    CctCube cube(64); // 4 x 4 tiles a face
+    CHECK(cube.allocated_tiles() == 0u);
+    // +X centre: tu = tv = 0.5 -> texel (32, 32), tile (2, 2).
+    CHECK(cube.store(glm::vec3(1, 0, 0), grey));
+    CHECK(cube.allocated_tiles() == 1u);
+    CHECK(cube.allocated_bytes() == cct_tile);
+    // Every other texel of that tile (columns and rows 32..47) stays in it.
+    for (int row = 32; row < 48; ++row)
+        for (int column = 32; column < 48; ++column) cube.store_at(TexelAddress{0, column, row}, grey);
+    CHECK(cube.allocated_tiles() == 1u);
+    CHECK(cube.valid_texels() == 256u);
+    // Column 48 is the next tile; -Z is another face.
+    CHECK(cube.store_at(TexelAddress{0, 48, 32}, grey));
+    CHECK(cube.store(glm::vec3(0, 0, -1), grey));
+    CHECK(cube.allocated_tiles() == 3u);
+}
+
+TEST_CASE("lookups and loads of texels in tiles never stored miss without allocating") {
+    CctCube cube(256);
+    for (int i = 0; i < 100; ++i) CHECK_FALSE(cube.lookup(glm::vec3(1.0f, 0.01f * static_cast<float>(i), -0.3f)));
+    CHECK_FALSE(cube.load(TexelAddress{3, 200, 17}));
+    CHECK_FALSE(cube.peek_at(TexelAddress{5, 0, 255}));
+    CHECK(cube.allocated_tiles() == 0u);
+    CHECK(cube.statistics().misses == 100u);
+}
+
+TEST_CASE("a face smaller than a tile has one tile, and its texels map into it") {
+    CctCube cube(5);
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 5; ++row)
+            for (int column = 0; column < 5; ++column) CHECK(cube.store_at(TexelAddress{face, column, row}, grey));
+    CHECK(cube.allocated_tiles() == 6u);
+    CHECK(cube.valid_texels() == 150u);
+    cube.begin_frame();
+    for (int face = 0; face < 6; ++face) CHECK(cube.peek_at(TexelAddress{face, 4, 4}));
+}
+
+TEST_CASE("clear gives every tile back to the cube and to its budget") {
+    auto budget = std::make_shared<MemoryBudget>(1u << 20);
+    CctCube cube(32, budget);
+    const std::size_t table = budget->used(); // 6 faces x 2 x 2 tile pointers
+    CHECK(table == 6u * 4u * sizeof(void*));
+    for (int face = 0; face < 6; ++face) cube.store_at(TexelAddress{face, 0, 0}, grey);
+    CHECK(budget->used() == table + 6 * cct_tile);
+    cube.clear();
+    CHECK(cube.allocated_tiles() == 0u);
+    CHECK(budget->used() == table);
+    CHECK_FALSE(cube.load(TexelAddress{0, 0, 0}));
+}
+
+TEST_CASE("a budget that holds one tile refuses the second tile's stores and keeps the first tile's") {
+    auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + cct_tile);
+    {
+        CctCube cube(32, budget);
+        CHECK(cube.store_at(TexelAddress{0, 0, 0}, grey));
+        CHECK(cube.store_at(TexelAddress{0, 15, 15}, grey)); // same tile
+        CHECK_FALSE(cube.store_at(TexelAddress{0, 16, 0}, grey)); // next tile: over the budget
+        CHECK_FALSE(cube.store_at(TexelAddress{4, 3, 3}, grey));
+        CHECK(cube.statistics().refused_stores == 2u);
+        CHECK(cube.statistics().stores == 2u);
+        CHECK(cube.allocated_tiles() == 1u);
+        CHECK(budget->used() == budget->limit());
+        cube.begin_frame();
+        CHECK_FALSE(cube.lookup(texel_direction(TexelAddress{0, 16, 0}, 32)));
+        CHECK(cube.lookup(texel_direction(TexelAddress{0, 15, 15}, 32)));
+    }
+    CHECK(budget->used() == 0u); // the destroyed cube gave everything back
+}
+
+TEST_CASE("cubes sharing a budget draw on it together") {
+    auto budget = std::make_shared<MemoryBudget>(10000);
+    CdctCube a(16, budget), b(16, budget); // one tile a face each; tables 6 x 8 bytes
+    CHECK(budget->used() == 2u * 48u);
+    // 10000 - 96 = 9904 bytes: four CDCT tiles (8320), not five (10400).
+    int stored = 0;
+    for (int face = 0; face < 6; ++face) {
+        stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});
+        stored += b.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});
+    }
+    CHECK(stored == 4);
+    CHECK(a.allocated_tiles() + b.allocated_tiles() == 4u);
+    CHECK(budget->used() == 96u + 4u * cdct_tile);
+}
+
+TEST_CASE("try_reserve takes bytes only when they fit, and release gives them back") {
+    MemoryBudget budget(100);
+    CHECK(budget.try_reserve(60));
+    CHECK_FALSE(budget.try_reserve(41));
+    CHECK(budget.try_reserve(40));
+    CHECK_FALSE(budget.try_reserve(1));
+    CHECK_FALSE(budget.try_reserve(static_cast<std::size_t>(-1)));
+    budget.release(100);
+    CHECK(budget.used() == 0u);
+    budget.reserve_always(150); // the fixed part of a cube: granted past the limit
+    CHECK(budget.used() == 150u);
+    CHECK_FALSE(budget.try_reserve(1));
+}
