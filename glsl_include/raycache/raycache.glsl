@@ -9,6 +9,8 @@
  *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
  *   if (!c.hit) { c.color = trace(hit, reflected); raycache_cct_store(cube, reflected, c.color); }
  *   raycache_relief_result f = raycache_relief_search(cube, hit, reflected, parameters); // CDCT
+ *   raycache_filter_result b = raycache_filtered_value(reflected, N, 0.0); // bilinear, over the texel
+ *                              // fetch named by RAYCACHE_FILTER_FETCH before the include (filter.glsl)
  * Between frames, one pass compiled with RAYCACHE_END_FRAME calls raycache_cct_end_frame(i) (and
  * raycache_cdct_end_frame(i)) for every buffer element i, which makes the frame's stores visible.
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
@@ -18,5 +20,6 @@
 
 #include "raycache/cct.glsl"
 #include "raycache/cdct.glsl"
+#include "raycache/filter.glsl"
 
 #endif /* RAYCACHE_RAYCACHE_GLSL */

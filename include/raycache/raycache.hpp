@@ -4,6 +4,7 @@
 #include "raycache/version.hpp"
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"
+#include "raycache/filtered_lookup.hpp"
 #include "raycache/texel.hpp"
 #include "raycache/statistics.hpp"
 #include "raycache/memory_budget.hpp"

@@ -567,11 +567,20 @@ void create_image(Context& context, const ImageDescription& d, VkImage& image, V
 
 // ---- SampledCubeImage ------------------------------------------------------------------------------
 
-SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format)
+bool SampledCubeImage::supports_linear_filter(const Context& context, VkFormat format) {
+    VkFormatProperties properties{};
+    vkGetPhysicalDeviceFormatProperties(context.physical_device(), format, &properties);
+    return (properties.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT) != 0;
+}
+
+SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format, VkFilter filter)
     : context_(context), face_size_(face_size) {
     if (face_size == 0 || face_size > context.properties().limits.maxImageDimensionCube)
         throw Error("rcx::vk: cube face size " + std::to_string(face_size) + " outside 1.." +
                     std::to_string(context.properties().limits.maxImageDimensionCube) + " on " + context.device_name());
+    if (filter == VK_FILTER_LINEAR && !supports_linear_filter(context, format))
+        throw Error("rcx::vk: " + context.device_name() + " cannot filter format " + std::to_string(format) +
+                    " linearly");
     const VkDevice device = context.device();
     try {
         ImageDescription cube;
@@ -585,8 +594,8 @@ SampledCubeImage::SampledCubeImage(Context& context, std::uint32_t face_size, Vk
 
         VkSamplerCreateInfo sampler{};
         sampler.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;
-        sampler.magFilter = VK_FILTER_NEAREST;
-        sampler.minFilter = VK_FILTER_NEAREST;
+        sampler.magFilter = filter;
+        sampler.minFilter = filter;
         sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
         sampler.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
         sampler.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;

@@ -100,13 +100,19 @@ RAYCACHE_FN float raycache_major_magnitude(vec3 s, int face) {
     return abs(s.z);
 }
 
-/* Texel index along one edge for a face coordinate sc and scale = 0.5 / |m|, in the driver's order:
- * t = sc * scale + 0.5 (no FMA), index = clamp(floor(t * N), 0, N - 1). */
-RAYCACHE_FN int raycache_texel_index(float sc, float scale, int face_size) {
+/* Position along one edge of a face, in texels (0 at the face's low edge, N at its high edge), for a
+ * face coordinate sc and scale = 0.5 / |m|, in the driver's order: t = sc * scale + 0.5 (no FMA), t * N.
+ * Nearest and linear filtering both start from it. */
+RAYCACHE_FN float raycache_texel_position(float sc, float scale, int face_size) {
     RAYCACHE_PRECISE float scaled = raycache_no_fma(sc * scale);
     RAYCACHE_PRECISE float t = scaled + 0.5f;
     RAYCACHE_PRECISE float texels = raycache_no_fma(t * float(face_size));
-    return clamp(int(floor(texels)), 0, face_size - 1);
+    return texels;
+}
+
+/* Texel index along one edge: clamp(floor(t * N), 0, N - 1) of raycache_texel_position. */
+RAYCACHE_FN int raycache_texel_index(float sc, float scale, int face_size) {
+    return clamp(int(floor(raycache_texel_position(sc, scale, face_size))), 0, face_size - 1);
 }
 
 /* The texel a direction s falls in, on a cube of face_size x face_size texels per face.
@@ -129,17 +135,23 @@ RAYCACHE_FN uint raycache_texel_linear_index(raycache_texel_address a, int face_
     return (uint(a.face) * uint(face_size) + uint(a.row)) * uint(face_size) + uint(a.column);
 }
 
+/* The table read backwards: the vector with major coordinate m along the face's axis and face
+ * coordinates (sc, tc), so that raycache_face_coordinates gives (sc, tc) back. Linear in (m, sc, tc). */
+RAYCACHE_FN vec3 raycache_face_point(int face, float m, float sc, float tc) {
+    if (face == RAYCACHE_FACE_POSITIVE_X) return vec3(m, -tc, -sc);
+    if (face == RAYCACHE_FACE_NEGATIVE_X) return vec3(-m, -tc, sc);
+    if (face == RAYCACHE_FACE_POSITIVE_Y) return vec3(sc, m, tc);
+    if (face == RAYCACHE_FACE_NEGATIVE_Y) return vec3(sc, -m, -tc);
+    if (face == RAYCACHE_FACE_POSITIVE_Z) return vec3(sc, -tc, m);
+    return vec3(-sc, -tc, -m);
+}
+
 /* The direction through the centre of a texel, with major component +-1 (not unit length).
  * Inverse of raycache_texel_of: raycache_texel_of(raycache_texel_direction(a, N), N) == a. */
 RAYCACHE_FN vec3 raycache_texel_direction(raycache_texel_address a, int face_size) {
     float sc = 2.0f * ((float(a.column) + 0.5f) / float(face_size)) - 1.0f;
     float tc = 2.0f * ((float(a.row) + 0.5f) / float(face_size)) - 1.0f;
-    if (a.face == RAYCACHE_FACE_POSITIVE_X) return vec3(1.0f, -tc, -sc);
-    if (a.face == RAYCACHE_FACE_NEGATIVE_X) return vec3(-1.0f, -tc, sc);
-    if (a.face == RAYCACHE_FACE_POSITIVE_Y) return vec3(sc, 1.0f, tc);
-    if (a.face == RAYCACHE_FACE_NEGATIVE_Y) return vec3(sc, -1.0f, -tc);
-    if (a.face == RAYCACHE_FACE_POSITIVE_Z) return vec3(sc, -tc, 1.0f);
-    return vec3(-sc, -tc, -1.0f);
+    return raycache_face_point(a.face, 1.0f, sc, tc);
 }
 
 #ifdef __cplusplus

@@ -107,12 +107,18 @@ void create_image(Context& context, const ImageDescription& description, VkImage
                   VkImageView& view);
 
 // A cube-compatible image (6 layers of face_size x face_size), sampled through a cube view with a
-// NEAREST, CLAMP_TO_EDGE sampler: what a `samplerCube` / `usamplerCube` binding sees.
+// CLAMP_TO_EDGE sampler, NEAREST or LINEAR (seamless across faces, as Vulkan cube maps always are): what a
+// `samplerCube` / `usamplerCube` binding sees.
 class SampledCubeImage {
 public:
-    // format: a sampleable 4-byte format (default R32_UINT, read as usamplerCube). Throws Error when the
-    // device cannot make such an image (face_size beyond maxImageDimensionCube, memory).
-    SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format = VK_FORMAT_R32_UINT);
+    // format: a sampleable 4-byte format (default R32_UINT, read as usamplerCube); filter: the sampler's
+    // magnification and minification filter (LINEAR needs a format whose optimal tiling has
+    // SAMPLED_IMAGE_FILTER_LINEAR: see supports_linear_filter). Throws Error when the device cannot make
+    // such an image (face_size beyond maxImageDimensionCube, memory, a format it cannot filter).
+    SampledCubeImage(Context& context, std::uint32_t face_size, VkFormat format = VK_FORMAT_R32_UINT,
+                     VkFilter filter = VK_FILTER_NEAREST);
+    // Whether the device can sample `format` with a LINEAR filter from an optimally tiled image.
+    static bool supports_linear_filter(const Context& context, VkFormat format);
     ~SampledCubeImage();
     SampledCubeImage(const SampledCubeImage&) = delete;
     SampledCubeImage& operator=(const SampledCubeImage&) = delete;
