@@ -500,3 +500,33 @@ TEST_CASE("a user-defined 32-bit distance texel works with CacheCube") {
     REQUIRE(back.has_value());
     CHECK(*back == 4.0f);
 }
+
+TEST_CASE("filtered_cached_trace hits when the direction's own texel is visible, with the filled neighbours' weighted mean") {
+    // +X on an N = 2 cube: the direction (1, -0.1, -0.1) has u = v = (0.1 + 1)/2 = 0.55, position 0.6 on
+    // both axes from the centre of texel 0: columns and rows 0 and 1 weigh 0.4 and 0.6, and it lies in
+    // texel (1, 1). Filled: (1, 1) red (weight 0.36) and (0, 1) blue (0.24): mean = (0.6, 0, 0.4).
+    CctCube cube(2);
+    cube.store_at(TexelAddress{0, 1, 1}, glm::vec3(1, 0, 0));
+    cube.store_at(TexelAddress{0, 0, 1}, glm::vec3(0, 0, 1));
+    cube.begin_frame();
+    int traced = 0;
+    auto trace = [&] {
+        ++traced;
+        return glm::vec3(0, 1, 0);
+    };
+    const glm::vec3 mean = raycache::filtered_cached_trace(cube, glm::vec3(1, -0.1f, -0.1f), trace);
+    CHECK(traced == 0);
+    CHECK(mean.x == doctest::Approx(0.6f));
+    CHECK(mean.y == doctest::Approx(0.0f));
+    CHECK(mean.z == doctest::Approx(0.4f));
+    // (1, 0.1, 0.1) lies in the empty texel (0, 0), though filled texels weigh 0.4 of its footprint: a miss,
+    // traced and stored into (0, 0), so the next frame hits.
+    const glm::vec3 traced_colour = raycache::filtered_cached_trace(cube, glm::vec3(1, 0.1f, 0.1f), trace);
+    CHECK(traced == 1);
+    CHECK(traced_colour == glm::vec3(0, 1, 0));
+    const CubeStatistics s = cube.statistics();
+    CHECK(s.hits == 1u);
+    CHECK(s.misses == 1u);
+    CHECK(s.stores == 1u);
+    CHECK(cube.load(TexelAddress{0, 0, 0}));
+}

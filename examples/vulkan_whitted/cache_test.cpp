@@ -34,10 +34,13 @@ std::string format(const char* pattern, double a, double b = 0.0) {
     return text;
 }
 
-// The Embree tracer's warm CCT frame: one frame to fill the cubes, a second from the same camera.
+// The Embree tracer's warm CCT frame: one frame to fill the cubes, a second from the same camera; nearest
+// texels, as the GPU tracer reads them (it has no filtered lookups yet).
 rcx::Image embree_warm_cct(const rcx::Scene& scene, int size, int face_size) {
     const rcx::embree::Tracer tracer(scene);
-    raycache::embree::SceneCache caches(raycache::embree::Technique::cct);
+    raycache::embree::SceneCacheSettings nearest; // the default, stated: the comparison depends on it
+    nearest.filtered = false;
+    raycache::embree::SceneCache caches(raycache::embree::Technique::cct, nearest);
     tracer.attach_caches(caches, face_size);
     rcx::embree::RenderSettings s;
     s.width = s.height = size;

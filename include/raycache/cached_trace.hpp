@@ -7,6 +7,7 @@
 #include <glm/glm.hpp>
 
 #include "raycache/cache_cube.hpp"
+#include "raycache/filtered_lookup.hpp"
 
 namespace raycache {
 
@@ -21,6 +22,23 @@ typename Texel::Value cached_trace(CacheCube<Texel>& cube, const glm::vec3& dire
     static_assert(std::is_invocable_r_v<Value, Trace&>, "RayCache cached_trace: trace must be callable as `Value trace()`");
     if (std::optional<Value> cached = cube.lookup(direction)) return *cached;
     Value traced = std::forward<Trace>(trace)();
+    cube.store(direction, traced);
+    return traced;
+}
+
+// cached_trace() for a CCT cube with a filtered value: a hit exactly when cached_trace() would hit (the
+// direction's own texel is visible), answered by the bilinear mean of the visible texels around
+// `direction` (raycache/filtered_lookup.hpp) rather than by the own texel alone. Gating on the own texel
+// keeps every miss able to fill what caused it, and keeps hit rates and cold frames those of cached_trace().
+// Thread-safe as CacheCube::lookup/store; counted as one lookup.
+template <class Trace>
+glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace&& trace) {
+    static_assert(std::is_invocable_r_v<glm::vec3, Trace&>,
+                  "RayCache filtered_cached_trace: trace must be callable as `glm::vec3 trace()`");
+    const bool hit = cube.peek(direction).has_value();
+    cube.record_lookup(hit);
+    if (hit) return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });
+    glm::vec3 traced = std::forward<Trace>(trace)();
     cube.store(direction, traced);
     return traced;
 }

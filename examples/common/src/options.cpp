@@ -103,6 +103,7 @@ Options parse_options(int argc, const char* const argv[]) {
             o.face_size = v == "auto" ? 0 : static_cast<int>(parse_int(arg, v, 1, 4096));
         }
         else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
+        else if (arg == "--filtered") { flag(); o.filtered = true; }
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -159,6 +160,7 @@ std::string help_text(const std::string& program) {
         "                      up to 512 whose cubes fit one storage buffer)          [auto]\n"
         "  --rays-per-texel F  auto: a frame's leaving rays per covered texel; smaller\n"
         "                      is sharper and fills more slowly (Embree tracer)       [1]\n"
+        "  --filtered          CCT: bilinear lookups instead of the nearest texel (Embree tracer)\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
         "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
         "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"

@@ -38,6 +38,7 @@ struct Options {
     CacheMode cache = CacheMode::cct;
     int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
     float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
+    bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss
