@@ -6,7 +6,14 @@
 # raycache_sanitize_directory(<dir>)
 #   Calls raycache_target_sanitize on every compiled target defined in <dir> and below
 #   (used for examples, whose CMakeLists need not know about sanitizers).
+# RAYCACHE_VULKAN_LSAN_ENVIRONMENT
+#   "LSAN_OPTIONS=suppressions=<cmake/lsan_vulkan.supp>": the ENVIRONMENT of every test that loads Vulkan.
+#   Leak checking stays on; only blocks allocated inside the Vulkan loader, its drivers (lavapipe, LLVM)
+#   and layers are suppressed, by module name (the file says which and why). Quoted for LeakSanitizer's
+#   option parser, which splits on spaces, commas and colons.
 include_guard(GLOBAL)
+
+set(RAYCACHE_VULKAN_LSAN_ENVIRONMENT "LSAN_OPTIONS=suppressions='${CMAKE_CURRENT_LIST_DIR}/lsan_vulkan.supp'")
 
 set(_RAYCACHE_SANITIZE_ALLOWED "" "address,undefined" "address" "undefined" "thread")
 if(DEFINED RAYCACHE_SANITIZE AND NOT RAYCACHE_SANITIZE IN_LIST _RAYCACHE_SANITIZE_ALLOWED)

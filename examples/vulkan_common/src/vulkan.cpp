@@ -9,6 +9,34 @@
 #include <fstream>
 #include <mutex>
 
+// ---- AddressSanitizer builds: no shared object is ever unloaded ------------------------------------
+// The Vulkan loader dlopen()s the drivers (ICDs), their dependencies (lavapipe: libLLVM) and the layers,
+// and dlclose()s them in vkDestroyInstance and after probing them. Memory that such a module leaks is
+// reported by LeakSanitizer at exit, when the module is gone: its frames read "<unknown module>" and no
+// suppression can name them (or tell them from a leak in RayCache). So in ASan builds every dlopen() of
+// the process goes through this one, which adds RTLD_NODELETE: modules stay mapped until exit, their
+// frames are symbolized with the module's path, and tests/lsan_vulkan.supp suppresses exactly the
+// driver's and loader's modules. libvulkan.so.1 references dlopen, so the linker exports this
+// definition from the executable and the loader's calls bind to it; the sanitizer's own dlopen
+// interceptor is reached through RTLD_NEXT.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RCX_VK_KEEP_MODULES_LOADED 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) && defined(__GLIBC__)
+#define RCX_VK_KEEP_MODULES_LOADED 1
+#endif
+#if defined(RCX_VK_KEEP_MODULES_LOADED) && defined(__GLIBC__)
+#include <dlfcn.h>
+
+extern "C" void* dlopen(const char* file, int mode) {
+    using Dlopen = void* (*)(const char*, int);
+    static const Dlopen next = reinterpret_cast<Dlopen>(dlsym(RTLD_NEXT, "dlopen"));
+    return next(file, mode | RTLD_NODELETE);
+}
+#endif
+
 namespace rcx::vk {
 
 namespace {

@@ -7,6 +7,10 @@
 //
 // Errors: NoDeviceError when Vulkan or a usable device is missing (tests turn it into exit code 77,
 // "skipped"); Error for any other failure, with the Vulkan call and VkResult in the message.
+//
+// AddressSanitizer builds: linking this harness makes every dlopen() of the process keep its module loaded
+// until exit (RTLD_NODELETE), so that LeakSanitizer can name the Vulkan driver's frames (see vulkan.cpp and
+// cmake/lsan_vulkan.supp).
 #pragma once
 
 #include <cstddef>
