@@ -1,5 +1,5 @@
-// bench_common.hpp: what the benchmark programs share: medians, number formatting, CSV text fields, the
-// machine's name and progress lines on stderr.
+// bench_common.hpp: what the benchmark programs share: medians, number formatting, CSV text fields and
+// files, the machine's name and progress lines on stderr.
 #pragma once
 
 #include <algorithm>
@@ -8,8 +8,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "rcx/image.hpp"
 
 namespace rcx::bench {
 
@@ -27,6 +30,19 @@ inline std::string fmt(double value, int digits = 2) {
 
 // A CSV text field: quoted, so labels may contain commas.
 inline std::string csv_text(const std::string& text) { return "\"" + text + "\""; }
+
+// Where a benchmark writes its files: CSV files with their header line, and PNG images.
+struct Report {
+    std::ostringstream md;
+    std::string dir;
+    std::ofstream csv(const std::string& name, const std::string& header) const {
+        std::ofstream f(dir + "/" + name);
+        if (!f) throw std::runtime_error("cannot write " + dir + "/" + name);
+        f << header << "\n";
+        return f;
+    }
+    void png(const std::string& name, const Image& image) const { write_png(dir + "/" + name, image); }
+};
 
 inline std::string machine_name() {
     std::ifstream cpuinfo("/proc/cpuinfo");
