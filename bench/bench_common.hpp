@@ -1,5 +1,5 @@
 // bench_common.hpp: what the benchmark programs share: medians, number formatting, CSV text fields and
-// files, the machine's name and progress lines on stderr.
+// files, aligned Markdown tables, the machine's name, option lists and progress lines on stderr.
 #pragma once
 
 #include <algorithm>
@@ -31,6 +31,27 @@ inline std::string fmt(double value, int digits = 2) {
 // A CSV text field: quoted, so labels may contain commas.
 inline std::string csv_text(const std::string& text) { return "\"" + text + "\""; }
 
+// A Markdown table whose columns are padded to one width, so it reads as well on a terminal as rendered.
+inline std::string markdown_table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+    std::vector<std::size_t> width(header.size(), 3);
+    for (std::size_t c = 0; c < header.size(); ++c) width[c] = std::max(width[c], header[c].size());
+    for (const auto& row : rows)
+        for (std::size_t c = 0; c < row.size() && c < width.size(); ++c) width[c] = std::max(width[c], row[c].size());
+    std::string out;
+    auto line = [&](const std::vector<std::string>& cells) {
+        for (std::size_t c = 0; c < width.size(); ++c) {
+            const std::string cell = c < cells.size() ? cells[c] : "";
+            out += "| " + cell + std::string(width[c] - cell.size(), ' ') + " ";
+        }
+        out += "|\n";
+    };
+    line(header);
+    for (std::size_t c = 0; c < width.size(); ++c) out += "|" + std::string(width[c] + 2, '-');
+    out += "|\n";
+    for (const auto& row : rows) line(row);
+    return out;
+}
+
 // Where a benchmark writes its files: CSV files with their header line, and PNG images.
 struct Report {
     std::ostringstream md;
@@ -61,11 +82,18 @@ struct CommonOptions {
     std::vector<int> ns;
 };
 
-inline std::vector<int> parse_list(const std::string& text) {
-    std::vector<int> values;
+// "a,b,c" -> {"a", "b", "c"}.
+inline std::vector<std::string> split_list(const std::string& text) {
+    std::vector<std::string> items;
     std::stringstream in(text);
     std::string item;
-    while (std::getline(in, item, ',')) values.push_back(std::atoi(item.c_str()));
+    while (std::getline(in, item, ',')) items.push_back(item);
+    return items;
+}
+
+inline std::vector<int> parse_list(const std::string& text) {
+    std::vector<int> values;
+    for (const std::string& item : split_list(text)) values.push_back(std::atoi(item.c_str()));
     return values;
 }
 
