@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Turns the benchmark outputs in docs/results/ into plots (PNG) and docs/RESULTS.md.
 
-Reads: tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
+Reads: walkthrough.md and walkthrough_frames.csv when present (raycache_walkthrough_bench: the headline, at
+the top), tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
 vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench) and micro.json
 (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
@@ -96,6 +97,50 @@ def plot_figure_5_9(results, out):
     plt.close(fig)
 
 
+def plot_walkthrough(results, out):
+    """Per scene, speed-up and PSNR against the frame, a line per mode and path; returns the scenes plotted."""
+    path = os.path.join(results, "walkthrough_frames.csv")
+    if not os.path.exists(path):
+        return []
+    data = rows(path)
+    colors = {"cct": "tab:blue", "cdct": "tab:orange", "ceiling": "black"}
+    styles = {"fixed": "-", "orbit": "--", "pan": ":"}
+    scenes = list(dict.fromkeys(r["scene"] for r in data))
+    for scene in scenes:
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+        part = [r for r in data if r["scene"] == scene and r["mode"] != "off"]
+        for mode in dict.fromkeys(r["mode"] for r in part):
+            for walk in dict.fromkeys(r["path"] for r in part):
+                line = sorted((r for r in part if r["mode"] == mode and r["path"] == walk), key=lambda r: int(r["frame"]))
+                frames = [int(r["frame"]) for r in line]
+                style = dict(color=colors.get(mode, "gray"), ls=styles.get(walk, "-"), lw=1.3, label=f"{mode}, {walk}")
+                top.plot(frames, [float(r["speedup"]) for r in line], **style)
+                # An identical frame has an infinite PSNR: a gap in the line.
+                bottom.plot(frames, [float(r["psnr"]) if math.isfinite(float(r["psnr"])) else float("nan") for r in line], **style)
+        top.axhline(1.0, color="lightgray", lw=1)
+        top.set_ylabel("speed-up over the cache off")
+        top.set_title(f"{scene}: walkthrough, 1 degree a frame (frame 0 cold)")
+        top.legend(fontsize=7, ncol=3)
+        bottom.set_xlabel("frame")
+        bottom.set_ylabel("PSNR vs uncached (dB)")
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, f"walkthrough_{scene}.png"), dpi=100)
+        plt.close(fig)
+    return scenes
+
+
+def walkthrough_section(results, rel, scenes):
+    """walkthrough.md with the per-scene plots after the per-path table (before the start-up section)."""
+    path = os.path.join(results, "walkthrough.md")
+    if not os.path.exists(path):
+        return ["## Walkthrough", "", "Not measured in this run (raycache_walkthrough_bench not run).", ""]
+    with open(path) as f:
+        text = f.read()
+    plots = "".join(f"![walkthrough {s}]({rel}/walkthrough_{s}.png)\n" for s in scenes) + "\n"
+    head, sep, startup = text.partition("### Start-up")
+    return [head.rstrip() + "\n\n" + plots + sep + startup]
+
+
 def targets(results):
     """One line per target of the benchmarks issue: (target, measured, met)."""
     lines = []
@@ -164,6 +209,7 @@ def main():
     plot_table_5_2(results, results)
     plot_figure_5_9(results, results)
     vulkan = plot_table_5_1(results, results)
+    walk_scenes = plot_walkthrough(results, results)
     rel = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
     with open(os.path.join(results, "tables.md")) as f:
         tables = f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
@@ -173,9 +219,12 @@ def main():
     else:
         tables += "\n## Table 5.1: the Vulkan tracer\n\nNot measured in this run (no Vulkan device or no Vulkan build).\n\n"
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 10 minutes on 2 cores). Every speed-up is a ratio of "
-          "medians of renders interleaved in one process on the same frames; files (CSV, PNG) are in "
-          f"[`{rel}/`]({rel}/).", "", "## Targets", "", "| target | measured | met |", "|---|---|---|"]
+          "Regenerate everything with `scripts/bench.sh` (about 20 minutes on 2 cores). Every speed-up compares renders "
+          "interleaved in one process on the same frames: the walkthrough's are ratios of mean times over a camera path, "
+          "the thesis tables' ratios of medians of repeated frames; files (CSV, PNG) are in "
+          f"[`{rel}/`]({rel}/).", ""]
+    md += walkthrough_section(results, rel, walk_scenes)
+    md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
     md += ["", f"![behind-N speed-ups]({rel}/table_5_2.png)", "", tables, "## Micro-benchmarks (Google Benchmark)", "",

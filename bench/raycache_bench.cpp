@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "bench_common.hpp"
+#include "bench_embree.hpp"
 #include "tracer.hpp"
 
 namespace fs = std::filesystem;
@@ -37,29 +38,18 @@ using rcx::bench::csv_text;
 using rcx::bench::fmt;
 using rcx::bench::machine_name;
 using rcx::bench::median;
+using rcx::bench::our_relief;
 using rcx::bench::progress;
+using rcx::bench::render;
+using rcx::bench::Report;
+using rcx::bench::Variant;
 
 namespace {
-
-// The CDCT settings our results use wherever one CDCT stands for all: the thesis's (0.2, 0.02), the depth
-// pyramid (chosen per variant) and crossings more than 0.5 behind the cached surface rejected.
-const raycache::ReliefParameters our_relief{0.2f, 0.02f, 1024, 100.0f, 0.5f};
 
 struct Config : rcx::bench::CommonOptions {
     Config() { rounds = 5; }
     std::string only; // empty: every experiment
     bool wants(const std::string& name) const { return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos; }
-};
-
-// One way of rendering a frame: a mode and, for the cached modes, its own caches.
-struct Variant {
-    std::string label;
-    CacheMode mode = CacheMode::off;
-    std::unique_ptr<SceneCache> caches;
-    std::vector<double> ms;
-    SceneCacheStatistics last_stats;
-    std::uint64_t texels_read = 0, lookups = 0, max_texels = 0;
-    Image last;
 };
 
 // A variant with its own caches; `prefill` traces every texel first (Tracer::prefill).
@@ -79,47 +69,11 @@ Variant make_variant(const rcx::embree::Tracer& tracer, std::string label, Cache
     return v;
 }
 
-// Renders one frame of a variant; ends the caches' frame and keeps its statistics.
-Image render(const rcx::embree::Tracer& tracer, Variant& v, const rcx::Camera& camera, int width, int height,
-             double* ms = nullptr) {
-    rcx::embree::RenderSettings settings;
-    settings.width = width;
-    settings.height = height;
-    settings.mode = v.mode;
-    settings.caches = v.caches.get();
-    rcx::embree::FrameStats stats;
-    Image image = tracer.render(camera, settings, &stats);
-    if (ms) *ms = stats.milliseconds;
-    if (v.caches) v.last_stats = v.caches->begin_frame();
-    return image;
-}
-
 // Times every variant `rounds` times on the same camera, interleaved, in a rotating order.
-void time_interleaved(const rcx::embree::Tracer& tracer, std::vector<Variant*> variants, const rcx::Camera& camera,
+void time_interleaved(const rcx::embree::Tracer& tracer, const std::vector<Variant*>& variants, const rcx::Camera& camera,
                       int width, int height, int rounds) {
-    for (int r = 0; r < rounds; ++r)
-        for (std::size_t k = 0; k < variants.size(); ++k) {
-            Variant& v = *variants[(k + r) % variants.size()];
-            double ms = 0.0;
-            v.last = render(tracer, v, camera, width, height, &ms);
-            v.ms.push_back(ms);
-            v.texels_read += v.last_stats.texels_read;
-            v.lookups += v.last_stats.lookups;
-            v.max_texels = std::max(v.max_texels, v.last_stats.max_texels_read);
-        }
+    for (int r = 0; r < rounds; ++r) rcx::bench::render_round(tracer, variants, camera, width, height, static_cast<std::size_t>(r));
 }
-
-struct Report {
-    std::ostringstream md;
-    std::string dir;
-    std::ofstream csv(const std::string& name, const std::string& header) {
-        std::ofstream f(dir + "/" + name);
-        if (!f) throw std::runtime_error("cannot write " + dir + "/" + name);
-        f << header << "\n";
-        return f;
-    }
-    void png(const std::string& name, const Image& image) { rcx::write_png(dir + "/" + name, image); }
-};
 
 // Table 5.2: conventional ray tracing of behind-N with warm caches.
 void table_5_2(const Config& c, Report& out) {

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# bench.sh: regenerates docs/RESULTS.md and docs/results/ from scratch: the thesis's experiments on the
-# Embree tracer (raycache_bench), Table 5.1 on the Vulkan tracer (raycache_vulkan_bench, on lavapipe where
-# there is no GPU), the micro-benchmarks (raycache_micro_bench), and the plots.
-#   scripts/bench.sh           the full run (about 10 minutes on 2 cores)
+# bench.sh: regenerates docs/RESULTS.md and docs/results/ from scratch: the walkthrough, the headline
+# (raycache_walkthrough_bench: camera paths with persisting caches, and start-up time and memory), the
+# thesis's experiments on the Embree tracer (raycache_bench), Table 5.1 on the Vulkan tracer
+# (raycache_vulkan_bench, on lavapipe where there is no GPU), the micro-benchmarks (raycache_micro_bench),
+# and the plots.
+#   scripts/bench.sh           the full run (about 20 minutes on 2 cores)
 #   scripts/bench.sh --quick   small images, one round: checks the pipeline, not results (writes to build-bench/quick)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -28,6 +30,7 @@ vulkan_bench() {
 if [[ "${1:-}" == "--quick" ]]; then
   out=build-bench/quick
   rm -rf "$out"
+  build-bench/bench/raycache_walkthrough_bench --quick --out "$out"
   build-bench/bench/raycache_bench --quick --out "$out"
   vulkan_bench --quick --out "$out"
   build-bench/bench/raycache_micro_bench --benchmark_min_time=0.01 --benchmark_out="$out/micro.json" --benchmark_out_format=json
@@ -38,6 +41,7 @@ fi
 out=docs/results
 rm -rf "$out"
 mkdir -p "$out"
+build-bench/bench/raycache_walkthrough_bench --out "$out"
 build-bench/bench/raycache_bench --out "$out"
 vulkan_bench --out "$out"
 build-bench/bench/raycache_micro_bench --benchmark_min_time=0.5 --benchmark_repetitions=3 \

@@ -112,10 +112,31 @@ TEST_CASE("unknown scene names throw invalid_argument listing the valid names") 
             FAIL("no exception");
         } catch (const std::invalid_argument& e) {
             const std::string what = e.what();
-            for (const char* valid : {"behind-N", "grid-32", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass"})
+            for (const char* valid : {"behind-N", "grid-32", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass",
+                                      "mirrors-1000"})
                 CHECK(what.find(valid) != std::string::npos);
         }
     }
+}
+
+TEST_CASE("mirrors-1000 has 1000 small cached mirror spheres, apart, above the floor and inside the camera's view") {
+    const rcx::Scene s = rcx::make_scene("mirrors-1000");
+    REQUIRE(s.spheres.size() == 1000);
+    CHECK(s.cached_object_count() == 1000);
+    const rcx::CameraBasis b = rcx::camera_basis(s.camera, 1, 1);
+    for (const rcx::Sphere& sp : s.spheres) {
+        CHECK(sp.radius == doctest::Approx(0.15f));
+        CHECK(sp.material.reflectivity > 0.0f);
+        CHECK(sp.centre.y - sp.radius > rcx::floor_height);
+        // The whole sphere inside the (square) view: its centre's angle off the view axis, in x and in y.
+        const glm::vec3 d = sp.centre - b.eye;
+        const float z = glm::dot(d, b.forward);
+        REQUIRE(z > sp.radius);
+        CHECK(std::abs(glm::dot(d, b.right)) + sp.radius < z * b.tan_half_fov);
+        CHECK(std::abs(glm::dot(d, b.up)) + sp.radius < z * b.tan_half_fov);
+    }
+    // Lattice neighbours do not touch: each cube encloses only its own sphere.
+    CHECK(glm::length(s.spheres[0].centre - s.spheres[1].centre) > 2.0f * s.spheres[0].radius);
 }
 
 TEST_CASE("an orbit keeps the distance to the target and turns the eye about +Y by the step") {

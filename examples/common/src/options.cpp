@@ -144,7 +144,7 @@ std::string help_text(const std::string& program) {
         "\n"
         "Scene and camera\n"
         "  --scene NAME        behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder,\n"
-        "                      concave, glass                                        [behind-32]\n"
+        "                      concave, glass, mirrors-1000                          [behind-32]\n"
         "  --mesh FILE         the concave object of scene concave (any format Assimp reads)\n"
         "                      [/usr/share/assimp/models/PLY/Wuson.ply, Debian: assimp-testmodels]\n"
         "  --size WxH          image size (or --width W --height H)                  [512x512]\n"

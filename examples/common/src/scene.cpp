@@ -204,8 +204,28 @@ Scene glass() {
     return s;
 }
 
+// Many small mirrors, for memory and start-up time: a 10 x 10 x 10 lattice of tinted mirror spheres
+// (r = 0.15, 0.5 apart, every one cached) floating above the floor, the whole lattice in view.
+Scene mirrors1000() {
+    Scene s = base_scene("mirrors-1000");
+    constexpr int side = 10;
+    constexpr float spacing = 0.5f, radius = 0.15f;
+    const float half = 0.5f * spacing * static_cast<float>(side - 1);
+    for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j)
+            for (int k = 0; k < side; ++k) {
+                const glm::vec3 centre(spacing * static_cast<float>(i) - half, -0.5f + spacing * static_cast<float>(j),
+                                       spacing * static_cast<float>(k) - half);
+                s.spheres.push_back(Sphere{centre, radius, mirror(0.8f, palette(static_cast<std::size_t>(i + j + k)))});
+            }
+    s.camera.eye = {0.0f, 3.6f, 11.0f};
+    s.camera.target = {0.0f, 1.5f, 0.0f};
+    s.camera.fov_y_degrees = 45.0f;
+    return s;
+}
+
 const char* const valid_names =
-    "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, glass";
+    "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, glass, mirrors-1000";
 
 } // namespace
 
@@ -306,12 +326,14 @@ Scene make_scene(const std::string& name, const SceneParams& params) {
     if (name == "cone-cylinder") return cone_cylinder();
     if (name == "concave") return concave(params);
     if (name == "glass") return glass();
+    if (name == "mirrors-1000") return mirrors1000();
     throw std::invalid_argument("unknown scene '" + name + "'; valid scenes: " + valid_names);
 }
 
 std::vector<std::string> scene_names() {
     return {"behind-0", "behind-1",   "behind-2",      "behind-4",      "behind-8", "behind-16", "behind-32",
-            "grid-32",  "diffuse-31", "reflective-32", "cone-cylinder", "concave",  "glass"};
+            "grid-32",  "diffuse-31", "reflective-32", "cone-cylinder", "concave",  "glass",
+            "mirrors-1000"};
 }
 
 } // namespace rcx

@@ -111,7 +111,7 @@ inline constexpr int max_behind_spheres = 32;
 inline constexpr float floor_height = -1.0f;
 
 // Builds a scene by name: "behind-N" (N = 0..32), "grid-32", "diffuse-31", "reflective-32",
-// "cone-cylinder", "concave", "glass". Throws std::invalid_argument listing the valid names for an
+// "cone-cylinder", "concave", "glass", "mirrors-1000" (1000 small cached mirror spheres). Throws std::invalid_argument listing the valid names for an
 // unknown name, std::runtime_error when a mesh file cannot be read (naming the Debian package).
 Scene make_scene(const std::string& name, const SceneParams& params = {});
 

@@ -1,0 +1,424 @@
+// raycache_walkthrough_bench: the project's headline measure. The camera walks a path through a scene (fixed,
+// orbit, pan: 1 degree a frame) and every frame is rendered in each mode: the cache off, CCT, CDCT and the
+// ceiling (every cached ray answered by a constant: what no cache can beat). The modes are interleaved frame
+// by frame in this one process, on one Tracer, in an order that rotates every frame (so no mode always runs
+// first); each caching mode keeps its own SceneCache along the whole path, so its later frames find what its
+// earlier ones stored. Frame 0 is cold; the summaries are over the frames after it.
+//
+// A start-up section builds mirrors-1000 (1000 cached mirror spheres) and behind-32, and times the Tracer's
+// construction, attaching the caches and the first frame, with no caches, CCT and CDCT.
+//
+// Writes into --out: walkthrough_frames.csv (a row per frame and mode), walkthrough_paths.csv (a row per
+// scene, path and mode), walkthrough_startup.csv and walkthrough.md (the tables, also printed on stdout);
+// bench/make_results.py plots the frames and puts walkthrough.md at the top of docs/RESULTS.md.
+//
+// Usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST]
+//        [--paths LIST] [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench_common.hpp"
+#include "bench_embree.hpp"
+#include "tracer.hpp"
+
+namespace {
+
+using raycache::embree::SceneCache;
+using raycache::embree::SceneCacheStatistics;
+using raycache::embree::Technique;
+using rcx::CacheMode;
+using rcx::bench::fmt;
+using rcx::bench::median;
+using rcx::bench::progress;
+using rcx::bench::Report;
+using rcx::bench::Variant;
+using Clock = std::chrono::steady_clock;
+using PathKind = rcx::CameraPath::Kind;
+
+constexpr double mib = 1024.0 * 1024.0;
+
+struct Options {
+    bool quick = false;
+    std::string out = "docs/results";
+    int size = 1024;
+    int frames = 30;
+    float step_degrees = 1.0f;
+    std::vector<std::string> scenes{"behind-32", "grid-32", "reflective-32"};
+    std::vector<PathKind> paths{PathKind::fixed, PathKind::orbit, PathKind::pan};
+    std::vector<CacheMode> modes{CacheMode::off, CacheMode::cct, CacheMode::cdct, CacheMode::ceiling};
+    int face_size = rcx::Options{}.face_size; // the example tracer's default
+    std::vector<std::string> startup{"mirrors-1000", "behind-32"};
+    double startup_budget_mib = 8192.0;
+};
+
+const char* const usage =
+    "usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST] [--paths LIST]\n"
+    "       [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N]\n"
+    "  --size N             N x N pixels                                                [1024]\n"
+    "  --frames N           frames per path, 1 degree apart                             [30]\n"
+    "  --scenes LIST        comma-separated scenes            [behind-32,grid-32,reflective-32]\n"
+    "  --paths LIST         fixed, orbit, pan                                [fixed,orbit,pan]\n"
+    "  --modes LIST         off, cct, cdct, ceiling (off is always rendered: the reference)\n"
+    "  --face-size N        texels per cube face side                                   [512]\n"
+    "  --startup LIST       scenes of the start-up section, or none    [mirrors-1000,behind-32]\n"
+    "  --startup-budget-mib N  start-up rows whose cubes would need more are not allocated [8192]\n"
+    "  --quick              64 x 64 pixels, 3 frames, 32-texel faces: a smoke test, not results\n"
+    "  --out DIR            where the CSV and Markdown files go                [docs/results]\n";
+
+// The one place where the walkthrough's caches are made: the SceneCache of one mode, with a cube on every
+// cached object of the tracer's scene; nullptr for the modes without caches. Today every cube has
+// --face-size texels per edge; adaptive cube sizes go here. The CDCT searches over its depth pyramid and
+// rejects crossings more than 0.5 behind the cached surface (our_relief, as in raycache_bench).
+std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o) {
+    if (!rcx::uses_caches(mode)) return nullptr;
+    auto caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct,
+                                               rcx::bench::our_relief, true);
+    tracer.attach_caches(*caches, o.face_size);
+    return caches;
+}
+
+// The cube memory of a SceneCache: texels, and the CDCT's depth pyramids.
+std::size_t cube_bytes(const SceneCacheStatistics& s) { return s.texel_bytes + s.pyramid_bytes; }
+
+// What make_scene_cache would allocate, without allocating it: one cube of --face-size per cached object
+// (change it with make_scene_cache). The start-up section uses it to stay inside --startup-budget-mib.
+std::size_t planned_cube_bytes(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o) {
+    if (!rcx::uses_caches(mode)) return 0;
+    const std::size_t objects = tracer.cached_geometries().size();
+    const std::size_t per_texel = mode == CacheMode::cct ? raycache::CctCube(1).texel_bytes() / 6 : raycache::CdctCube(1).texel_bytes() / 6;
+    const std::size_t pyramid = mode == CacheMode::cdct ? raycache::DepthPyramid(o.face_size).bytes() : 0;
+    return objects * (std::size_t{6} * o.face_size * o.face_size * per_texel + pyramid);
+}
+
+// One mode's measurements on one frame.
+struct FrameRecord {
+    double ms = 0.0;
+    rcx::ImageDifference diff; // against the frame's 'off' image
+    SceneCacheStatistics stats;
+    std::uint64_t rays = 0;
+};
+
+// One mode along one path.
+struct ModeTrack {
+    Variant variant;
+    std::vector<FrameRecord> frames;
+};
+
+// The frames the summaries use: all after the cold frame 0 (frame 0 alone when there is no other).
+std::vector<std::size_t> warm_frames(std::size_t count) {
+    std::vector<std::size_t> frames;
+    for (std::size_t f = count > 1 ? 1 : 0; f < count; ++f) frames.push_back(f);
+    return frames;
+}
+
+double mean_of(const std::vector<double>& v) {
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    return v.empty() ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(v.size());
+}
+
+// A mode's summary over the warm frames of a path.
+struct PathSummary {
+    double off_ms = 0.0, ms = 0.0;
+    double speedup = 0.0;              // mean off ms / mean ms over the warm frames
+    double median_ratio_speedup = 0.0; // median over the warm frames of off ms / ms (a check on noise)
+    double psnr_mean = 0.0, psnr_min = 0.0;
+    int identical_frames = 0;          // frames equal to 'off' in every 8-bit value (PSNR infinite)
+    double hit_rate = 0.0;             // mean over the warm frames
+    double texels_per_lookup = 0.0;    // texels read / lookups, summed over the warm frames
+    std::size_t cube_bytes = 0;
+};
+
+PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
+    PathSummary s;
+    std::vector<double> off_ms, ms, ratios, psnrs, hits;
+    std::uint64_t texels = 0, lookups = 0;
+    s.psnr_min = std::numeric_limits<double>::infinity();
+    for (std::size_t f : warm_frames(m.frames.size())) {
+        const FrameRecord& r = m.frames[f];
+        off_ms.push_back(off.frames[f].ms);
+        ms.push_back(r.ms);
+        ratios.push_back(off.frames[f].ms / r.ms);
+        s.psnr_min = std::min(s.psnr_min, r.diff.psnr_db);
+        if (std::isfinite(r.diff.psnr_db)) psnrs.push_back(r.diff.psnr_db);
+        else ++s.identical_frames;
+        hits.push_back(r.stats.hit_rate());
+        texels += r.stats.texels_read;
+        lookups += r.stats.lookups;
+        s.cube_bytes = cube_bytes(r.stats);
+    }
+    s.off_ms = mean_of(off_ms);
+    s.ms = mean_of(ms);
+    s.speedup = s.off_ms / s.ms;
+    s.median_ratio_speedup = median(ratios);
+    s.psnr_mean = psnrs.empty() ? std::numeric_limits<double>::infinity() : mean_of(psnrs);
+    s.hit_rate = mean_of(hits);
+    s.texels_per_lookup = lookups ? static_cast<double>(texels) / static_cast<double>(lookups) : 0.0;
+    return s;
+}
+
+// (off/mode - 1) / (off/ceiling - 1): the share of the ceiling's gain a mode reaches; NaN without a ceiling gain.
+double ceiling_share(double speedup, double ceiling_speedup) {
+    return ceiling_speedup > 1.0 ? (speedup - 1.0) / (ceiling_speedup - 1.0) : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::string or_dash(bool present, const std::string& text) { return present ? text : "-"; }
+
+struct Outputs {
+    Report report;
+    std::ofstream frames_csv, paths_csv;
+    std::vector<std::vector<std::string>> path_rows;
+};
+
+// Walks one path through a scene in every mode and writes its rows.
+void walk(const Options& o, const rcx::embree::Tracer& tracer, PathKind kind, Outputs& out) {
+    rcx::Scene scene = tracer.scene();
+    scene.path.kind = kind;
+    scene.path.frames = o.frames;
+    scene.path.step_degrees = o.step_degrees;
+    const std::string path = rcx::to_string(kind);
+
+    std::vector<ModeTrack> tracks;
+    for (CacheMode mode : o.modes) {
+        ModeTrack t;
+        t.variant.label = rcx::to_string(mode);
+        t.variant.mode = mode;
+        t.variant.caches = make_scene_cache(tracer, mode, o);
+        tracks.push_back(std::move(t));
+    }
+    std::vector<Variant*> order;
+    for (ModeTrack& t : tracks) order.push_back(&t.variant);
+    const ModeTrack& off = tracks.front(); // parse_options puts off first
+
+    const auto started = Clock::now();
+    for (int f = 0; f < o.frames; ++f) {
+        rcx::bench::render_round(tracer, order, scene.camera_at(f), o.size, o.size, static_cast<std::size_t>(f));
+        for (ModeTrack& t : tracks) {
+            FrameRecord r;
+            r.ms = t.variant.ms.back();
+            r.diff = rcx::compare(off.variant.last, t.variant.last);
+            r.stats = t.variant.last_stats;
+            r.rays = t.variant.last_frame.rays;
+            const bool cached = rcx::uses_caches(t.variant.mode);
+            out.frames_csv << scene.name << "," << path << "," << f << "," << t.variant.label << "," << r.ms << ","
+                           << off.variant.ms.back() / r.ms << "," << r.diff.psnr_db << "," << r.diff.mean_abs_error << ","
+                           << r.diff.max_abs_error << "," << (cached ? fmt(r.stats.hit_rate(), 6) : "") << ","
+                           << (t.variant.mode == CacheMode::cdct ? fmt(r.stats.texels_per_lookup(), 3) : "") << ","
+                           << (cached ? std::to_string(r.stats.max_texels_read) : "") << ","
+                           << (cached ? fmt(r.stats.valid_fraction(), 6) : "") << "," << cube_bytes(r.stats) << "," << r.rays
+                           << "\n";
+            t.frames.push_back(r);
+        }
+        if ((f + 1) % 10 == 0 && f + 1 < o.frames)
+            progress("  " + scene.name + ", " + path + ": frame " + std::to_string(f + 1) + "/" + std::to_string(o.frames));
+    }
+    progress("  " + scene.name + ", " + path + ": done in " +
+             fmt(std::chrono::duration<double>(Clock::now() - started).count(), 0) + " s");
+
+    std::optional<PathSummary> ceiling;
+    for (const ModeTrack& t : tracks)
+        if (t.variant.mode == CacheMode::ceiling) ceiling = summarise(off, t);
+    for (const ModeTrack& t : tracks) {
+        if (t.variant.mode == CacheMode::off) continue;
+        const PathSummary s = summarise(off, t);
+        const bool cached = rcx::uses_caches(t.variant.mode), cdct = t.variant.mode == CacheMode::cdct;
+        const bool is_ceiling = t.variant.mode == CacheMode::ceiling;
+        const double share = ceiling && !is_ceiling ? ceiling_share(s.speedup, ceiling->speedup) : std::numeric_limits<double>::quiet_NaN();
+        out.paths_csv << scene.name << "," << path << "," << t.variant.label << "," << warm_frames(t.frames.size()).size() << ","
+                      << s.off_ms << "," << s.ms << "," << s.speedup << "," << s.median_ratio_speedup << ","
+                      << (std::isnan(share) ? "" : fmt(share, 4)) << "," << s.psnr_mean << "," << s.psnr_min << ","
+                      << s.identical_frames << "," << (cached ? fmt(s.hit_rate, 6) : "") << ","
+                      << (cdct ? fmt(s.texels_per_lookup, 3) : "") << "," << s.cube_bytes << "\n";
+        out.path_rows.push_back({scene.name, path, t.variant.label, fmt(s.off_ms, 1), fmt(s.ms, 1), fmt(s.speedup) + "x",
+                                 std::isnan(share) ? "-" : fmt(100.0 * share, 0) + "%", fmt(s.psnr_mean, 1), fmt(s.psnr_min, 1), or_dash(cached, fmt(100.0 * s.hit_rate, 1) + "%"),
+                                 or_dash(cdct, fmt(s.texels_per_lookup, 1)), or_dash(cached, fmt(s.cube_bytes / mib, 1))});
+    }
+}
+
+// Start-up: building the Tracer, attaching the caches and the first frame, with no caches, CCT and CDCT.
+std::string startup(const Options& o, const Report& report) {
+    std::ofstream csv = report.csv("walkthrough_startup.csv",
+                                   "scene,cached_objects,mode,face_size,tracer_ms,attach_ms,cube_bytes,planned_cube_bytes,"
+                                   "allocated,first_frame_ms");
+    std::vector<std::vector<std::string>> rows;
+    for (const std::string& name : o.startup) {
+        progress("start-up: " + name);
+        const rcx::Scene scene = rcx::make_scene(name);
+        for (CacheMode mode : {CacheMode::off, CacheMode::cct, CacheMode::cdct}) {
+            auto t0 = Clock::now();
+            const rcx::embree::Tracer tracer(scene);
+            const double tracer_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+            const std::size_t planned = planned_cube_bytes(tracer, mode, o);
+            const bool cached = rcx::uses_caches(mode);
+            const std::string label = cached ? rcx::to_string(mode) : "none";
+            const std::string objects = std::to_string(tracer.cached_geometries().size());
+            if (planned / mib > o.startup_budget_mib) {
+                csv << name << "," << objects << "," << label << "," << o.face_size << "," << tracer_ms << ",,," << planned << ",0,\n";
+                rows.push_back({name, objects, label, std::to_string(o.face_size), fmt(tracer_ms, 1), "-",
+                                "needs " + fmt(planned / mib, 0) + ", not allocated (over " + fmt(o.startup_budget_mib, 0) + ")", "-"});
+                continue;
+            }
+            Variant v;
+            v.mode = mode;
+            t0 = Clock::now();
+            v.caches = make_scene_cache(tracer, mode, o);
+            const double attach_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+            const std::size_t bytes = v.caches ? cube_bytes(v.caches->statistics()) : 0;
+            double first_ms = 0.0;
+            rcx::bench::render(tracer, v, scene.camera_at(0), o.size, o.size, &first_ms);
+            csv << name << "," << objects << "," << label << "," << (cached ? std::to_string(o.face_size) : "") << ","
+                << tracer_ms << "," << (cached ? fmt(attach_ms, 3) : "") << "," << bytes << "," << planned << ",1," << first_ms << "\n";
+            rows.push_back({name, objects, label, or_dash(cached, std::to_string(o.face_size)), fmt(tracer_ms, 1),
+                            or_dash(cached, fmt(attach_ms, 1)), or_dash(cached, fmt(bytes / mib, 1)), fmt(first_ms, 1)});
+        }
+    }
+    std::ostringstream md;
+    md << "### Start-up\n\n"
+       << "Building the Embree scene (`Tracer`), attaching a cube to every cached object (`SceneCache` construction and "
+       << "`attach_caches`, which allocates and clears the texels) and the first, cold frame at " << o.size << "x" << o.size
+       << ", each row with a Tracer of its own. Rows whose cubes would exceed " << fmt(o.startup_budget_mib, 0)
+       << " MiB are not allocated (this machine is shared).\n\n"
+       << rcx::bench::markdown_table({"scene", "cached objects", "caches", "face size", "build Tracer ms", "attach ms",
+                                      "cube MiB", "first frame ms"},
+                                     rows);
+    return md.str();
+}
+
+// Each item of a comma-separated list through `parse`; an item it rejects is a UsageError naming the option.
+template <class T, class Parse>
+std::vector<T> parse_each(const std::string& option, const std::string& text, Parse parse, const char* valid) {
+    std::vector<T> values;
+    for (const std::string& item : rcx::bench::split_list(text)) {
+        try {
+            values.push_back(parse(item));
+        } catch (const std::invalid_argument&) {
+            throw rcx::UsageError(option + ": unknown '" + item + "'; use " + valid);
+        }
+    }
+    return values;
+}
+
+int positive(const std::string& option, const std::string& text) {
+    char* end = nullptr;
+    const long value = std::strtol(text.c_str(), &end, 10);
+    if (text.empty() || *end != '\0' || value < 1 || value > 1 << 20)
+        throw rcx::UsageError(option + ": '" + text + "' is not a positive whole number");
+    return static_cast<int>(value);
+}
+
+Options parse_options(int argc, char** argv) {
+    Options o;
+    std::optional<int> size, frames, face;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw rcx::UsageError(a + " needs a value");
+            return argv[++i];
+        };
+        if (a == "--quick") o.quick = true;
+        else if (a == "--out") o.out = value();
+        else if (a == "--size") size = positive(a, value());
+        else if (a == "--frames") frames = positive(a, value());
+        else if (a == "--face-size") face = positive(a, value());
+        else if (a == "--scenes") o.scenes = rcx::bench::split_list(value());
+        else if (a == "--paths") o.paths = parse_each<PathKind>(a, value(), rcx::parse_path_kind, "fixed, orbit, pan");
+        else if (a == "--modes") o.modes = parse_each<CacheMode>(a, value(), rcx::parse_cache_mode, "off, cct, cdct, ceiling");
+        else if (a == "--startup") {
+            const std::string list = value();
+            o.startup = list == "none" ? std::vector<std::string>{} : rcx::bench::split_list(list);
+        } else if (a == "--startup-budget-mib") o.startup_budget_mib = positive(a, value());
+        else throw rcx::UsageError("unknown option '" + a + "'");
+    }
+    o.size = size.value_or(o.quick ? 64 : o.size);
+    o.frames = frames.value_or(o.quick ? 3 : o.frames);
+    o.face_size = face.value_or(o.quick ? 32 : o.face_size);
+    // 'off' is the reference of every speed-up and PSNR: always rendered, listed first, each mode once.
+    std::vector<CacheMode> modes{CacheMode::off};
+    for (CacheMode m : o.modes)
+        if (std::find(modes.begin(), modes.end(), m) == modes.end()) modes.push_back(m);
+    o.modes = modes;
+    if (o.scenes.empty() || o.paths.empty()) throw rcx::UsageError("--scenes and --paths need at least one entry");
+    for (const std::string& name : o.scenes) rcx::make_scene(name); // unknown names fail here, before any work
+    for (const std::string& name : o.startup) rcx::make_scene(name);
+    return o;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    try {
+        for (int i = 1; i < argc; ++i)
+            if (std::string(argv[i]) == "--help") {
+                std::fputs(usage, stdout);
+                return 0;
+            }
+        o = parse_options(argc, argv);
+    } catch (const std::exception& e) { // rcx::UsageError, and std::invalid_argument for unknown scenes or paths
+        std::fprintf(stderr, "raycache_walkthrough_bench: %s\n%s", e.what(), usage);
+        return 2;
+    }
+    try {
+        std::filesystem::create_directories(o.out);
+        const auto started = Clock::now();
+        Outputs out;
+        out.report.dir = o.out;
+        out.frames_csv = out.report.csv("walkthrough_frames.csv",
+                                        "scene,path,frame,mode,ms,speedup,psnr,mean_abs_error,max_abs_error,hit_rate,"
+                                        "texels_per_lookup,max_texels,valid_fraction,cube_bytes,rays");
+        out.paths_csv = out.report.csv("walkthrough_paths.csv",
+                                       "scene,path,mode,frames,off_ms,ms,speedup,median_ratio_speedup,ceiling_share,"
+                                       "psnr_mean,psnr_min,identical_frames,hit_rate,texels_per_lookup,cube_bytes");
+        for (const std::string& name : o.scenes) {
+            progress("walkthrough: " + name + " (" + std::to_string(o.frames) + " frames x " + std::to_string(o.modes.size()) +
+                     " modes per path)");
+            const rcx::embree::Tracer tracer(rcx::make_scene(name));
+            for (PathKind kind : o.paths) walk(o, tracer, kind, out);
+        }
+        const std::string startup_md = o.startup.empty() ? "" : startup(o, out.report);
+        const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+
+        std::ostringstream md;
+        md << "## Walkthrough: the camera moves, the caches persist\n\n"
+           << "Machine: " << rcx::bench::machine_name() << ", " << std::thread::hardware_concurrency() << " hardware threads. "
+           << (o.quick ? "QUICK MODE (tiny images, few frames): a smoke test, not results. " : "")
+           << "Generated by `raycache_walkthrough_bench` in " << fmt(seconds, 0) << " s.\n\n"
+           << o.size << "x" << o.size << " pixels, " << o.frames << " frames per path, " << fmt(o.step_degrees, 0)
+           << " degree a frame (orbit: the eye around the target; pan: the view around the eye; fixed: no motion), "
+           << o.face_size << "-texel faces on every cached object, recursion depth 5. Every frame is rendered in every "
+           << "mode, interleaved in one process in a rotating order, on one Tracer; each caching mode keeps its own "
+           << "caches along the path (filled only by rendering, cold at frame 0). CDCT: depth-pyramid search, max_gap 0.5.\n\n"
+           << "Over frames 1.." << o.frames - 1 << " (frame 0 is cold): *speed-up* = mean ms with the cache off / mean ms "
+           << "of the mode; *of ceiling's gain* = (speed-up - 1) / (ceiling's speed-up - 1); PSNR against the same "
+           << "frame's uncached image (mean of the finite values, and the minimum); hit rate = mean of the frames' "
+           << "rates; cube MiB = texels + CDCT depth pyramids. Per frame: `walkthrough_frames.csv`, plots "
+           << "`walkthrough_<scene>.png`.\n\n"
+           << rcx::bench::markdown_table({"scene", "path", "mode", "off ms", "ms", "speed-up", "of ceiling's gain",
+                                          "PSNR mean dB", "PSNR min dB", "hit rate", "texels/lookup", "cube MiB"},
+                                         out.path_rows)
+           << "\n"
+           << startup_md;
+        std::ofstream file(o.out + "/walkthrough.md");
+        file << md.str();
+        if (!file) throw std::runtime_error("cannot write " + o.out + "/walkthrough.md");
+        std::printf("%s", md.str().c_str());
+        std::fprintf(stderr, "[bench] walkthrough done in %.0f s; tables in %s/walkthrough.md\n", seconds, o.out.c_str());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "raycache_walkthrough_bench: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
