@@ -72,15 +72,15 @@ const char* const usage =
     "  --scenes LIST        comma-separated scenes            [behind-32,grid-32,reflective-32]\n"
     "  --paths LIST         fixed, orbit, pan                                [fixed,orbit,pan]\n"
     "  --modes LIST         off, cct, cdct, ceiling (off is always rendered: the reference)\n"
-    "  --face-size N        texels per cube face side                                   [512]\n"
+    "  --face-size N|auto   texels per cube face side; auto: adaptive (the tracer's default) [auto]\n"
     "  --startup LIST       scenes of the start-up section, or none    [mirrors-1000,behind-32]\n"
     "  --startup-budget-mib N  start-up rows whose cubes would need more are not allocated [8192]\n"
-    "  --quick              64 x 64 pixels, 3 frames, 32-texel faces: a smoke test, not results\n"
+    "  --quick              64 x 64 pixels, 3 frames: a smoke test, not results\n"
     "  --out DIR            where the CSV and Markdown files go                [docs/results]\n";
 
 // The one place where the walkthrough's caches are made: the SceneCache of one mode, with a cube on every
-// cached object of the tracer's scene; nullptr for the modes without caches. Today every cube has
-// --face-size texels per edge; adaptive cube sizes go here. The CDCT searches over its depth pyramid and
+// cached object of the tracer's scene; nullptr for the modes without caches. Cubes are adaptive (--face-size
+// auto, the default) or of --face-size texels per edge. The CDCT searches over its depth pyramid and
 // rejects crossings more than 0.5 behind the cached surface (our_relief, as in raycache_bench).
 std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o) {
     if (!rcx::uses_caches(mode)) return nullptr;
@@ -90,13 +90,17 @@ std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, 
     return caches;
 }
 
-// The cube memory of a SceneCache: texels, and the CDCT's depth pyramids.
-std::size_t cube_bytes(const SceneCacheStatistics& s) { return s.texel_bytes + s.pyramid_bytes; }
+// The cube memory of a SceneCache: what its cubes hold (allocated tiles, tile tables), and the CDCT's pyramids.
+std::size_t cube_bytes(const SceneCacheStatistics& s) { return s.allocated_bytes + s.pyramid_bytes; }
 
-// What make_scene_cache would allocate, without allocating it: one cube of --face-size per cached object
-// (change it with make_scene_cache). The start-up section uses it to stay inside --startup-budget-mib.
+// "auto" for adaptive cubes, else the face size.
+std::string face_label(int face_size) { return face_size > 0 ? std::to_string(face_size) : "auto"; }
+
+// What make_scene_cache's cubes would take if every tile were allocated: one cube of --face-size per cached
+// object (0 for adaptive cubes: they allocate on first store, within the SceneCache's budget). The start-up
+// section uses it to stay inside --startup-budget-mib.
 std::size_t planned_cube_bytes(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o) {
-    if (!rcx::uses_caches(mode)) return 0;
+    if (!rcx::uses_caches(mode) || o.face_size == 0) return 0;
     const std::size_t objects = tracer.cached_geometries().size();
     const std::size_t per_texel = mode == CacheMode::cct ? raycache::CctCube(1).texel_bytes() / 6 : raycache::CdctCube(1).texel_bytes() / 6;
     const std::size_t pyramid = mode == CacheMode::cdct ? raycache::DepthPyramid(o.face_size).bytes() : 0;
@@ -266,8 +270,8 @@ std::string startup(const Options& o, const Report& report) {
             const std::string label = cached ? rcx::to_string(mode) : "none";
             const std::string objects = std::to_string(tracer.cached_geometries().size());
             if (planned / mib > o.startup_budget_mib) {
-                csv << name << "," << objects << "," << label << "," << o.face_size << "," << tracer_ms << ",,," << planned << ",0,\n";
-                rows.push_back({name, objects, label, std::to_string(o.face_size), fmt(tracer_ms, 1), "-",
+                csv << name << "," << objects << "," << label << "," << face_label(o.face_size) << "," << tracer_ms << ",,," << planned << ",0,\n";
+                rows.push_back({name, objects, label, face_label(o.face_size), fmt(tracer_ms, 1), "-",
                                 "needs " + fmt(planned / mib, 0) + ", not allocated (over " + fmt(o.startup_budget_mib, 0) + ")", "-"});
                 continue;
             }
@@ -279,9 +283,9 @@ std::string startup(const Options& o, const Report& report) {
             const std::size_t bytes = v.caches ? cube_bytes(v.caches->statistics()) : 0;
             double first_ms = 0.0;
             rcx::bench::render(tracer, v, scene.camera_at(0), o.size, o.size, &first_ms);
-            csv << name << "," << objects << "," << label << "," << (cached ? std::to_string(o.face_size) : "") << ","
+            csv << name << "," << objects << "," << label << "," << (cached ? face_label(o.face_size) : "") << ","
                 << tracer_ms << "," << (cached ? fmt(attach_ms, 3) : "") << "," << bytes << "," << planned << ",1," << first_ms << "\n";
-            rows.push_back({name, objects, label, or_dash(cached, std::to_string(o.face_size)), fmt(tracer_ms, 1),
+            rows.push_back({name, objects, label, or_dash(cached, face_label(o.face_size)), fmt(tracer_ms, 1),
                             or_dash(cached, fmt(attach_ms, 1)), or_dash(cached, fmt(bytes / mib, 1)), fmt(first_ms, 1)});
         }
     }
@@ -332,7 +336,10 @@ Options parse_options(int argc, char** argv) {
         else if (a == "--out") o.out = value();
         else if (a == "--size") size = positive(a, value());
         else if (a == "--frames") frames = positive(a, value());
-        else if (a == "--face-size") face = positive(a, value());
+        else if (a == "--face-size") {
+            const std::string v = value();
+            face = v == "auto" ? 0 : positive(a, v);
+        }
         else if (a == "--scenes") o.scenes = rcx::bench::split_list(value());
         else if (a == "--paths") o.paths = parse_each<PathKind>(a, value(), rcx::parse_path_kind, "fixed, orbit, pan");
         else if (a == "--modes") o.modes = parse_each<CacheMode>(a, value(), rcx::parse_cache_mode, "off, cct, cdct, ceiling");
@@ -344,7 +351,7 @@ Options parse_options(int argc, char** argv) {
     }
     o.size = size.value_or(o.quick ? 64 : o.size);
     o.frames = frames.value_or(o.quick ? 3 : o.frames);
-    o.face_size = face.value_or(o.quick ? 32 : o.face_size);
+    o.face_size = face.value_or(o.face_size);
     // 'off' is the reference of every speed-up and PSNR: always rendered, listed first, each mode once.
     std::vector<CacheMode> modes{CacheMode::off};
     for (CacheMode m : o.modes)
@@ -398,13 +405,15 @@ int main(int argc, char** argv) {
            << "Generated by `raycache_walkthrough_bench` in " << fmt(seconds, 0) << " s.\n\n"
            << o.size << "x" << o.size << " pixels, " << o.frames << " frames per path, " << fmt(o.step_degrees, 0)
            << " degree a frame (orbit: the eye around the target; pan: the view around the eye; fixed: no motion), "
-           << o.face_size << "-texel faces on every cached object, recursion depth 5. Every frame is rendered in every "
+           << (o.face_size > 0 ? std::to_string(o.face_size) + "-texel faces on every cached object"
+                               : std::string("adaptive faces (each cube's size follows its object's rays; nearest-texel CCT lookups)"))
+           << ", recursion depth 5. Every frame is rendered in every "
            << "mode, interleaved in one process in a rotating order, on one Tracer; each caching mode keeps its own "
            << "caches along the path (filled only by rendering, cold at frame 0). CDCT: depth-pyramid search, max_gap 0.5.\n\n"
            << "Over frames 1.." << o.frames - 1 << " (frame 0 is cold): *speed-up* = mean ms with the cache off / mean ms "
            << "of the mode; *of ceiling's gain* = (speed-up - 1) / (ceiling's speed-up - 1); PSNR against the same "
            << "frame's uncached image (mean of the finite values, and the minimum); hit rate = mean of the frames' "
-           << "rates; cube MiB = texels + CDCT depth pyramids. Per frame: `walkthrough_frames.csv`, plots "
+           << "rates; cube MiB = allocated texel tiles + CDCT depth pyramids. Per frame: `walkthrough_frames.csv`, plots "
            << "`walkthrough_<scene>.png`.\n\n"
            << rcx::bench::markdown_table({"scene", "path", "mode", "off ms", "ms", "speed-up", "of ceiling's gain",
                                           "PSNR mean dB", "PSNR min dB", "hit rate", "texels/lookup", "cube MiB"},
