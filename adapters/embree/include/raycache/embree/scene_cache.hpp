@@ -19,6 +19,9 @@
 // leaving rays its object received in the last frame (raycache/adaptive_resolution.hpp), and all cubes
 // draw their texel tiles from one MemoryBudget (SceneCacheSettings::budget_bytes); a tile that does not fit
 // is not cached, its rays are traced. An explicit face size keeps a cube at that size.
+//
+// Warm starts. save() writes every cube to one file and load() reads it back into a SceneCache with the
+// same objects attached (raycache/cache_file.hpp: format, checks, atomic writes).
 #pragma once
 
 #include <atomic>
@@ -305,6 +308,32 @@ public:
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
 
+    // Writes every cube (its texels, face size and placement, keyed by its object id) and `scene`, the
+    // caller's identity of the scene, to `path` (raycache/cache_file.hpp): atomically, so a process killed
+    // during the save leaves the old file or the new one. Between frames. Throws CacheFileError naming the
+    // file and the system's reason when it cannot be written.
+    void save(const std::string& path, const SceneIdentity& scene) const {
+        if (technique_ == Technique::cct)
+            save_cache_file(path, scene, cubes_to_save(&Entry::cct));
+        else
+            save_cache_file(path, scene, cubes_to_save(&Entry::cdct));
+    }
+
+    // Replaces every cube by the one saved for its object in `path`, texels visible from the next frame,
+    // depth pyramids rebuilt; adaptive cubes take the face size they were saved with. The file must hold this
+    // cache's technique, `scene`, one cube for each attached object and no other, each at the same placement
+    // and (for a cube of a fixed face size) of that face size. Otherwise, or when it is truncated, corrupted
+    // or of a newer format, throws CacheFileError saying what is wrong, and the cache is left as it was.
+    // The file's tiles are allocated before the old cubes give theirs back: the budget must hold both.
+    // Between frames.
+    void load(const std::string& path, const SceneIdentity& scene) {
+        const std::vector<std::uint8_t> bytes = read_whole_file(path);
+        if (technique_ == Technique::cct)
+            load_cubes(bytes, path, scene, &Entry::cct);
+        else
+            load_cubes(bytes, path, scene, &Entry::cdct);
+    }
+
     // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
     std::size_t texel_bytes() const noexcept {
         std::size_t bytes = 0;
@@ -370,6 +399,71 @@ private:
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
         }
         return true;
+    }
+
+    // An object's id in a cache file: instance id in the high half, geometry id in the low half.
+    static std::uint64_t file_object(ObjectId id) noexcept { return std::uint64_t{id.inst_id} << 32 | id.geom_id; }
+    static std::string object_text(ObjectId id) {
+        return id.inst_id == RTC_INVALID_GEOMETRY_ID
+                   ? "geometry " + std::to_string(id.geom_id)
+                   : "geometry " + std::to_string(id.geom_id) + " of instance " + std::to_string(id.inst_id);
+    }
+
+    template <class Texel>
+    std::vector<CubeToSave<Texel>> cubes_to_save(std::unique_ptr<CacheCube<Texel>> Entry::*cube) const {
+        std::vector<CubeToSave<Texel>> cubes;
+        for (const Entry& e : entries_) cubes.push_back(CubeToSave<Texel>{file_object(e.id), e.bounds, (e.*cube).get()});
+        return cubes;
+    }
+
+    // load(): the file's cubes, matched to the entries and checked, then swapped in all at once.
+    template <class Texel>
+    void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene,
+                    std::unique_ptr<CacheCube<Texel>> Entry::*cube) {
+        const std::string source = "cache file '" + path + "'";
+        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source);
+        auto fail = [&](const std::string& what) {
+            throw CacheFileError("RayCache: " + source + ": " + what + "; nothing was loaded");
+        };
+        std::map<std::uint64_t, std::size_t> by_object;
+        for (std::size_t i = 0; i < loaded.size(); ++i) by_object[loaded[i].object] = i;
+        std::vector<std::size_t> source_of(entries_.size());
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            const Entry& e = entries_[i];
+            const auto it = by_object.find(file_object(e.id));
+            if (it == by_object.end()) fail(object_text(e.id) + " has a cube here but none in the file");
+            const LoadedCube<Texel>& c = loaded[it->second];
+            if (!same_placement(c.bounds, e.bounds))
+                fail(object_text(e.id) + "'s cube sits at " + raycache::describe(e.bounds) + ", in the file at " + raycache::describe(c.bounds));
+            const int here = (e.*cube)->face_size();
+            if (!e.coverage && c.cube->face_size() != here)
+                fail(object_text(e.id) + "'s cube has " + std::to_string(here) + "-texel faces (fixed), in the file " +
+                     std::to_string(c.cube->face_size()));
+            source_of[i] = it->second;
+            by_object.erase(it);
+        }
+        if (!by_object.empty()) {
+            const std::uint64_t object = by_object.begin()->first;
+            fail("the file has a cube for " +
+                 object_text(ObjectId{static_cast<unsigned>(object & 0xFFFFFFFFu), static_cast<unsigned>(object >> 32)}) +
+                 ", which has none here (" + std::to_string(by_object.size()) + " such cubes)");
+        }
+        std::vector<std::unique_ptr<DepthPyramid>> pyramids(entries_.size());
+        if constexpr (std::is_same_v<Texel, CdctTexel>) {
+            if (use_pyramid_)
+                for (std::size_t i = 0; i < entries_.size(); ++i) {
+                    const CdctCube& c = *loaded[source_of[i]].cube;
+                    pyramids[i] = std::make_unique<DepthPyramid>(c.face_size());
+                    pyramids[i]->rebuild(c);
+                }
+        }
+        // Nothing below throws: every entry takes its new cube, or none does.
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            Entry& e = entries_[i];
+            e.*cube = std::move(loaded[source_of[i]].cube);
+            e.pyramid = std::move(pyramids[i]);
+            if (e.coverage) e.coverage->reset();
+        }
     }
 
     static void add(SceneCacheStatistics& total, const CubeStatistics& s) {
