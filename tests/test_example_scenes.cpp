@@ -3,11 +3,13 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
 #include "rcx/meshes.hpp"
 #include "rcx/scene.hpp"
+#include "rcx/scene_hash.hpp"
 
 namespace {
 
@@ -211,4 +213,30 @@ TEST_CASE("load_mesh reads the Wuson smooth and names the path when it cannot re
     const glm::vec3 size = b.max - b.min;
     CHECK(std::max(size.x, std::max(size.y, size.z)) == doctest::Approx(2.0f).epsilon(1e-4));
     for (const glm::vec3& n : m.normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
+}
+
+TEST_CASE("a scene's hash for cache files follows what cached colours depend on, not the camera") {
+    const rcx::Scene scene = rcx::make_scene("behind-4");
+    const std::uint64_t hash = rcx::scene_hash(scene);
+    CHECK(rcx::scene_hash(rcx::make_scene("behind-4")) == hash);
+    CHECK(rcx::scene_hash(rcx::make_scene("behind-8")) != hash);
+    rcx::Scene changed = scene;
+    changed.camera.eye.x += 1.0f;
+    changed.path.frames += 5;
+    CHECK(rcx::scene_hash(changed) == hash);
+    changed = scene;
+    changed.spheres.back().centre.y = std::nextafter(changed.spheres.back().centre.y, 100.0f);
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.spheres.front().material.reflectivity *= 0.5f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.meshes.front().positions.front().x += 1.0f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.light.intensity *= 2.0f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.max_depth = 2;
+    CHECK(rcx::scene_hash(changed) != hash);
 }

@@ -5,9 +5,10 @@
 //
 //   raycache_vulkan_whitted --scene behind-32 --size 256x256 --cache cct --frames 10 --compare
 //
-// Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill is
-// refused, the CDCT search is the linear walk (no depth pyramid in GLSL), and a ray leaving a cached
-// object inside the subtree of a missed leaving ray is traced without a lookup (no recursion in GLSL).
+// Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill,
+// --load-cache and --save-cache are refused, the CDCT search is the linear walk (no depth pyramid in
+// GLSL), and a ray leaving a cached object inside the subtree of a missed leaving ray is traced without
+// a lookup (no recursion in GLSL).
 // --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
 // rays in compute, as in the thesis's Table 5.1.
 // Exit status 2: bad options, no Vulkan device, a shader that does not load.
@@ -41,6 +42,9 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const st
 
 int run(const rcx::Options& o, bool hybrid) {
     if (o.prefill) throw InputError("--prefill is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (!o.load_cache.empty() || !o.save_cache.empty())
+        throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
+                         " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     rcx::Scene scene;
     try {
         scene = rcx::scene_from_options(o);
@@ -182,7 +186,7 @@ int main(int argc, char** argv) {
         std::fputs(rcx::help_text(program).c_str(), stdout);
         std::fputs("\nVulkan tracer: --hybrid   primary visibility by a raster pass into a G-buffer, secondary rays in compute\n"
                    "(thesis Table 5.1); with --compare the uncached reference is rendered the same way.\n"
-                   "--threads is ignored, --prefill is refused, the CDCT search is the linear walk.\n"
+                   "--threads is ignored, --prefill, --load-cache and --save-cache are refused, the CDCT search is the linear walk.\n"
                    "Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv files are looked for.\n",
                    stdout);
         return 0;

@@ -113,6 +113,11 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--no-pyramid") { flag(); o.pyramid = false; }
         else if (arg == "--prefill") { flag(); o.prefill = true; }
+        else if (arg == "--load-cache" || arg == "--save-cache") {
+            std::string& file = arg == "--load-cache" ? o.load_cache : o.save_cache;
+            file = next();
+            if (file.empty()) throw UsageError(arg + ": the file name is empty");
+        }
         else if (arg == "--frames") o.frames = static_cast<int>(parse_int(arg, next(), 1, 1000000));
         else if (arg == "--step") o.step_degrees = parse_float(arg, next(), false);
         else if (arg == "--path") {
@@ -134,6 +139,9 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--progress") { flag(); o.progress = true; }
         else throw UsageError("unknown option '" + std::string(argv[i]) + "' (see --help)");
     }
+    if ((!o.load_cache.empty() || !o.save_cache.empty()) && !uses_caches(o.cache))
+        throw UsageError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") + " needs --cache cct or cdct, not " +
+                         to_string(o.cache));
     return o;
 }
 
@@ -167,6 +175,9 @@ std::string help_text(const std::string& program) {
         "  --no-pyramid        CDCT: the thesis's fixed-step walk, no min-depth pyramid\n"
         "  --max-gap F         CDCT: a crossing F behind the cached surface is a miss  [0.5; 0 = off]\n"
         "  --prefill           trace every cube texel once before the first frame\n"
+        "  --load-cache FILE   start warm: load the cubes saved in FILE before the first frame (the\n"
+        "                      scene, objects and technique must match; Embree tracer)\n"
+        "  --save-cache FILE   save the cubes to FILE after the last frame (Embree tracer)\n"
         "Run\n"
         "  --threads N         worker threads, 0 = all cores                          [0]\n"
         "  --out DIR           folder for the PNGs (created when missing)             [out]\n"
