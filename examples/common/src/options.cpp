@@ -104,6 +104,7 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
         else if (arg == "--filtered") { flag(); o.filtered = true; }
+        else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -161,6 +162,8 @@ std::string help_text(const std::string& program) {
         "  --rays-per-texel F  auto: a frame's leaving rays per covered texel; smaller\n"
         "                      is sharper and fills more slowly (Embree tracer)       [1]\n"
         "  --filtered          CCT: bilinear lookups instead of the nearest texel (Embree tracer)\n"
+        "  --edge-threshold F  CCT: texels differing from a neighbour by more than F are\n"
+        "                      traced, not answered; negative: off (Embree tracer)   [0.1]\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
         "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
         "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"

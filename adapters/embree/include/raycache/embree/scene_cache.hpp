@@ -57,6 +57,10 @@ struct SceneCacheSettings {
     // around the ray's direction (raycache/filtered_lookup.hpp); false (the default): with the own texel
     // alone. Filtering gains about 1.5 dB on moving cameras at adaptive sizes and costs 15-20% of the frame.
     bool filtered = false;
+    // CCT confidence test (raycache/edge_confidence.hpp): texels whose colour differs from a filled
+    // neighbour's by more than this (linear radiance, any channel) are not answered; their rays are
+    // traced. Negative: off.
+    float edge_threshold = 0.1f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -80,6 +84,7 @@ struct SceneCacheStatistics {
     std::size_t allocated_bytes = 0; // what the cubes hold: allocated tiles and tile tables
     std::size_t pyramid_bytes = 0;   // CDCT depth pyramids
     std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
+    std::size_t doubtful_texels = 0; // CCT texels the confidence test does not answer (their rays are traced)
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -149,7 +154,7 @@ public:
     // Throws std::invalid_argument naming the field for bad settings.
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
-          adaptive_(settings.adaptive), filtered_(settings.filtered),
+          adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
@@ -256,6 +261,7 @@ public:
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
             if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
+            if (e.cct) mark_doubtful_edges(*e.cct, edge_threshold_);
             const CubeStatistics frame = with_cube(e, [](auto& cube) { return cube.begin_frame(); });
             add(total, frame);
             if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
@@ -265,6 +271,7 @@ public:
         total.texel_bytes = texel_bytes();
         total.allocated_bytes = allocated_bytes();
         total.pyramid_bytes = pyramid_bytes();
+        for (const Entry& e : entries_) total.doubtful_texels += e.cct ? e.cct->doubtful_texels() : 0;
         texels_read_.reset();
         return total;
     }
@@ -362,9 +369,10 @@ private:
         Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), std::move(e.pyramid), nullptr};
         make_cube(e, next);
         if (next < current) {
-            if (technique_ == Technique::cct)
+            if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
-            else
+                mark_doubtful_edges(*e.cct, edge_threshold_);
+            } else
                 resample_into(*old.cdct, *e.cdct);
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
@@ -386,6 +394,7 @@ private:
     bool use_pyramid_;
     AdaptiveResolution adaptive_;
     bool filtered_;
+    float edge_threshold_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
