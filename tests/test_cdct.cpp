@@ -273,6 +273,40 @@ TEST_CASE("relief parameters are validated with a message naming the field") {
                          doctest::Contains("max_depth"), std::invalid_argument);
 }
 
+TEST_CASE("a depth pyramid refuses a cube of another face size in every build, and changes nothing") {
+    CdctCube small(8), large(16);
+    fill(large, [](const glm::vec3&) { return 5.0f; });
+    for (int face = 0; face < 6; ++face) large.store_at({face, 15, 15}, DepthSample{glm::vec3(1.0f), 2.0f}); // written this frame
+    DepthPyramid pyramid(8);
+    CHECK_THROWS_WITH_AS(pyramid.update(large), doctest::Contains("face size"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(pyramid.rebuild(large), doctest::Contains("face size"), std::invalid_argument);
+    for (int level = 1; level <= pyramid.levels(); ++level)
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < pyramid.blocks(level); ++row)
+                for (int column = 0; column < pyramid.blocks(level); ++column)
+                    REQUIRE(pyramid.min_distance(face, level, column, row) == 0.0f);
+    CHECK_NOTHROW(pyramid.update(small));
+}
+
+TEST_CASE("a depth pyramid answers 0 for level 0 and for any block off the pyramid") {
+    CdctCube cube(8);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    DepthPyramid pyramid(8); // levels 1..3: 4, 2 and 1 blocks along an edge
+    pyramid.rebuild(cube);
+    REQUIRE(pyramid.levels() == 3);
+    CHECK(pyramid.min_distance(0, 1, 3, 3) == 5.0f);
+    CHECK(pyramid.min_distance(5, 3, 0, 0) == 5.0f);
+    CHECK(pyramid.blocks(0) == 0);
+    CHECK(pyramid.blocks(4) == 0);
+    CHECK(pyramid.min_distance(0, 0, 0, 0) == 0.0f); // level 0 is the cube, not the pyramid
+    CHECK(pyramid.min_distance(0, -1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 4, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(6, 1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(-1, 1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 1, 4, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 1, 0, -1) == 0.0f);
+}
+
 TEST_CASE("with a depth pyramid the search finds the same sphere hits within epsilon and reads fewer texels") {
     const float radius = 5.0f;
     CdctCube cube(64);
