@@ -273,6 +273,48 @@ TEST_CASE("relief parameters are validated with a message naming the field") {
                          doctest::Contains("max_depth"), std::invalid_argument);
 }
 
+TEST_CASE("max_steps above RAYCACHE_MAX_RELIEF_STEPS is refused by validate and makes a search a miss that reads nothing") {
+    ReliefParameters p{0.25f, 0.02f, RAYCACHE_MAX_RELIEF_STEPS, 100.0f};
+    CHECK_NOTHROW(validate(p));
+    p.max_steps = std::numeric_limits<int>::max();
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_steps"), std::invalid_argument);
+    p.max_steps = RAYCACHE_MAX_RELIEF_STEPS + 1;
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_steps"), std::invalid_argument);
+
+    CdctCube cube(16);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    DepthPyramid pyramid(16);
+    pyramid.rebuild(cube);
+    for (int steps : {RAYCACHE_MAX_RELIEF_STEPS + 1, std::numeric_limits<int>::max()}) {
+        CAPTURE(steps);
+        p.max_steps = steps;
+        for (const DepthPyramid* with : {static_cast<const DepthPyramid*>(nullptr), static_cast<const DepthPyramid*>(&pyramid)}) {
+            const ReliefResult r = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p, with);
+            CHECK_FALSE(r.hit);
+            CHECK(r.texels_read == 0);
+        }
+    }
+    // At the limit the search runs: the sphere is found, linear and with the pyramid.
+    p.max_steps = RAYCACHE_MAX_RELIEF_STEPS;
+    CHECK(relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p).hit);
+    CHECK(relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p, &pyramid).hit);
+}
+
+TEST_CASE("a linear search whose step no longer moves the ray ends at once as a miss") {
+    // From the centre along +X the walk starts at the box exit, t = 1, where 1 + 1e-30 == 1: every step
+    // would read the same texel again, up to max_steps (2^24 here: about a second per search).
+    CdctCube cube(16);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    const ReliefParameters p{1e-30f, 0.02f, RAYCACHE_MAX_RELIEF_STEPS, 100.0f};
+    const ReliefResult r = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p);
+    CHECK_FALSE(r.hit);
+    CHECK(r.texels_read == 1); // the box exit only
+    // A step that still moves the ray on is walked as before.
+    const ReliefResult small = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), ReliefParameters{1e-3f, 1e-4f, 8192, 100.0f});
+    REQUIRE(small.hit);
+    CHECK(small.distance == doctest::Approx(5.0f).epsilon(1e-3));
+}
+
 TEST_CASE("a depth pyramid refuses a cube of another face size in every build, and changes nothing") {
     CdctCube small(8), large(16);
     fill(large, [](const glm::vec3&) { return 5.0f; });
