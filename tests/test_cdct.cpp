@@ -233,6 +233,26 @@ TEST_CASE("cdct_cached_trace traces on a miss, stores the hit, and answers from 
     CHECK(std::abs(r.distance - 100.0f) <= far.epsilon);
 }
 
+TEST_CASE("a trace reporting a negative hit distance gives its colour and stores nothing") {
+    // A ray along +X that reports a hit 5 behind its origin would key a texel on the -X face, which later
+    // searches towards -X would take for a surface.
+    CdctCube cube(16);
+    const ReliefParameters p{0.1f, 0.01f, 1000, 100.0f};
+    for (float behind : {-5.0f, -std::numeric_limits<float>::min(), -std::numeric_limits<float>::infinity()}) {
+        CAPTURE(behind);
+        const glm::vec3 color = cdct_cached_trace(cube, bounds, centre, glm::vec3(1, 0, 0), p,
+                                                  [&] { return TracedRay{glm::vec3(0.75f), behind}; });
+        CHECK(color == glm::vec3(0.75f));
+    }
+    CHECK(cube.valid_texels() == 0);
+    CHECK(cube.statistics().stores == 0);
+    cube.begin_frame();
+    CHECK_FALSE(relief_search(cube, bounds, centre, glm::vec3(-1, 0, 0), p).hit);
+    // Pre-filling leaves such texels empty too.
+    CHECK(prefill(cube, bounds, p, [](glm::vec3, glm::vec3) { return TracedRay{glm::vec3(0.5f), -1.0f}; }) == 0);
+    CHECK(cube.valid_texels() == 0);
+}
+
 TEST_CASE("bad origins, directions and boxes make the search a miss without reading the cube") {
     CdctCube cube(8);
     fill(cube, [](const glm::vec3&) { return 5.0f; });

@@ -287,14 +287,16 @@ inline bool store_escape(CacheCube<CdctTexel>& cube, const glm::vec3& direction,
 }
 
 // What a secondary-ray trace returns to the CDCT: its colour, and the distance along the unit ray
-// direction to what it hit (infinity or NaN when it escaped to the environment).
+// direction to what it hit (infinity or NaN when it escaped to the environment). A negative distance
+// (a hit behind the ray's origin) is never stored: the colour is used, the cube left alone.
 struct TracedRay {
     glm::vec3 color{0.0f};
     float distance = std::numeric_limits<float>::infinity();
 };
 
 // Algorithm 1 with the CDCT: the relief search answers when it can; otherwise trace() runs, its hit is
-// stored (store_hit, or store_escape when it escaped) and its colour returned unchanged.
+// stored (store_hit, or store_escape when it escaped; nothing for a negative distance, which would key
+// the hit by a point behind the ray) and its colour returned unchanged.
 // trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
 // `pyramid`, when given, speeds up the search (see relief_search).
 template <class Trace>
@@ -306,7 +308,7 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
     const TracedRay traced = std::forward<Trace>(trace)();
-    if (!is_direction(direction)) return traced.color;
+    if (!is_direction(direction) || traced.distance < 0.0f) return traced.color;
     if (std::isfinite(traced.distance))
         store_hit(cube, bounds, origin + traced.distance * shared::raycache_unit(direction), traced.color, p);
     else
