@@ -350,6 +350,15 @@ TEST_CASE("a depth pyramid refuses a cube of another face size in every build, a
     CHECK_NOTHROW(pyramid.update(small));
 }
 
+TEST_CASE("DepthPyramid::bytes_for gives a pyramid's bytes without making one") {
+    for (int n : {1, 2, 3, 13, 64, 291, 512, 4096}) {
+        CAPTURE(n);
+        CHECK(DepthPyramid::bytes_for(n) == DepthPyramid(n).bytes());
+    }
+    CHECK(DepthPyramid::bytes_for(0) == 0);
+    CHECK(DepthPyramid::bytes_for(4097) == 0);
+}
+
 TEST_CASE("a depth pyramid answers 0 for level 0 and for any block off the pyramid") {
     CdctCube cube(8);
     fill(cube, [](const glm::vec3&) { return 5.0f; });

@@ -24,6 +24,7 @@ public:
     explicit DepthPyramid(int face_size) : face_size_(face_size) {
         if (!is_valid_face_size(face_size))
             throw std::invalid_argument("RayCache: DepthPyramid face size must be 1 to 4096 texels");
+        values_.reserve(bytes_for(face_size) / sizeof(float));
         for (int size = face_size; size > 1;) {
             size = (size + 1) / 2;
             offsets_.push_back(values_.size());
@@ -40,6 +41,16 @@ public:
         return level >= 1 && level <= levels() ? sizes_[static_cast<std::size_t>(level - 1)] : 0;
     }
     std::size_t bytes() const noexcept { return values_.size() * sizeof(float); }
+    // bytes() of a pyramid for cubes of face_size (1..4096), without making one (0 for other sizes).
+    static std::size_t bytes_for(int face_size) noexcept {
+        if (!is_valid_face_size(face_size)) return 0;
+        std::size_t values = 0;
+        for (int size = face_size; size > 1;) {
+            size = (size + 1) / 2;
+            values += std::size_t{RAYCACHE_FACE_COUNT} * static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+        }
+        return values * sizeof(float);
+    }
 
     // Smallest distance of block (column, row) of `face` at level k in 1..levels(). Anything else (level 0,
     // which is the cube itself, a level above levels(), a face or block off the pyramid) gives 0, the value

@@ -186,7 +186,9 @@ std::string help_text(const std::string& program) {
         "  --quiet             only the summary; no progress bar\n"
         "  --progress          draw the progress bar even when stderr is not a terminal\n"
         "  --help              this text\n"
-        "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input.\n";
+        "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
+        "(including a run that needs more memory than is available: MemAvailable, or the environment's\n"
+        "RCX_AVAILABLE_MEMORY=BYTES).\n";
 }
 
 SceneParams scene_params(const Options& options) {
