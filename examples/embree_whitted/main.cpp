@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "rcx/image.hpp"
+#include "rcx/memory.hpp"
 #include "rcx/options.hpp"
 #include "rcx/progress.hpp"
 #include "rcx/scene.hpp"
@@ -56,6 +57,11 @@ int run(const rcx::Options& o) {
     try {
         scene = rcx::scene_from_options(o);
     } catch (const std::exception& e) {
+        throw InputError(e.what());
+    }
+    try {
+        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid), rcx::frame_images(o)});
+    } catch (const std::runtime_error& e) {
         throw InputError(e.what());
     }
 
