@@ -233,6 +233,26 @@ TEST_CASE("cdct_cached_trace traces on a miss, stores the hit, and answers from 
     CHECK(std::abs(r.distance - 100.0f) <= far.epsilon);
 }
 
+TEST_CASE("a trace reporting a negative hit distance gives its colour and stores nothing") {
+    // A ray along +X that reports a hit 5 behind its origin would key a texel on the -X face, which later
+    // searches towards -X would take for a surface.
+    CdctCube cube(16);
+    const ReliefParameters p{0.1f, 0.01f, 1000, 100.0f};
+    for (float behind : {-5.0f, -std::numeric_limits<float>::min(), -std::numeric_limits<float>::infinity()}) {
+        CAPTURE(behind);
+        const glm::vec3 color = cdct_cached_trace(cube, bounds, centre, glm::vec3(1, 0, 0), p,
+                                                  [&] { return TracedRay{glm::vec3(0.75f), behind}; });
+        CHECK(color == glm::vec3(0.75f));
+    }
+    CHECK(cube.valid_texels() == 0);
+    CHECK(cube.statistics().stores == 0);
+    cube.begin_frame();
+    CHECK_FALSE(relief_search(cube, bounds, centre, glm::vec3(-1, 0, 0), p).hit);
+    // Pre-filling leaves such texels empty too.
+    CHECK(prefill(cube, bounds, p, [](glm::vec3, glm::vec3) { return TracedRay{glm::vec3(0.5f), -1.0f}; }) == 0);
+    CHECK(cube.valid_texels() == 0);
+}
+
 TEST_CASE("bad origins, directions and boxes make the search a miss without reading the cube") {
     CdctCube cube(8);
     fill(cube, [](const glm::vec3&) { return 5.0f; });
@@ -271,6 +291,91 @@ TEST_CASE("relief parameters are validated with a message naming the field") {
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, 0.02f, 10, 100.0f, 0.0f}), doctest::Contains("max_gap"), std::invalid_argument);
     CHECK_THROWS_WITH_AS(validate(ReliefParameters{0.2f, 0.02f, 10, std::numeric_limits<float>::infinity()}),
                          doctest::Contains("max_depth"), std::invalid_argument);
+}
+
+TEST_CASE("max_steps above RAYCACHE_MAX_RELIEF_STEPS is refused by validate and makes a search a miss that reads nothing") {
+    ReliefParameters p{0.25f, 0.02f, RAYCACHE_MAX_RELIEF_STEPS, 100.0f};
+    CHECK_NOTHROW(validate(p));
+    p.max_steps = std::numeric_limits<int>::max();
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_steps"), std::invalid_argument);
+    p.max_steps = RAYCACHE_MAX_RELIEF_STEPS + 1;
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_steps"), std::invalid_argument);
+
+    CdctCube cube(16);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    DepthPyramid pyramid(16);
+    pyramid.rebuild(cube);
+    for (int steps : {RAYCACHE_MAX_RELIEF_STEPS + 1, std::numeric_limits<int>::max()}) {
+        CAPTURE(steps);
+        p.max_steps = steps;
+        for (const DepthPyramid* with : {static_cast<const DepthPyramid*>(nullptr), static_cast<const DepthPyramid*>(&pyramid)}) {
+            const ReliefResult r = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p, with);
+            CHECK_FALSE(r.hit);
+            CHECK(r.texels_read == 0);
+        }
+    }
+    // At the limit the search runs: the sphere is found, linear and with the pyramid.
+    p.max_steps = RAYCACHE_MAX_RELIEF_STEPS;
+    CHECK(relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p).hit);
+    CHECK(relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p, &pyramid).hit);
+}
+
+TEST_CASE("a linear search whose step no longer moves the ray ends at once as a miss") {
+    // From the centre along +X the walk starts at the box exit, t = 1, where 1 + 1e-30 == 1: every step
+    // would read the same texel again, up to max_steps (2^24 here: about a second per search).
+    CdctCube cube(16);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    const ReliefParameters p{1e-30f, 0.02f, RAYCACHE_MAX_RELIEF_STEPS, 100.0f};
+    const ReliefResult r = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), p);
+    CHECK_FALSE(r.hit);
+    CHECK(r.texels_read == 1); // the box exit only
+    // A step that still moves the ray on is walked as before.
+    const ReliefResult small = relief_search(cube, bounds, centre, glm::vec3(1, 0, 0), ReliefParameters{1e-3f, 1e-4f, 8192, 100.0f});
+    REQUIRE(small.hit);
+    CHECK(small.distance == doctest::Approx(5.0f).epsilon(1e-3));
+}
+
+TEST_CASE("a depth pyramid refuses a cube of another face size in every build, and changes nothing") {
+    CdctCube small(8), large(16);
+    fill(large, [](const glm::vec3&) { return 5.0f; });
+    for (int face = 0; face < 6; ++face) large.store_at({face, 15, 15}, DepthSample{glm::vec3(1.0f), 2.0f}); // written this frame
+    DepthPyramid pyramid(8);
+    CHECK_THROWS_WITH_AS(pyramid.update(large), doctest::Contains("face size"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(pyramid.rebuild(large), doctest::Contains("face size"), std::invalid_argument);
+    for (int level = 1; level <= pyramid.levels(); ++level)
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < pyramid.blocks(level); ++row)
+                for (int column = 0; column < pyramid.blocks(level); ++column)
+                    REQUIRE(pyramid.min_distance(face, level, column, row) == 0.0f);
+    CHECK_NOTHROW(pyramid.update(small));
+}
+
+TEST_CASE("DepthPyramid::bytes_for gives a pyramid's bytes without making one") {
+    for (int n : {1, 2, 3, 13, 64, 291, 512, 4096}) {
+        CAPTURE(n);
+        CHECK(DepthPyramid::bytes_for(n) == DepthPyramid(n).bytes());
+    }
+    CHECK(DepthPyramid::bytes_for(0) == 0);
+    CHECK(DepthPyramid::bytes_for(4097) == 0);
+}
+
+TEST_CASE("a depth pyramid answers 0 for level 0 and for any block off the pyramid") {
+    CdctCube cube(8);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    DepthPyramid pyramid(8); // levels 1..3: 4, 2 and 1 blocks along an edge
+    pyramid.rebuild(cube);
+    REQUIRE(pyramid.levels() == 3);
+    CHECK(pyramid.min_distance(0, 1, 3, 3) == 5.0f);
+    CHECK(pyramid.min_distance(5, 3, 0, 0) == 5.0f);
+    CHECK(pyramid.blocks(0) == 0);
+    CHECK(pyramid.blocks(4) == 0);
+    CHECK(pyramid.min_distance(0, 0, 0, 0) == 0.0f); // level 0 is the cube, not the pyramid
+    CHECK(pyramid.min_distance(0, -1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 4, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(6, 1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(-1, 1, 0, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 1, 4, 0) == 0.0f);
+    CHECK(pyramid.min_distance(0, 1, 0, -1) == 0.0f);
 }
 
 TEST_CASE("with a depth pyramid the search finds the same sphere hits within epsilon and reads fewer texels") {

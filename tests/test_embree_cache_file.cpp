@@ -1,5 +1,6 @@
 // SceneCache::save and load: a whole scene's cubes go to one file and come back into a fresh SceneCache bit
-// for bit, answering the next frame's rays exactly as the saved cache would; a file that does not fit the
+// for bit, answering the next frame's rays exactly as the saved cache would (pyramids rebuilt, CCT edge
+// marks made again); a file that does not fit the
 // cache (scene, objects, placements, fixed face sizes, technique) is refused and the cache keeps its cubes.
 // No Embree scene is needed: cubes are attached with explicit bounds and rays traced against an analytic world.
 #include <doctest/doctest.h>
@@ -32,13 +33,16 @@ const SceneIdentity scene{42, "three balls"};
 const ObjectId objects[] = {{0}, {3}, {1, 5}};
 const CubeBounds placements[] = {{glm::vec3(0.0f), 1.0f}, {glm::vec3(4.0f, 0.5f, -2.0f), 0.5f}, {glm::vec3(-3.0f, 1.0f, 6.0f), 2.0f}};
 
-// The analytic world: a sphere of radius 20 around the origin, coloured by where a ray meets it.
+// The analytic world: a sphere of radius 20 around the origin, coloured by where a ray meets it, with a
+// checker pattern whose edges the CCT's confidence test marks doubtful.
 TracedRay trace_world(const glm::vec3& origin, const glm::vec3& direction) {
     const glm::vec3 d = glm::normalize(direction);
     const float b = glm::dot(origin, d), c = glm::dot(origin, origin) - 400.0f;
     const float t = -b + std::sqrt(b * b - c);
     const glm::vec3 hit = origin + t * d;
-    return TracedRay{0.5f + 0.5f * glm::normalize(hit), t};
+    const glm::ivec3 square = glm::ivec3(glm::floor(hit / 6.0f));
+    const float checker = (square.x + square.y + square.z) % 2 ? 1.0f : 0.3f;
+    return TracedRay{checker * (0.5f + 0.5f * glm::normalize(hit)), t};
 }
 
 // One leaving ray of object k: from a point on its box's surface sphere, in a random direction.
@@ -114,6 +118,8 @@ void check_round_trip(Technique technique, int face_size) {
     CHECK(a.hits > a.lookups / 4);
     CHECK(b.hits == a.hits);
     CHECK(b.texels_read == a.texels_read);
+    CHECK(b.doubtful_texels == a.doubtful_texels); // the CCT's edge marks were made again
+    if (technique == Technique::cct) CHECK(a.doubtful_texels > 0u);
     int same = 0;
     for (std::size_t i = 0; i < next.size(); ++i) same += same_bits(from_warm[i], from_loaded[i]);
     CHECK(same == static_cast<int>(next.size()));

@@ -106,3 +106,36 @@ TEST_CASE("--load-cache and --save-cache take a file name and need a caching mod
                          doctest::Contains("--load-cache needs --cache cct or cdct, not ceiling"), rcx::UsageError);
     CHECK(rcx::help_text("tracer").find("--save-cache FILE") != std::string::npos);
 }
+
+TEST_CASE("numbers too small or too large for a float are called that, not 'not a finite number'") {
+    auto message = [](std::vector<const char*> args) -> std::string {
+        try {
+            parse(args);
+        } catch (const rcx::UsageError& e) {
+            return e.what();
+        }
+        return "(accepted)";
+    };
+    const std::string tiny = message({"--delta", "1e-45"}); // a subnormal float
+    CHECK(tiny.find("--delta") != std::string::npos);
+    CHECK(tiny.find("too small") != std::string::npos);
+    CHECK(tiny.find("subnormal") != std::string::npos);
+    CHECK(tiny.find("finite") == std::string::npos);
+    CHECK(message({"--epsilon", "1e-50"}).find("too small") != std::string::npos); // below every float
+    CHECK(message({"--step", "-1e-40"}).find("too small") != std::string::npos);
+    CHECK(message({"--delta", "1e39"}).find("too large") != std::string::npos);
+    CHECK(message({"--epsilon", "nan"}).find("not a finite number") != std::string::npos);
+    CHECK(message({"--delta", "inf"}).find("not a finite number") != std::string::npos);
+    CHECK(message({"--delta", "fast"}).find("'fast' is not a number") != std::string::npos);
+    CHECK(parse({"--delta", "1e-30"}).delta == doctest::Approx(1e-30f).epsilon(1e-6)); // small but normal
+    CHECK(parse({"--step", "0"}).step_degrees == 0.0f);
+}
+
+TEST_CASE("an output folder on the kernel's proc file system is refused as such, not as 'no such file'") {
+    for (const char* path : {"/proc/sys", "/proc/raycache-out"}) {
+        CAPTURE(path);
+        CHECK_THROWS_WITH_AS(rcx::ensure_writable_directory(path), doctest::Contains("proc file system"), std::runtime_error);
+        CHECK_THROWS_WITH_AS(rcx::ensure_writable_directory(path), doctest::Contains("no files can be created there"),
+                             std::runtime_error);
+    }
+}

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -213,6 +214,58 @@ TEST_CASE("load_mesh reads the Wuson smooth and names the path when it cannot re
     const glm::vec3 size = b.max - b.min;
     CHECK(std::max(size.x, std::max(size.y, size.z)) == doctest::Approx(2.0f).epsilon(1e-4));
     for (const glm::vec3& n : m.normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
+}
+
+namespace {
+
+// The first `fraction` of `source`'s bytes, written to a file in the temporary folder; its path.
+std::string truncated_copy(const std::string& source, double fraction, const std::string& name) {
+    std::FILE* in = std::fopen(source.c_str(), "rb");
+    REQUIRE(in);
+    std::string bytes;
+    char buffer[65536];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, in)) > 0;) bytes.append(buffer, n);
+    std::fclose(in);
+    const std::string path = (std::filesystem::temp_directory_path() / name).string();
+    std::FILE* out = std::fopen(path.c_str(), "wb");
+    REQUIRE(out);
+    std::fwrite(bytes.data(), 1, static_cast<std::size_t>(fraction * static_cast<double>(bytes.size())), out);
+    std::fclose(out);
+    return path;
+}
+
+} // namespace
+
+TEST_CASE("load_mesh refuses a PLY file truncated anywhere, instead of aborting or reading a partial mesh") {
+    const std::string cube = "/usr/share/assimp/models/PLY/cube_binary.ply";
+    if (!std::filesystem::exists(wuson) || !std::filesystem::exists(cube)) return; // assimp-testmodels not installed
+    // Wuson.ply is ASCII: 11184 vertices (the first 92% of the file), then 3732 faces. Assimp used to
+    // abort (an assertion in its triangulation) on 10% to 90%, and at 99% repeat the last face to make up
+    // the declared 3732.
+    for (double fraction : {0.0005, 0.1, 0.3, 0.5, 0.7, 0.9, 0.95, 0.99, 0.999}) {
+        CAPTURE(fraction);
+        const std::string path = truncated_copy(wuson, fraction, "raycache-truncated-wuson.ply");
+        CHECK_THROWS_WITH_AS(rcx::load_mesh(path), doctest::Contains(path.c_str()), std::runtime_error);
+        if (fraction > 0.001) // past the header: it says what is missing
+            CHECK_THROWS_WITH_AS(rcx::load_mesh(path), doctest::Contains("the file ends early"), std::runtime_error);
+        std::filesystem::remove(path);
+    }
+    // Binary: 8 vertices of 12 bytes, then 12 faces of 13 bytes.
+    for (double fraction : {0.5, 0.8, 0.99}) {
+        CAPTURE(fraction);
+        const std::string path = truncated_copy(cube, fraction, "raycache-truncated-cube.ply");
+        CHECK_THROWS_WITH_AS(rcx::load_mesh(path), doctest::Contains("the file ends early"), std::runtime_error);
+        std::filesystem::remove(path);
+    }
+    CHECK(rcx::load_mesh(cube).triangles.size() == 12); // whole, both read
+    CHECK(rcx::load_mesh(wuson).triangles.size() == 3732);
+}
+
+TEST_CASE("load_mesh says a folder is a directory, not that there is no such file") {
+    const std::string folder = std::filesystem::temp_directory_path().string();
+    CHECK_THROWS_WITH_AS(rcx::load_mesh(folder), doctest::Contains("is a directory"), std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::load_mesh("/dev/null"), doctest::Contains("not a regular file"), std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::load_mesh("/no/such/mesh.ply"), doctest::Contains("no such file"), std::runtime_error);
 }
 
 TEST_CASE("a scene's hash for cache files follows what cached colours depend on, not the camera") {

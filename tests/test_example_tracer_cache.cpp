@@ -39,16 +39,20 @@ constexpr Variant all_variants[] = {off, cct, cdct_pyramid, cdct_linear, ceiling
 constexpr Variant cached_variants[] = {cct, cdct_pyramid, cdct_linear};
 
 // The scene's cubes for `v` (face_size texels per edge on every cached object), with the relief search
-// parameters the example's command line uses by default; nullptr for the modes without caches.
-std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const Variant& v, int face_size) {
+// parameters the example's command line uses by default and the given CCT confidence threshold (the
+// library's default unless stated; negative: every filled texel answers); nullptr for the modes without caches.
+std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const Variant& v, int face_size,
+                                        float edge_threshold = raycache::embree::SceneCacheSettings{}.edge_threshold) {
     if (!rcx::uses_caches(v.mode)) return nullptr;
     const rcx::Options defaults;
-    raycache::ReliefParameters relief;
-    relief.step = defaults.delta;
-    relief.epsilon = defaults.epsilon;
-    relief.max_steps = defaults.max_steps;
-    relief.max_gap = defaults.max_gap;
-    auto caches = std::make_unique<SceneCache>(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, relief, v.pyramid);
+    raycache::embree::SceneCacheSettings s;
+    s.relief.step = defaults.delta;
+    s.relief.epsilon = defaults.epsilon;
+    s.relief.max_steps = defaults.max_steps;
+    s.relief.max_gap = defaults.max_gap;
+    s.depth_pyramid = v.pyramid;
+    s.edge_threshold = edge_threshold;
+    auto caches = std::make_unique<SceneCache>(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, s);
     tracer.attach_caches(*caches, face_size);
     return caches;
 }
@@ -169,7 +173,8 @@ TEST_CASE("warm caches at the same viewpoint stay close to the uncached frame wi
         const rcx::Image constant = tracer.render(scene.camera, settings(64, ceiling, nullptr));
         const double ceiling_psnr = rcx::compare(constant, uncached).psnr_db;
         {
-            const std::unique_ptr<SceneCache> caches = make_caches(tracer, cct, 128);
+            // Every filled texel answers (no confidence test): what a warm cube holds, read back.
+            const std::unique_ptr<SceneCache> caches = make_caches(tracer, cct, 128, -1.0f);
             tracer.render(scene.camera, settings(64, cct, caches.get()));
             caches->begin_frame();
             const rcx::Image warm = tracer.render(scene.camera, settings(64, cct, caches.get()));
@@ -259,4 +264,28 @@ TEST_CASE("pre-filling stores six N x N texels per cached object and leaves ever
             CHECK(one->begin_frame().hits > 0);
         }
     }
+}
+
+TEST_CASE("the CCT's confidence test traces the rays of texels at colour edges: closer to uncached after a camera step") {
+    const rcx::Scene scene = rcx::make_scene("behind-8"); // orbit, 1 degree a frame
+    const rcx::embree::Tracer tracer(scene);
+    const rcx::Image uncached = tracer.render(scene.camera_at(1), settings(96, off, nullptr));
+    auto step = [&](float threshold, SceneCacheStatistics* stats) {
+        const std::unique_ptr<SceneCache> caches = make_caches(tracer, cct, raycache::embree::adaptive_face_size, threshold);
+        tracer.render(scene.camera_at(0), settings(96, cct, caches.get()));
+        caches->begin_frame();
+        const rcx::Image image = tracer.render(scene.camera_at(1), settings(96, cct, caches.get()));
+        *stats = caches->begin_frame();
+        return rcx::compare(image, uncached).psnr_db;
+    };
+    SceneCacheStatistics trusting, doubting;
+    const double psnr_all = step(-1.0f, &trusting);
+    const double psnr_tested = step(0.1f, &doubting);
+    INFO("no test: ", psnr_all, " dB, hit rate ", trusting.hit_rate(), "; test 0.1: ", psnr_tested, " dB, hit rate ",
+         doubting.hit_rate(), ", doubtful texels ", doubting.doubtful_texels);
+    CHECK(trusting.doubtful_texels == 0u);
+    CHECK(doubting.doubtful_texels > 0u);
+    CHECK(doubting.hit_rate() < trusting.hit_rate());
+    CHECK(doubting.hit_rate() > 0.3); // the test rejects edges, not the cube
+    CHECK(psnr_tested > psnr_all + 3.0);
 }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "rcx/image.hpp"
+#include "rcx/memory.hpp"
 #include "rcx/options.hpp"
 #include "rcx/progress.hpp"
 #include "rcx/scene.hpp"
@@ -69,6 +70,11 @@ int run(const rcx::Options& o) {
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
+    try {
+        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid), rcx::frame_images(o)});
+    } catch (const std::runtime_error& e) {
+        throw InputError(e.what());
+    }
 
     rcx::embree::Tracer tracer(scene);
     rcx::embree::RenderSettings settings;
@@ -90,6 +96,7 @@ int run(const rcx::Options& o) {
             cache_settings.depth_pyramid = o.pyramid;
             cache_settings.adaptive.rays_per_texel = o.rays_per_texel;
             cache_settings.filtered = o.filtered;
+            cache_settings.edge_threshold = o.edge_threshold;
             caches = std::make_unique<raycache::embree::SceneCache>(
                 o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct,
                 cache_settings);

@@ -38,8 +38,9 @@ std::string format(const char* pattern, double a, double b = 0.0) {
 // texels, as the GPU tracer reads them (it has no filtered lookups yet).
 rcx::Image embree_warm_cct(const rcx::Scene& scene, int size, int face_size) {
     const rcx::embree::Tracer tracer(scene);
-    raycache::embree::SceneCacheSettings nearest; // the default, stated: the comparison depends on it
+    raycache::embree::SceneCacheSettings nearest; // stated: the comparison depends on it
     nearest.filtered = false;
+    nearest.edge_threshold = -1.0f; // the GPU tracer has no confidence test: every filled texel answers
     raycache::embree::SceneCache caches(raycache::embree::Technique::cct, nearest);
     tracer.attach_caches(caches, face_size);
     rcx::embree::RenderSettings s;

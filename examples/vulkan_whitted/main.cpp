@@ -11,8 +11,11 @@
 // a lookup (no recursion in GLSL).
 // --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
 // rays in compute, as in the thesis's Table 5.1.
-// Exit status 2: bad options, no Vulkan device, a shader that does not load.
+// Exit status 2: bad options, more memory needed than is available, no Vulkan device, a shader that does
+// not load.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -25,6 +28,7 @@
 
 #include "gpu_tracer.hpp"
 #include "rcx/image.hpp"
+#include "rcx/memory.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
 
@@ -60,6 +64,22 @@ int run(const rcx::Options& o, bool hybrid) {
     } catch (const rcx::vk::NoDeviceError& e) {
         throw InputError(std::string("no usable Vulkan device: ") + e.what() +
                          ". On Debian/Ubuntu install mesa-vulkan-drivers (lavapipe, Vulkan on the CPU) and libvulkan1.");
+    }
+
+    // The cubes live in two host-visible buffers (texels and pending) of at most maxStorageBufferRange
+    // each (a larger --face-size is lowered to fit); the frame images come on top.
+    std::vector<rcx::MemoryNeed> needs{rcx::frame_images(o)};
+    if (rcx::uses_caches(o.cache)) {
+        const std::uint64_t n = static_cast<std::uint64_t>(o.face_size);
+        const std::uint64_t cubes = static_cast<std::uint64_t>(scene.cached_object_count()) * 6 * n * n *
+                                    (o.cache == rcx::CacheMode::cdct ? 8 : 4);
+        const std::uint64_t buffer = std::min<std::uint64_t>(cubes, context->properties().limits.maxStorageBufferRange);
+        needs.push_back({"cube texel and pending buffers", 2 * buffer});
+    }
+    try {
+        rcx::check_memory(needs);
+    } catch (const std::runtime_error& e) {
+        throw InputError(e.what());
     }
 
     rcx::gpu::TracerSettings settings;

@@ -47,7 +47,7 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_PENDING_BINDING)
 struct raycache_relief_parameters {
     float step;      /* delta: length of a linear step along the ray, world units, > 0 */
     float epsilon;   /* bisection stops when the bracket is shorter than this, > 0 */
-    int max_steps;   /* linear steps before giving up (a miss) */
+    int max_steps;   /* linear steps before giving up (a miss), at most RAYCACHE_MAX_RELIEF_STEPS */
     float max_depth; /* distance at which rays that escaped to the environment are stored */
     float max_gap;   /* a crossing more than this beyond the cached surface is a miss (infinity: never) */
 };
@@ -93,8 +93,9 @@ vec3 raycache_ray_from_centre(vec3 o, vec3 d, float t, vec3 centre) {
  * ray origin + t * unit(direction) from where it leaves the cube's box, in steps of p.step; at each point
  * Q read the texel in direction Q - centre; a crossing (stored distance <= |Q - centre|) is bisected
  * (at most 64 times, keeping the crossed end) down to p.epsilon. A miss: an empty or this-frame texel on
- * the way, p.max_steps used up, a crossing more than p.max_gap behind the surface, a bad origin,
- * direction, box or parameters. Reads at most 1 + p.max_steps + 64 texels. */
+ * the way, p.max_steps used up, a step too small to change t (t + p.step == t), a crossing more than
+ * p.max_gap behind the surface, a bad origin, direction, box or parameters (p.max_steps above
+ * RAYCACHE_MAX_RELIEF_STEPS among them). Reads at most 1 + p.max_steps + 64 texels. */
 raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,
                                               raycache_relief_parameters p) {
     raycache_relief_result r;
@@ -104,7 +105,7 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
     r.distance = 0.0;
     r.texels_read = 0;
     if (!raycache_is_direction(direction) || !raycache_is_finite3(origin) || !raycache_cube_box_is_usable(cube) ||
-        !(p.step > 0.0) || !(p.epsilon > 0.0))
+        !(p.step > 0.0) || !(p.epsilon > 0.0) || p.max_steps > RAYCACHE_MAX_RELIEF_STEPS)
         return r;
     vec3 d = raycache_unit(direction);
 
@@ -123,6 +124,7 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
         for (int i = 0; i < p.max_steps && !crossed; ++i) {
             lo = t;
             t = t + p.step;
+            if (!(t > lo)) return r; /* the step no longer moves the ray */
             v = raycache_ray_from_centre(origin, d, t, cube.centre);
             texel = raycache_cdct_texel_at(cube, v);
             r.texels_read += 1;

@@ -4,7 +4,9 @@
 // frame it was made in, its texel reads as empty. So every lookup of a frame sees the same cube whatever
 // the thread timing, and a frame rendered with a cold cube traces every cached ray, exactly as without
 // the cache. When several stores reach one texel in the same frame, the smallest packed word wins.
-// A texel that is already visible keeps its value until clear() or invalidate().
+// A texel that is already visible keeps its value until clear() or invalidate(). A texel marked
+// doubtful (set_doubtful(), between frames; see raycache/edge_confidence.hpp) keeps its value but reads
+// as empty to lookups, so the rays that reach it are traced.
 //
 // Memory. Texels live in tiles of 16 x 16 (smaller faces: one tile per face), allocated on a tile's
 // first store, so a cube costs what its rays have touched, not 6 N^2 texels: most of a large cube is
@@ -85,7 +87,7 @@ public:
     // Bytes of the tiles allocated so far (each tile_bytes()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * sizeof(Tile); }
     std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
-    // Bytes of one tile: 16 x 16 words and their written-this-frame bits.
+    // Bytes of one tile: 16 x 16 words, their written-this-frame bits and their doubtful bits.
     static constexpr std::size_t tile_bytes() noexcept { return sizeof(Tile); }
     const std::shared_ptr<MemoryBudget>& budget() const noexcept { return budget_; }
 
@@ -164,14 +166,39 @@ public:
         return store_word(texel, word);
     }
 
-    // Empties one texel. Between frames only.
+    // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
+    // reads it) until clear() or invalidate(). False when the texel holds no value. Between frames only.
+    bool set_doubtful(const TexelAddress& texel) noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        if (!contains(texel)) return false;
+        Tile* tile = tile_of(texel);
+        const int slot = slot_of(texel);
+        if (!tile || !Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return false;
+        const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
+        if (!(tile->doubtful_bits[slot / 64].fetch_or(bit, std::memory_order_relaxed) & bit))
+            state_->doubtful_texels.fetch_add(1, std::memory_order_relaxed);
+        return true;
+    }
+    bool is_doubtful(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        const Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
+        return tile && doubtful(*tile, slot_of(texel));
+    }
+    // Texels marked doubtful.
+    std::size_t doubtful_texels() const noexcept { return state_->doubtful_texels.load(std::memory_order_relaxed); }
+
+    // Empties one texel (and drops its doubtful mark). Between frames only.
     void invalidate(const TexelAddress& texel) noexcept {
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return;
         Tile* tile = tile_of(texel);
         if (!tile) return;
-        if (Texel::is_valid(tile->texels[slot_of(texel)].exchange(Texel::invalid, std::memory_order_relaxed)))
+        const int slot = slot_of(texel);
+        if (Texel::is_valid(tile->texels[slot].exchange(Texel::invalid, std::memory_order_relaxed)))
             state_->valid_texels.fetch_sub(1, std::memory_order_relaxed);
+        const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
+        if (tile->doubtful_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed) & bit)
+            state_->doubtful_texels.fetch_sub(1, std::memory_order_relaxed);
     }
 
     // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
@@ -179,6 +206,7 @@ public:
         free_tiles();
         state_->written_this_frame.store(false, std::memory_order_relaxed);
         state_->valid_texels.store(0, std::memory_order_relaxed);
+        state_->doubtful_texels.store(0, std::memory_order_relaxed);
         state_->counters.reset();
     }
 
@@ -242,10 +270,13 @@ private:
         Tile() noexcept {
             for (auto& t : texels) t.store(Texel::invalid, std::memory_order_relaxed);
             for (auto& w : written_bits) w.store(0, std::memory_order_relaxed);
+            for (auto& w : doubtful_bits) w.store(0, std::memory_order_relaxed);
         }
         std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet).
         std::atomic<std::uint64_t> written_bits[bit_words];
+        // One bit per texel: its value is kept but not answered (set_doubtful()).
+        std::atomic<std::uint64_t> doubtful_bits[bit_words];
     };
 
     struct State {
@@ -256,6 +287,7 @@ private:
         std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<bool> written_this_frame{false};
         std::atomic<std::int64_t> valid_texels{0};
+        std::atomic<std::size_t> doubtful_texels{0};
         detail::StripedCounters<counter_count> counters;
     };
 
@@ -322,6 +354,9 @@ private:
     static bool written(const Tile& tile, int slot) noexcept {
         return (tile.written_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
     }
+    static bool doubtful(const Tile& tile, int slot) noexcept {
+        return (tile.doubtful_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
+    }
 
     // f(address) for each texel of an allocated tile for which keep(tile, slot), in linear-index order.
     template <class Keep, class F>
@@ -359,6 +394,7 @@ private:
         const Word word = tile->texels[slot].load(std::memory_order_acquire);
         if (!Texel::is_valid(word)) return std::nullopt;
         if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return std::nullopt;
+        if (doubtful(*tile, slot)) return std::nullopt;
         return Texel::decode(word);
     }
 

@@ -25,7 +25,8 @@
 // the bytes that remain before reading, every checksum, the scene, the technique and the version, then
 // fills fresh cubes; a CacheFileError names the file and what is wrong, and the caller's cubes are left as
 // they were. Loaded texels are visible at once, as a frame's stores are after begin_frame(): the next frame
-// rendered sees them. A CDCT cube's DepthPyramid must be rebuilt after a load (SceneCache::load does it).
+// rendered sees them. What is derived from the texels is not saved but made again: a CDCT cube's
+// DepthPyramid must be rebuilt and a CCT cube's doubtful edges marked (SceneCache::load does both).
 //
 // Threads: saving reads cubes, loading replaces them: both between frames.
 #pragma once
@@ -102,7 +103,8 @@ struct CubeToSave {
     const CacheCube<Texel>* cube = nullptr;
 };
 
-// One cube read back: its texels visible, its counters zero.
+// One cube read back. Its texels are held as the current frame's stores: structures derived from the texels
+// (edge marks, raycache/edge_confidence.hpp) are made as after a frame, then begin_frame() makes them visible.
 template <class Texel>
 struct LoadedCube {
     std::uint64_t object = 0;
@@ -368,7 +370,8 @@ CubeRecord read_cube_record(ByteReader& r) {
     return c;
 }
 
-// A fresh cube holding the record's texels, visible. Throws CacheFileError when the budget refuses a tile.
+// A fresh cube holding the record's texels as this frame's stores. Throws CacheFileError when the budget
+// refuses a tile.
 template <class Texel>
 std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::shared_ptr<MemoryBudget>& budget,
                                              const ByteReader& messages) {
@@ -387,7 +390,6 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                               " in use) cannot hold the file's tiles as well as the cubes they replace");
         }
     }
-    cube->begin_frame(); // the loaded texels are visible to the next frame's lookups
     return cube;
 }
 
@@ -453,7 +455,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
     return std::move(w.bytes);
 }
 
-// The cubes of a cache file's bytes, checked whole before any cube is made: the prelude, every chunk's
+// The cubes of a cache file's bytes (see LoadedCube), checked whole before any cube is made: the prelude, every chunk's
 // size and checksum, the format version (newer: refused), the technique (Texel's), the scene (`expected`,
 // hash and name), every face size, placement, tile index and texel word. `source` names the bytes in
 // messages (a file name). The cubes draw their tiles from `budget` (may be null).
@@ -600,7 +602,7 @@ void save_cube(const std::string& path, const CacheCube<Texel>& cube, const Cube
 }
 
 // Replaces `target` by the one cube saved in `path`, at the face size it was saved with, drawing on
-// target's budget; its texels are visible at once. The file must hold one cube, of object `object`, placed
+// target's budget; its texels are visible at once, none marked doubtful. The file must hold one cube, of object `object`, placed
 // at `bounds`, for `scene`. Otherwise throws CacheFileError and leaves `target` as it was. Between frames.
 // A DepthPyramid of the cube must be rebuilt (DepthPyramid(target.face_size()).rebuild(target)).
 template <class Texel>
@@ -616,6 +618,7 @@ void load_cube(const std::string& path, CacheCube<Texel>& target, const CubeBoun
     if (!same_placement(cubes[0].bounds, bounds))
         throw CacheFileError(source + "its cube sits at " + describe(cubes[0].bounds) + ", this one at " + describe(bounds) +
                              "; nothing was loaded");
+    cubes[0].cube->begin_frame(); // visible to the next lookup
     target = std::move(*cubes[0].cube);
 }
 

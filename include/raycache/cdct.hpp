@@ -28,7 +28,8 @@ struct CubeBounds {
 struct ReliefParameters {
     float step = 0.2f;        // delta: length of a linear step along the ray, world units (linear walk only)
     float epsilon = 0.02f;    // binary refinement stops when the bracket is shorter than this
-    int max_steps = 1024;     // linear steps, or pyramid nodes read, before giving up (a miss)
+    int max_steps = 1024;     // linear steps, or pyramid nodes read, before giving up (a miss); at most
+                              // RAYCACHE_MAX_RELIEF_STEPS (16,777,216)
     float max_depth = 100.0f; // distance at which rays that escaped to the environment are stored
     // A crossing where the ray ends up more than max_gap beyond the cached surface (|Q - C| - d, after
     // refinement) is a depth discontinuity: the ray passed behind an edge, where the cube saw nothing.
@@ -36,7 +37,8 @@ struct ReliefParameters {
     float max_gap = std::numeric_limits<float>::infinity();
 };
 
-// Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive.
+// Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive
+// and max_steps is 1..RAYCACHE_MAX_RELIEF_STEPS.
 inline void validate(const ReliefParameters& p) {
     auto bad = [](const char* name, float value) {
         throw std::invalid_argument(std::string("RayCache: ReliefParameters::") + name +
@@ -45,7 +47,9 @@ inline void validate(const ReliefParameters& p) {
     if (!(p.step > 0.0f) || !std::isfinite(p.step)) bad("step", p.step);
     if (!(p.epsilon > 0.0f) || !std::isfinite(p.epsilon)) bad("epsilon", p.epsilon);
     if (!(p.max_depth > 0.0f) || !std::isfinite(p.max_depth)) bad("max_depth", p.max_depth);
-    if (p.max_steps < 1) bad("max_steps", static_cast<float>(p.max_steps));
+    if (p.max_steps < 1 || p.max_steps > RAYCACHE_MAX_RELIEF_STEPS)
+        throw std::invalid_argument("RayCache: ReliefParameters::max_steps must be 1 to " +
+                                    std::to_string(RAYCACHE_MAX_RELIEF_STEPS) + ", got " + std::to_string(p.max_steps));
     if (!(p.max_gap > 0.0f)) bad("max_gap", p.max_gap);
 }
 
@@ -140,11 +144,14 @@ public:
         return result;
     }
 
-    // Linear walk (thesis Algorithm 4): steps of p.step from t until the first crossing.
+    // Linear walk (thesis Algorithm 4): steps of p.step from t until the first crossing. A step too small
+    // to change t (t + step == t) would read the same point for ever: the walk ends there, a miss. As that
+    // happens once t exceeds about 2^24 steps, the walk takes at most about 2^25 steps whatever max_steps says.
     ReliefResult linear(float t) {
         for (int i = 0; i < p_.max_steps; ++i) {
             const float previous = t;
             t += p_.step;
+            if (!(t > previous)) return miss();
             if (!read(t)) return miss();
             if (crossed) return refine(previous, t);
         }
@@ -233,14 +240,16 @@ private:
 // with its distance; at the first crossing, bisect down to p.epsilon. Without a pyramid the walk takes
 // steps of p.step (the thesis); with one (kept up to date for this cube) it skips blocks of texels that
 // lie beyond the ray. An empty or not-yet-visible texel read on the way makes the search a miss; so do
-// running out of p.max_steps, a crossing more than p.max_gap behind the surface, and a bad origin,
-// direction or box. Counts one lookup on the cube (hit or miss); texels_read counts pyramid nodes too.
-// Thread-safe as CacheCube::lookup.
+// running out of p.max_steps, a linear step too small to move the ray on, a crossing more than p.max_gap
+// behind the surface, a bad origin, direction or box, and parameters no search can run with (step or
+// epsilon not > 0, max_steps above RAYCACHE_MAX_RELIEF_STEPS: no texel read). Reads at most
+// 1 + min(p.max_steps, RAYCACHE_MAX_RELIEF_STEPS) + 64 texels or pyramid nodes. Counts one lookup on the
+// cube (hit or miss); texels_read counts pyramid nodes too. Thread-safe as CacheCube::lookup.
 inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p,
                                   const DepthPyramid* pyramid = nullptr) noexcept {
     if (!is_direction(direction) || !shared::raycache_is_finite3(origin) || !detail::is_usable(bounds) || !(p.step > 0.0f) ||
-        !(p.epsilon > 0.0f)) {
+        !(p.epsilon > 0.0f) || p.max_steps > RAYCACHE_MAX_RELIEF_STEPS) {
         cube.record_lookup(false);
         return ReliefResult{};
     }
@@ -278,14 +287,16 @@ inline bool store_escape(CacheCube<CdctTexel>& cube, const glm::vec3& direction,
 }
 
 // What a secondary-ray trace returns to the CDCT: its colour, and the distance along the unit ray
-// direction to what it hit (infinity or NaN when it escaped to the environment).
+// direction to what it hit (infinity or NaN when it escaped to the environment). A negative distance
+// (a hit behind the ray's origin) is never stored: the colour is used, the cube left alone.
 struct TracedRay {
     glm::vec3 color{0.0f};
     float distance = std::numeric_limits<float>::infinity();
 };
 
 // Algorithm 1 with the CDCT: the relief search answers when it can; otherwise trace() runs, its hit is
-// stored (store_hit, or store_escape when it escaped) and its colour returned unchanged.
+// stored (store_hit, or store_escape when it escaped; nothing for a negative distance, which would key
+// the hit by a point behind the ray) and its colour returned unchanged.
 // trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
 // `pyramid`, when given, speeds up the search (see relief_search).
 template <class Trace>
@@ -297,7 +308,7 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
     const TracedRay traced = std::forward<Trace>(trace)();
-    if (!is_direction(direction)) return traced.color;
+    if (!is_direction(direction) || traced.distance < 0.0f) return traced.color;
     if (std::isfinite(traced.distance))
         store_hit(cube, bounds, origin + traced.distance * shared::raycache_unit(direction), traced.color, p);
     else

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "raycache/cache_cube.hpp"
@@ -22,6 +24,7 @@ public:
     explicit DepthPyramid(int face_size) : face_size_(face_size) {
         if (!is_valid_face_size(face_size))
             throw std::invalid_argument("RayCache: DepthPyramid face size must be 1 to 4096 texels");
+        values_.reserve(bytes_for(face_size) / sizeof(float));
         for (int size = face_size; size > 1;) {
             size = (size + 1) / 2;
             offsets_.push_back(values_.size());
@@ -33,18 +36,36 @@ public:
     int face_size() const noexcept { return face_size_; }
     // Stored levels (1..levels()); the top level has one block per face. 0 when face_size is 1.
     int levels() const noexcept { return static_cast<int>(sizes_.size()); }
-    // Blocks along an edge at level k >= 1.
-    int blocks(int level) const noexcept { return sizes_[static_cast<std::size_t>(level - 1)]; }
+    // Blocks along an edge at level k in 1..levels(); 0 for any other level.
+    int blocks(int level) const noexcept {
+        return level >= 1 && level <= levels() ? sizes_[static_cast<std::size_t>(level - 1)] : 0;
+    }
     std::size_t bytes() const noexcept { return values_.size() * sizeof(float); }
+    // bytes() of a pyramid for cubes of face_size (1..4096), without making one (0 for other sizes).
+    static std::size_t bytes_for(int face_size) noexcept {
+        if (!is_valid_face_size(face_size)) return 0;
+        std::size_t values = 0;
+        for (int size = face_size; size > 1;) {
+            size = (size + 1) / 2;
+            values += std::size_t{RAYCACHE_FACE_COUNT} * static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+        }
+        return values * sizeof(float);
+    }
 
-    // Smallest distance of block (column, row) of `face` at level k in 1..levels().
+    // Smallest distance of block (column, row) of `face` at level k in 1..levels(). Anything else (level 0,
+    // which is the cube itself, a level above levels(), a face or block off the pyramid) gives 0, the value
+    // of a block holding an empty texel: a search that asks sends itself down to the texels, never past them.
     float min_distance(int face, int level, int column, int row) const noexcept {
+        const int size = blocks(level);
+        if (size == 0 || face < 0 || face >= RAYCACHE_FACE_COUNT || column < 0 || column >= size || row < 0 || row >= size)
+            return 0.0f;
         return values_[index(face, level, column, row)];
     }
 
     // Recomputes every block from the cube's texels (after clear(), invalidate(), or a load).
+    // Throws std::invalid_argument when the cube's face size is not the pyramid's.
     void rebuild(const CdctCube& cube) {
-        RAYCACHE_ASSERT(cube.face_size() == face_size_);
+        check_face_size(cube);
         for (int level = 1; level <= levels(); ++level)
             for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
                 for (int row = 0; row < blocks(level); ++row)
@@ -53,8 +74,9 @@ public:
 
     // Recomputes the blocks above the texels stored in the cube's current frame. Call it between frames,
     // before the cube's begin_frame(). Cost: proportional to the texels stored, times levels().
+    // Throws std::invalid_argument when the cube's face size is not the pyramid's (nothing is changed).
     void update(const CdctCube& cube) {
-        RAYCACHE_ASSERT(cube.face_size() == face_size_);
+        check_face_size(cube);
         std::vector<std::uint32_t> dirty; // (face, column, row) of blocks at the current level, packed
         cube.for_each_written_texel([&](const TexelAddress& t) { dirty.push_back(pack(t.face, t.column, t.row)); });
         for (int level = 1; level <= levels(); ++level) {
@@ -66,6 +88,13 @@ public:
     }
 
 private:
+    // A cube of another face size would address blocks outside this pyramid: refused in every build.
+    void check_face_size(const CdctCube& cube) const {
+        if (cube.face_size() != face_size_)
+            throw std::invalid_argument("RayCache: a DepthPyramid of face size " + std::to_string(face_size_) +
+                                        " cannot follow a cube of face size " + std::to_string(cube.face_size()));
+    }
+
     static std::uint32_t pack(int face, int column, int row) {
         return static_cast<std::uint32_t>(face) << 26 | static_cast<std::uint32_t>(row) << 13 | static_cast<std::uint32_t>(column);
     }

@@ -20,7 +20,8 @@ namespace raycache {
 // faces and rows; rows of one cube may run on different threads at once). Returns the texels stored.
 // trace: callable `TracedRay trace(glm::vec3 origin, glm::vec3 unit_direction)`, called with the cube's
 // centre as origin; it must pass through the cached object itself. The CDCT stores the hit's distance
-// from the centre (escaped rays at p.max_depth); the CCT stores only the colour.
+// from the centre (escaped rays at p.max_depth; a negative distance, a hit behind the centre, is not
+// stored and the texel stays empty); the CCT stores only the colour.
 // Stores become visible at the cube's next begin_frame(). face in 0..5, row in 0..N-1 (asserted).
 template <class Texel, class Trace>
 std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const ReliefParameters& p, int face, int row,
@@ -41,6 +42,7 @@ std::size_t prefill_row(CacheCube<Texel>& cube, const CubeBounds& bounds, const 
         if constexpr (std::is_same_v<Texel, CctTexel>) {
             written = cube.store_at(texel, traced.color);
         } else {
+            if (traced.distance < 0.0f) continue; // behind the centre: not what this texel sees
             const float distance = std::isfinite(traced.distance)
                                        ? std::min(glm::length(origin + traced.distance * d - bounds.centre), p.max_depth)
                                        : p.max_depth;

@@ -10,6 +10,7 @@
 #include "raycache/memory_budget.hpp"
 #include "raycache/cache_cube.hpp"
 #include "raycache/adaptive_resolution.hpp"
+#include "raycache/edge_confidence.hpp"
 #include "raycache/cached_trace.hpp"
 #include "raycache/depth_pyramid.hpp"
 #include "raycache/cdct.hpp"

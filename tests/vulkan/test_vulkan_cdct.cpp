@@ -4,6 +4,7 @@
 // store), after the end-frame pass, are word for word what C++ makes of the same stores.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -208,6 +209,50 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
         CHECK(c.same == queries.size());
         CHECK(c.hits > queries.size() / 5);
         CHECK(c.hits < queries.size());
+    }
+}
+
+TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot move the ray or max_steps is over the limit") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    std::mt19937 rng(23);
+    Scene s = make_scene(rng, true);
+    // Origins inside the boxes (and the bad ones): the walk starts at the box exit, t > 0.05, where
+    // t + 1e-30 == t.
+    std::vector<Query> queries = search_queries(s, rng, 300);
+    queries.erase(std::remove_if(queries.begin(), queries.end(),
+                                 [&](const Query& q) {
+                                     const glm::vec3 local = glm::abs(q.origin - s.bounds[q.cube].centre);
+                                     return std::max(local.x, std::max(local.y, local.z)) > 0.95f * s.bounds[q.cube].half_size;
+                                 }),
+                  queries.end());
+
+    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
+    rcx::vk::Buffer pending(*vk, s.elements * 8);
+    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+
+    const float inf = std::numeric_limits<float>::infinity();
+    const ReliefParameters sets[] = {{1e-30f, 0.02f, 100000, 100.0f, inf},
+                                     {0.2f, 0.02f, std::numeric_limits<int>::max(), 100.0f, inf}};
+    for (const ReliefParameters& p : sets) {
+        CAPTURE(p.step);
+        CAPTURE(p.max_steps);
+        const Push push{p, static_cast<std::uint32_t>(queries.size())};
+        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                     rcx::vk::group_count(queries.size(), 64));
+        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        CHECK(c.same == queries.size());
+        if (p.max_steps > RAYCACHE_MAX_RELIEF_STEPS) { // parameters no search runs with: a miss, nothing read
+            CHECK(c.hits == 0);
+            CHECK(c.texels == 0);
+        } else { // the box exit only (a hit where the cached surface lies inside the box)
+            CHECK(c.texels <= static_cast<long long>(queries.size()));
+        }
     }
 }
 

@@ -89,16 +89,10 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
 }
 
 void check_face_sizes(std::initializer_list<int> sizes) {
-    rcx::vk::Context* vk = rcx_test::context();
-    if (!vk) return;
-    rcx::vk::ComputePipeline pipeline(*vk, rcx_test::spirv("face_map"),
-                                      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                      8);
-    for (int n : sizes) {
-        CAPTURE(n);
-        check_face_size(*vk, pipeline, n);
-    }
+    rcx_test::for_face_sizes("face_map",
+                             {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                              VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                             sizes, check_face_size);
 }
 
 } // namespace

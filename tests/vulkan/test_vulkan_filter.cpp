@@ -88,6 +88,10 @@ struct Totals {
 };
 
 void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, int n) {
+    if (!rcx::vk::SampledCubeImage::supports_linear_filter(vk, VK_FORMAT_R32_SFLOAT)) {
+        MESSAGE("skipped: " << vk.device_name() << " cannot filter R32_SFLOAT linearly");
+        return;
+    }
     const std::vector<Direction> directions = filter_directions(n, 777u + static_cast<std::uint32_t>(n));
     const std::size_t count = directions.size();
     const std::size_t texel_count = std::size_t{6} * n * n;
@@ -199,21 +203,11 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
 }
 
 void check_face_sizes(std::initializer_list<int> sizes) {
-    rcx::vk::Context* vk = rcx_test::context();
-    if (!vk) return;
-    if (!rcx::vk::SampledCubeImage::supports_linear_filter(*vk, VK_FORMAT_R32_SFLOAT)) {
-        MESSAGE("skipped: " << vk->device_name() << " cannot filter R32_SFLOAT linearly");
-        return;
-    }
-    rcx::vk::ComputePipeline pipeline(*vk, rcx_test::spirv("filter_cross"),
-                                      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                      8);
-    for (int n : sizes) {
-        CAPTURE(n);
-        check_face_size(*vk, pipeline, n);
-    }
+    rcx_test::for_face_sizes("filter_cross",
+                             {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                              VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                              VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                             sizes, check_face_size);
 }
 
 } // namespace

@@ -8,8 +8,11 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
+
+#include <doctest/doctest.h>
 
 #include <raycache/cache_cube.hpp>
 #include <raycache/shared/gpu_layout.h>
@@ -24,6 +27,21 @@ rcx::vk::Context* context();
 std::string spirv(const std::string& name);
 
 using rcx::vk::buffer_of;
+
+// Calls check(context, pipeline, n) for each face size n (captured for failure messages), with one compute
+// pipeline made from shaders/<shader>.comp with these bindings and 8 bytes of push constants (face size,
+// count). Does nothing without a Vulkan device.
+template <class Check>
+void for_face_sizes(const std::string& shader, const std::vector<VkDescriptorType>& bindings,
+                    std::initializer_list<int> sizes, Check&& check) {
+    rcx::vk::Context* vk = context();
+    if (!vk) return;
+    rcx::vk::ComputePipeline pipeline(*vk, spirv(shader), bindings, 8);
+    for (int n : sizes) {
+        CAPTURE(n);
+        check(*vk, pipeline, n);
+    }
+}
 
 // Bindings of the cross-check shaders (shaders/*_cross.comp: five storage buffers) and of the
 // end-frame pass (texels and pending).

@@ -1,10 +1,18 @@
 // Procedural meshes and Assimp loading.
 #include "rcx/meshes.hpp"
 
+#include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -125,10 +133,204 @@ Mesh make_torus(float major, float minor, int major_segments, int minor_segments
     return m;
 }
 
-Mesh load_mesh(const std::string& path) {
+namespace {
+
+[[noreturn]] void cannot_read(const std::string& path, const std::string& why) {
+    throw std::runtime_error("cannot read mesh '" + path + "': " + why);
+}
+
+// The file must exist, be a regular file and open for reading; the message says which it is not.
+std::string read_whole_file(const std::string& path) {
+    namespace fs = std::filesystem;
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw std::runtime_error("cannot read mesh '" + path + "': no such file");
+    const fs::file_status status = fs::status(path, ec);
+    if (!fs::exists(status)) cannot_read(path, "no such file");
+    if (fs::is_directory(status)) cannot_read(path, "it is a directory, not a mesh file");
+    if (!fs::is_regular_file(status)) cannot_read(path, "it is not a regular file (a device, pipe or socket)");
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) cannot_read(path, std::strerror(errno));
+    std::string bytes;
+    char buffer[65536];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) bytes.append(buffer, n);
+    const bool failed = std::ferror(f) != 0;
+    std::fclose(f);
+    if (failed) cannot_read(path, "reading it failed");
+    return bytes;
+}
+
+// --- PLY: every element the header declares must be in the file ---------------------------------
+// Assimp's PLY reader does not notice a body that ends early: it fills the declared counts by repeating
+// the last face or with empty faces (and then aborts in triangulation). So the body is walked here.
+
+struct PlyProperty {
+    int size = 0;       // bytes of a scalar, or of each list item
+    int count_size = 0; // lists: bytes of the item count; 0 for a scalar
+    bool count_signed = false;
+};
+struct PlyElement {
+    std::string name;
+    std::uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+// Bytes of a PLY scalar type (and whether it is signed); 0 for an unknown type.
+int ply_type_size(const std::string& type, bool* is_signed = nullptr) {
+    static const struct { const char* name; int size; bool is_signed; } types[] = {
+        {"char", 1, true},   {"int8", 1, true},     {"uchar", 1, false},  {"uint8", 1, false},
+        {"short", 2, true},  {"int16", 2, true},    {"ushort", 2, false}, {"uint16", 2, false},
+        {"int", 4, true},    {"int32", 4, true},    {"uint", 4, false},   {"uint32", 4, false},
+        {"float", 4, true},  {"float32", 4, true},  {"double", 8, true},  {"float64", 8, true},
+    };
+    for (const auto& t : types)
+        if (type == t.name) {
+            if (is_signed) *is_signed = t.is_signed;
+            return t.size;
+        }
+    return 0;
+}
+
+[[noreturn]] void ply_ends_early(const std::string& path, const PlyElement& e, std::uint64_t held) {
+    cannot_read(path, "the file ends early (truncated?): its header declares " + std::to_string(e.count) + " '" + e.name +
+                          "' elements, the file holds " + std::to_string(held));
+}
+
+// Throws when `bytes` is a PLY file whose body holds fewer elements than its header declares, or whose
+// header or list counts are malformed. Files that are not PLY, or use types this walk does not know,
+// are left to Assimp.
+void check_ply_complete(const std::string& path, const std::string& bytes) {
+    if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0) return;
+    const std::size_t end = bytes.find("end_header");
+    if (end == std::string::npos) cannot_read(path, "the PLY header has no end_header line (truncated?)");
+    std::size_t body = bytes.find('\n', end);
+    if (body == std::string::npos) cannot_read(path, "the file ends after its PLY header (truncated?)");
+    ++body;
+
+    std::istringstream header(bytes.substr(0, end));
+    std::string line, format;
+    std::vector<PlyElement> elements;
+    while (std::getline(header, line)) {
+        std::istringstream words(line);
+        std::string keyword;
+        words >> keyword;
+        if (keyword == "format") {
+            words >> format;
+        } else if (keyword == "element") {
+            PlyElement e;
+            if (!(words >> e.name >> e.count)) cannot_read(path, "malformed PLY header line '" + line + "'");
+            elements.push_back(e);
+        } else if (keyword == "property") {
+            if (elements.empty()) cannot_read(path, "PLY property before any element: '" + line + "'");
+            std::string type;
+            words >> type;
+            PlyProperty p;
+            if (type == "list") {
+                std::string count_type, item_type;
+                words >> count_type >> item_type;
+                p.count_size = ply_type_size(count_type, &p.count_signed);
+                p.size = ply_type_size(item_type);
+                if (p.count_size == 0 || p.size == 0) return; // types Assimp may know better
+            } else {
+                p.size = ply_type_size(type);
+                if (p.size == 0) return;
+            }
+            elements.back().properties.push_back(p);
+        }
+    }
+
+    const char* text = bytes.data();
+    std::size_t at = body;
+    if (format == "ascii") {
+        // Whitespace-separated numbers; a list is its item count, then that many items.
+        auto next_token = [&](std::string* token) {
+            while (at < bytes.size() && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
+            if (at == bytes.size()) return false;
+            const std::size_t start = at;
+            while (at < bytes.size() && !std::isspace(static_cast<unsigned char>(text[at]))) ++at;
+            if (token) token->assign(text + start, at - start);
+            return true;
+        };
+        std::string token;
+        for (const PlyElement& e : elements)
+            for (std::uint64_t i = 0; i < e.count; ++i)
+                for (const PlyProperty& p : e.properties) {
+                    if (!next_token(p.count_size ? &token : nullptr)) ply_ends_early(path, e, i);
+                    if (!p.count_size) continue;
+                    char* stop = nullptr;
+                    const long long items = std::strtoll(token.c_str(), &stop, 10);
+                    if (*stop != '\0' || items < 0)
+                        cannot_read(path, "'" + e.name + "' element " + std::to_string(i) + " has a bad list length '" + token + "'");
+                    for (long long k = 0; k < items; ++k)
+                        if (!next_token(nullptr)) ply_ends_early(path, e, i);
+                }
+    } else if (format == "binary_little_endian" || format == "binary_big_endian") {
+        const bool little = format == "binary_little_endian";
+        const std::uint64_t size = bytes.size();
+        for (const PlyElement& e : elements) {
+            bool has_list = false;
+            std::uint64_t fixed = 0;
+            for (const PlyProperty& p : e.properties) {
+                has_list = has_list || p.count_size;
+                fixed += static_cast<std::uint64_t>(p.size);
+            }
+            if (!has_list) { // every element the same size: no need to walk them
+                const std::uint64_t held = fixed ? (size - at) / fixed : e.count;
+                if (held < e.count) ply_ends_early(path, e, held);
+                at += static_cast<std::size_t>(e.count * fixed);
+                continue;
+            }
+            for (std::uint64_t i = 0; i < e.count; ++i)
+                for (const PlyProperty& p : e.properties) {
+                    if (!p.count_size) {
+                        if (size - at < static_cast<std::uint64_t>(p.size)) ply_ends_early(path, e, i);
+                        at += static_cast<std::size_t>(p.size);
+                        continue;
+                    }
+                    if (size - at < static_cast<std::uint64_t>(p.count_size)) ply_ends_early(path, e, i);
+                    std::uint64_t items = 0;
+                    for (int k = 0; k < p.count_size; ++k) {
+                        const std::uint64_t byte = static_cast<unsigned char>(text[at + static_cast<std::size_t>(little ? p.count_size - 1 - k : k)]);
+                        items = items << 8 | byte;
+                    }
+                    if (p.count_signed && (items >> (8 * p.count_size - 1)) & 1u)
+                        cannot_read(path, "'" + e.name + "' element " + std::to_string(i) + " has a negative list length");
+                    at += static_cast<std::size_t>(p.count_size);
+                    if ((size - at) / static_cast<std::uint64_t>(p.size) < items) ply_ends_early(path, e, i);
+                    at += static_cast<std::size_t>(items * static_cast<std::uint64_t>(p.size));
+                }
+        }
+    }
+}
+
+#if RCX_HAVE_ASSIMP
+// What post-processing must not be given (Assimp's triangulation asserts on faces without indices):
+// faces with no index or an index past the mesh's vertices, and vertices that are not finite.
+void check_imported(const std::string& path, const aiScene& scene) {
+    for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
+        const aiMesh& mesh = *scene.mMeshes[mi];
+        const std::string where = scene.mNumMeshes > 1 ? " of mesh " + std::to_string(mi) : std::string();
+        for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+            const aiVector3D& p = mesh.mVertices[v];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                cannot_read(path, "vertex " + std::to_string(v) + where + " is not a finite point");
+        }
+        for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+            const aiFace& face = mesh.mFaces[f];
+            if (face.mNumIndices == 0 || !face.mIndices)
+                cannot_read(path, "face " + std::to_string(f) + where + " has no vertices (the file is damaged or truncated)");
+            for (unsigned k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh.mNumVertices)
+                    cannot_read(path, "face " + std::to_string(f) + where + " uses vertex " + std::to_string(face.mIndices[k]) +
+                                          " of " + std::to_string(mesh.mNumVertices));
+        }
+    }
+}
+#endif
+
+} // namespace
+
+Mesh load_mesh(const std::string& path) {
+    const std::string bytes = read_whole_file(path);
+    check_ply_complete(path, bytes);
 #if RCX_HAVE_ASSIMP
     Assimp::Importer importer;
     // Drop the file's normals, texture coordinates and colours so that vertices shared by faces join
@@ -136,11 +338,14 @@ Mesh load_mesh(const std::string& path) {
     importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS | aiComponent_TEXCOORDS |
                                                             aiComponent_COLORS | aiComponent_TANGENTS_AND_BITANGENTS);
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* scene = importer.ReadFile(
-        path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                  aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices | aiProcess_SortByPType);
-    if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
-        throw std::runtime_error("cannot read mesh '" + path + "': " + importer.GetErrorString());
+    // Read and validate first, check what Assimp's checks let through, and only then post-process.
+    const aiScene* raw = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    if (!raw || (raw->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) cannot_read(path, importer.GetErrorString());
+    check_imported(path, *raw);
+    const aiScene* scene = importer.ApplyPostProcessing(
+        aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
+        aiProcess_PreTransformVertices | aiProcess_SortByPType);
+    if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) cannot_read(path, importer.GetErrorString());
     Mesh out;
     out.name = std::filesystem::path(path).stem().string();
     for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
@@ -161,11 +366,10 @@ Mesh load_mesh(const std::string& path) {
             out.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
         }
     }
-    if (out.triangles.empty()) throw std::runtime_error("cannot read mesh '" + path + "': it holds no triangles");
+    if (out.triangles.empty()) cannot_read(path, "it holds no triangles");
     return out;
 #else
-    throw std::runtime_error("cannot read mesh '" + path + "': RayCache examples were built without Assimp "
-                             "(install libassimp-dev and reconfigure)");
+    cannot_read(path, "RayCache examples were built without Assimp (install libassimp-dev and reconfigure)");
 #endif
 }
 

@@ -4,12 +4,19 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <system_error>
+
+#include <fcntl.h>
+#include <unistd.h>
+#ifdef __linux__
+#include <linux/magic.h>
+#include <sys/vfs.h>
+#endif
 
 namespace rcx {
 
@@ -44,13 +51,27 @@ long parse_int(const std::string& option, const std::string& text, long min, lon
     return v;
 }
 
-// A finite float; `positive` additionally requires > 0.
+// A finite float, 0 or of normal size (subnormals are refused: too small to compute with); `positive`
+// additionally requires > 0.
 float parse_float(const std::string& option, const std::string& text, bool positive) {
     errno = 0;
     char* end = nullptr;
     const float v = std::strtof(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    const bool out_of_range = errno == ERANGE;
+    if (text.empty() || end == text.c_str() || *end != '\0') throw UsageError(option + ": '" + text + "' is not a number");
+    if (std::isnan(v) || (std::isinf(v) && !out_of_range))
         throw UsageError(option + ": '" + text + "' is not a finite number");
+    auto shortest = [](float limit) {
+        char digits[32];
+        std::snprintf(digits, sizeof digits, "%g", static_cast<double>(limit));
+        return std::string(digits);
+    };
+    if (std::isinf(v))
+        throw UsageError(option + ": " + text + " is too large for a float (the largest is " +
+                         shortest(std::numeric_limits<float>::max()) + ")");
+    if (out_of_range || (v != 0.0f && !std::isnormal(v)))
+        throw UsageError(option + ": " + text + " is too small: below the smallest normal float (" +
+                         shortest(std::numeric_limits<float>::min()) + "), it would be a subnormal number or 0");
     if (positive && !(v > 0.0f)) throw UsageError(option + ": must be > 0, got " + text);
     return v;
 }
@@ -104,6 +125,7 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
         else if (arg == "--filtered") { flag(); o.filtered = true; }
+        else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -169,6 +191,8 @@ std::string help_text(const std::string& program) {
         "  --rays-per-texel F  auto: a frame's leaving rays per covered texel; smaller\n"
         "                      is sharper and fills more slowly (Embree tracer)       [1]\n"
         "  --filtered          CCT: bilinear lookups instead of the nearest texel (Embree tracer)\n"
+        "  --edge-threshold F  CCT: texels differing from a neighbour by more than F are\n"
+        "                      traced, not answered; negative: off (Embree tracer)   [0.1]\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
         "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
         "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"
@@ -186,7 +210,9 @@ std::string help_text(const std::string& program) {
         "  --quiet             only the summary; no progress bar\n"
         "  --progress          draw the progress bar even when stderr is not a terminal\n"
         "  --help              this text\n"
-        "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input.\n";
+        "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
+        "(including a run that needs more memory than is available: MemAvailable, or the environment's\n"
+        "RCX_AVAILABLE_MEMORY=BYTES).\n";
 }
 
 SceneParams scene_params(const Options& options) {
@@ -209,23 +235,79 @@ Scene scene_from_options(const Options& options) {
     return scene;
 }
 
+namespace {
+
+// Why a file or folder could not be created in the existing folder `folder` (errno `error`), in words a
+// user can act on: the system's message alone misleads on virtual file systems, where creating a file in
+// a folder that exists fails with "No such file or directory".
+std::string why_nothing_can_be_created(const std::string& folder, int error) {
+    const std::string system = std::strerror(error);
+#ifdef __linux__
+    struct statfs fs{};
+    if (statfs(folder.c_str(), &fs) == 0) {
+        const char* kind = nullptr;
+        switch (static_cast<unsigned long>(fs.f_type)) {
+        case PROC_SUPER_MAGIC: kind = "proc"; break;
+        case SYSFS_MAGIC: kind = "sysfs"; break;
+        case DEBUGFS_MAGIC: kind = "debugfs"; break;
+        case TRACEFS_MAGIC: kind = "tracefs"; break;
+        case CGROUP_SUPER_MAGIC: case CGROUP2_SUPER_MAGIC: kind = "cgroup"; break;
+        default: break;
+        }
+        if (kind)
+            return "'" + folder + "' is on the kernel's " + kind +
+                   " file system, which only shows kernel state: no files can be created there (the system says: " +
+                   system + ")";
+    }
+#endif
+    switch (error) {
+    case EACCES:
+    case EPERM: return "no permission to create files in '" + folder + "' (" + system + ")";
+    case EROFS: return "'" + folder + "' is on a read-only file system";
+    case ENOSPC: return "the file system of '" + folder + "' is full";
+    case EDQUOT: return "the disk quota for '" + folder + "' is used up";
+    case ENOENT: return "the file system of '" + folder + "' does not let files be created there (" + system + ")";
+    default: return "creating a file in '" + folder + "' failed: " + system;
+    }
+}
+
+// The nearest folder that exists on the way to `path` (`path` itself when it exists).
+std::filesystem::path nearest_existing(std::filesystem::path path) {
+    std::error_code ec;
+    path = std::filesystem::absolute(path, ec);
+    while (!path.empty() && !std::filesystem::exists(path, ec) && path.has_relative_path()) path = path.parent_path();
+    return path;
+}
+
+} // namespace
+
 void ensure_writable_directory(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::exists(path, ec) && !fs::is_directory(path, ec))
         throw std::runtime_error("output folder '" + path + "' is a file, not a folder; choose another --out");
     fs::create_directories(path, ec);
-    if (ec) throw std::runtime_error("cannot create output folder '" + path + "': " + ec.message() + "; choose another --out");
-    // Probe with a real file: permissions alone do not tell (read-only mounts, ACLs, root).
+    if (ec) {
+        const fs::path parent = nearest_existing(path);
+        throw std::runtime_error("cannot create output folder '" + path + "': " +
+                                 (fs::is_directory(parent) ? why_nothing_can_be_created(parent.string(), ec.value())
+                                                           : ec.message()) +
+                                 "; choose another --out");
+    }
+    // Probe with a real file: permissions alone do not tell (read-only mounts, ACLs, root, virtual file systems).
     const fs::path probe = fs::path(path) / (".rcx-write-test-" + std::to_string(
         std::chrono::steady_clock::now().time_since_epoch().count()));
-    {
-        std::ofstream f(probe);
-        if (!f || !(f << "x") || !f.flush())
-            throw std::runtime_error("cannot write into output folder '" + path + "': " + std::strerror(errno) +
-                                     "; choose another --out");
-    }
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0)
+        throw std::runtime_error("cannot write into output folder '" + path + "': " + why_nothing_can_be_created(path, errno) +
+                                 "; choose another --out");
+    const bool written = ::write(fd, "x", 1) == 1;
+    const int write_error = errno;
+    ::close(fd);
     fs::remove(probe, ec);
+    if (!written)
+        throw std::runtime_error("cannot write into output folder '" + path + "': " +
+                                 why_nothing_can_be_created(path, write_error) + "; choose another --out");
 }
 
 } // namespace rcx

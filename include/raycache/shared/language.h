@@ -1,7 +1,8 @@
 /* raycache/shared/language.h: lets the files in raycache/shared/ compile as both C++17 (with GLM) and GLSL 4.50.
  *
  * Shared files use only the common subset of the two languages: vec3/uvec2/uint/int/float/bool,
- * if/else, ?:, bit operations, floatBitsToUint/uintBitsToFloat, abs/floor/min/max/clamp/sqrt/dot.
+ * if/else, for, ?:, bit operations, floatBitsToUint/uintBitsToFloat, abs/floor/min/max/clamp/sqrt/dot,
+ * fixed-size arrays (also as struct members) filled element by element (no initializer lists).
  * Functions are declared RAYCACHE_FN; out-parameters are avoided (return values or structs instead).
  */
 #ifndef RAYCACHE_SHARED_LANGUAGE_H

@@ -60,6 +60,10 @@ struct SceneCacheSettings {
     // around the ray's direction (raycache/filtered_lookup.hpp); false (the default): with the own texel
     // alone. Filtering gains about 1.5 dB on moving cameras at adaptive sizes and costs 15-20% of the frame.
     bool filtered = false;
+    // CCT confidence test (raycache/edge_confidence.hpp): texels whose colour differs from a filled
+    // neighbour's by more than this (linear radiance, any channel) are not answered; their rays are
+    // traced. Negative: off.
+    float edge_threshold = 0.1f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -83,6 +87,7 @@ struct SceneCacheStatistics {
     std::size_t allocated_bytes = 0; // what the cubes hold: allocated tiles and tile tables
     std::size_t pyramid_bytes = 0;   // CDCT depth pyramids
     std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
+    std::size_t doubtful_texels = 0; // CCT texels the confidence test does not answer (their rays are traced)
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -152,7 +157,7 @@ public:
     // Throws std::invalid_argument naming the field for bad settings.
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
-          adaptive_(settings.adaptive), filtered_(settings.filtered),
+          adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
@@ -259,6 +264,7 @@ public:
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
             if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
+            if (e.cct) mark_doubtful_edges(*e.cct, edge_threshold_);
             const CubeStatistics frame = with_cube(e, [](auto& cube) { return cube.begin_frame(); });
             add(total, frame);
             if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
@@ -268,6 +274,7 @@ public:
         total.texel_bytes = texel_bytes();
         total.allocated_bytes = allocated_bytes();
         total.pyramid_bytes = pyramid_bytes();
+        for (const Entry& e : entries_) total.doubtful_texels += e.cct ? e.cct->doubtful_texels() : 0;
         texels_read_.reset();
         return total;
     }
@@ -320,7 +327,7 @@ public:
     }
 
     // Replaces every cube by the one saved for its object in `path`, texels visible from the next frame,
-    // depth pyramids rebuilt; adaptive cubes take the face size they were saved with. The file must hold this
+    // depth pyramids rebuilt and doubtful edges marked with this cache's edge_threshold; adaptive cubes take the face size they were saved with. The file must hold this
     // cache's technique, `scene`, one cube for each attached object and no other, each at the same placement
     // and (for a cube of a fixed face size) of that face size. Otherwise, or when it is truncated, corrupted
     // or of a newer format, throws CacheFileError saying what is wrong, and the cache is left as it was.
@@ -391,9 +398,10 @@ private:
         Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), std::move(e.pyramid), nullptr};
         make_cube(e, next);
         if (next < current) {
-            if (technique_ == Technique::cct)
+            if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
-            else
+                mark_doubtful_edges(*e.cct, edge_threshold_);
+            } else
                 resample_into(*old.cdct, *e.cdct);
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
@@ -448,14 +456,19 @@ private:
                  object_text(ObjectId{static_cast<unsigned>(object & 0xFFFFFFFFu), static_cast<unsigned>(object >> 32)}) +
                  ", which has none here (" + std::to_string(by_object.size()) + " such cubes)");
         }
+        // What saved caches derive from their texels is derived again: edge marks (as at the end of a frame
+        // that stored every texel, which marks the same pairs), then the texels are made visible; pyramids.
         std::vector<std::unique_ptr<DepthPyramid>> pyramids(entries_.size());
-        if constexpr (std::is_same_v<Texel, CdctTexel>) {
-            if (use_pyramid_)
-                for (std::size_t i = 0; i < entries_.size(); ++i) {
-                    const CdctCube& c = *loaded[source_of[i]].cube;
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            CacheCube<Texel>& c = *loaded[source_of[i]].cube;
+            if constexpr (std::is_same_v<Texel, CctTexel>) mark_doubtful_edges(c, edge_threshold_);
+            c.begin_frame();
+            if constexpr (std::is_same_v<Texel, CdctTexel>) {
+                if (use_pyramid_) {
                     pyramids[i] = std::make_unique<DepthPyramid>(c.face_size());
                     pyramids[i]->rebuild(c);
                 }
+            }
         }
         // Nothing below throws: every entry takes its new cube, or none does.
         for (std::size_t i = 0; i < entries_.size(); ++i) {
@@ -480,6 +493,7 @@ private:
     bool use_pyramid_;
     AdaptiveResolution adaptive_;
     bool filtered_;
+    float edge_threshold_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     std::vector<int> direct_;                                // geom_id -> entry, objects not instanced

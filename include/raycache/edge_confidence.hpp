@@ -1,0 +1,54 @@
+// raycache/edge_confidence.hpp: the CCT's confidence test. A texel holds one ray's colour and answers
+// every ray that falls in it; where the surroundings change within a texel (a checker edge, a sphere's
+// rim seen in the mirror) that answer is often the wrong side of the edge, and those pixels carry most
+// of a cached frame's error. So texels whose colour differs from a filled neighbour's by more than a
+// threshold are marked doubtful (CacheCube::set_doubtful): their rays are traced, the rest are answered.
+//
+// Marks only ever need setting: a visible texel's value does not change until clear() or invalidate(),
+// so each pair of neighbours is compared once, when the second of them is stored. The test compares
+// neighbours on the same face (a texel on a face's edge is not compared across it).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cache_cube.hpp"
+
+namespace raycache {
+
+// True when two cached colours differ by more than `threshold` in some channel (linear radiance).
+inline bool colours_differ(const glm::vec3& a, const glm::vec3& b, float threshold) noexcept {
+    const glm::vec3 d = glm::abs(a - b);
+    return std::max(d.x, std::max(d.y, d.z)) > threshold;
+}
+
+// Marks doubtful every texel written this frame, and every filled neighbour of one (left, right, up,
+// down on its face), whose colours differ by more than `threshold`. Call it between frames, before the
+// cube's begin_frame() (it reads the frame's written texels). Returns the texels newly marked.
+// threshold < 0 (or NaN): nothing is marked.
+inline std::size_t mark_doubtful_edges(CctCube& cube, float threshold) {
+    if (!(threshold >= 0.0f)) return 0;
+    const int n = cube.face_size();
+    const std::size_t before = cube.doubtful_texels();
+    cube.for_each_written_texel([&](const TexelAddress& t) {
+        const std::optional<glm::vec3> own = cube.load(t);
+        if (!own) return;
+        const TexelAddress neighbours[4] = {{t.face, t.column - 1, t.row}, {t.face, t.column + 1, t.row},
+                                            {t.face, t.column, t.row - 1}, {t.face, t.column, t.row + 1}};
+        for (const TexelAddress& other : neighbours) {
+            if (!is_on_cube(other, n)) continue;
+            const std::optional<glm::vec3> value = cube.load(other);
+            if (value && colours_differ(*own, *value, threshold)) {
+                cube.set_doubtful(t);
+                cube.set_doubtful(other);
+            }
+        }
+    });
+    return cube.doubtful_texels() - before;
+}
+
+} // namespace raycache

@@ -1,0 +1,56 @@
+// The memory a run of an example tracer needs, checked before it starts (rcx/memory.hpp): a run that
+// cannot fit is refused with a message naming the need and what is available.
+#include <doctest/doctest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include <raycache/cache_cube.hpp>
+#include <raycache/depth_pyramid.hpp>
+
+#include "rcx/memory.hpp"
+
+TEST_CASE("cpu_cubes counts the texels, written bits and depth pyramids of the cubes the Embree tracer makes") {
+    const raycache::CdctCube cdct(64);
+    const raycache::CctCube cct(64);
+    const raycache::DepthPyramid pyramid(64);
+    const std::uint64_t with_pyramids = rcx::cpu_cubes(rcx::CacheMode::cdct, 3, 64, true).bytes;
+    CHECK(with_pyramids >= 3 * (cdct.texel_bytes() + pyramid.bytes()));
+    CHECK(with_pyramids <= 3 * (cdct.bytes() + pyramid.bytes()));
+    CHECK(rcx::cpu_cubes(rcx::CacheMode::cdct, 3, 64, false).bytes == with_pyramids - 3 * pyramid.bytes());
+    const std::uint64_t colour = rcx::cpu_cubes(rcx::CacheMode::cct, 3, 64, true).bytes; // no pyramid for the CCT
+    CHECK(colour >= 3 * cct.texel_bytes());
+    CHECK(colour <= 3 * cct.bytes());
+    CHECK(rcx::cpu_cubes(rcx::CacheMode::off, 3, 64, true).bytes == 0);
+    CHECK(rcx::cpu_cubes(rcx::CacheMode::ceiling, 3, 64, true).bytes == 0);
+}
+
+TEST_CASE("a run that needs more memory than is available is refused, naming the need and what is available") {
+    // behind-32 (33 cached objects) with 4096-texel CDCT faces: about 29 GiB.
+    const std::vector<rcx::MemoryNeed> needs{rcx::cpu_cubes(rcx::CacheMode::cdct, 33, 4096, true),
+                                             rcx::MemoryNeed{"frame images", 3u << 20}};
+    const rcx::AvailableMemory sixteen{16ull << 30, "MemAvailable in /proc/meminfo"};
+    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("needs about 29.3 GiB"), std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("33 cdct cubes of 6 x 4096 x 4096 texels"),
+                         std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen),
+                         doctest::Contains("only 16.0 GiB is available (MemAvailable in /proc/meminfo)"), std::runtime_error);
+    CHECK_NOTHROW(rcx::check_memory(needs, rcx::AvailableMemory{64ull << 30, "a big machine"}));
+    CHECK_NOTHROW(rcx::check_memory(needs, std::nullopt)); // unknown: nothing to check against
+}
+
+TEST_CASE("available memory comes from RCX_AVAILABLE_MEMORY when set, else from the system") {
+    const char* saved = std::getenv("RCX_AVAILABLE_MEMORY");
+    const std::string before = saved ? saved : "";
+    setenv("RCX_AVAILABLE_MEMORY", "123456789", 1);
+    const std::optional<rcx::AvailableMemory> forced = rcx::available_memory();
+    REQUIRE(forced.has_value());
+    CHECK(forced->bytes == 123456789u);
+    CHECK(forced->source == "RCX_AVAILABLE_MEMORY");
+    unsetenv("RCX_AVAILABLE_MEMORY");
+    const std::optional<rcx::AvailableMemory> system = rcx::available_memory();
+    REQUIRE(system.has_value()); // Linux: /proc/meminfo
+    CHECK(system->bytes > 0);
+    CHECK(system->source != "RCX_AVAILABLE_MEMORY");
+    if (saved) setenv("RCX_AVAILABLE_MEMORY", before.c_str(), 1);
+}
