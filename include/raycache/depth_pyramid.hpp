@@ -76,6 +76,7 @@ public:
     // before the cube's begin_frame(). Cost: proportional to the texels stored, times levels().
     // Throws std::invalid_argument when the cube's face size is not the pyramid's (nothing is changed).
     void update(const CdctCube& cube) {
+        cube.assert_between_frames();
         check_face_size(cube);
         std::vector<std::uint32_t> dirty; // (face, column, row) of blocks at the current level, packed
         cube.for_each_written_texel([&](const TexelAddress& t) { dirty.push_back(pack(t.face, t.column, t.row)); });
