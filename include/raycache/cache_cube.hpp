@@ -18,6 +18,8 @@
 // begin_frame(), clear() and invalidate() must run between frames, when no other thread uses the cube.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cstddef>

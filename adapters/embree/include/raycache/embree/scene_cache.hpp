@@ -21,6 +21,8 @@
 // is not cached, its rays are traced. An explicit face size keeps a cube at that size.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
