@@ -496,3 +496,36 @@ TEST_CASE("a primitive range inside an instance gets its cube from the caller's 
     }
     rtcReleaseScene(top);
 }
+
+TEST_CASE("object_of(hit) of real Embree hits finds the cubes the README attaches: a geometry, and an instance by its own id") {
+    World w;
+    RTCScene top = rtcNewScene(w.device);
+    const unsigned plain = w.add_sphere(top, {0, 0, 10}, 1.0f);
+    RTCGeometry instance = rtcNewGeometry(w.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(instance, w.scene); // the World: mirror, floor and ball
+    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 20, 0, 0}; // moved to x + 20
+    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    rtcCommitGeometry(instance);
+    const unsigned instance_id = rtcAttachGeometry(top, instance);
+    rtcReleaseGeometry(instance);
+    rtcCommitScene(top);
+    {
+        SceneCache caches(Technique::cct);
+        caches.attach(top, {plain});
+        caches.attach(top, {instance_id});
+        const RTCHit on_plain = hit_in(top, {0, 0, 0}, {0, 0, 1});
+        REQUIRE(on_plain.geomID == plain);
+        CHECK(on_plain.instID[0] == RTC_INVALID_GEOMETRY_ID);
+        const RTCHit on_mirror = hit_in(top, {21, 2, 0}, {0, 0, 1}); // the instanced mirror sphere
+        REQUIRE(on_mirror.geomID == w.mirror);
+        CHECK(on_mirror.instID[0] == instance_id);
+        const RTCHit on_floor = hit_in(top, {15, 5, 0}, {0, -1, 0}); // the instanced floor
+        REQUIRE(on_floor.geomID == w.floor);
+        for (const RTCHit& hit : {on_plain, on_mirror, on_floor})
+            caches.leaving_ray(raycache::embree::object_of(hit), {0, 0, 0}, {0, 1, 0}, [] { return TracedRay{glm::vec3(0.5f), 1.0f}; });
+        CHECK(caches.object_statistics({plain})->lookups == 1u);
+        CHECK(caches.object_statistics({instance_id})->lookups == 2u); // both geometries reached through it
+        CHECK(caches.begin_frame().lookups == 3u);
+    }
+    rtcReleaseScene(top);
+}
