@@ -68,6 +68,18 @@ struct World {
     }
 };
 
+// Instances committed scene `inner` into `top`, moved by `offset`; the instance's geometry id in `top`.
+unsigned add_instance(RTCDevice device, RTCScene top, RTCScene inner, glm::vec3 offset) {
+    RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(instance, inner);
+    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, offset.x, offset.y, offset.z}; // column-major 3x4
+    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    rtcCommitGeometry(instance);
+    const unsigned id = rtcAttachGeometry(top, instance);
+    rtcReleaseGeometry(instance);
+    return id;
+}
+
 } // namespace
 
 TEST_CASE("cube bounds come from the Embree geometry: centre of its box, largest half-extent") {
@@ -265,13 +277,7 @@ TEST_CASE("an instance attached by its own id caches every geometry reached thro
     const unsigned inner_sphere = w.add_sphere(inner, {0, 0, 0}, 1.0f);
     rtcCommitScene(inner);
     RTCScene top = rtcNewScene(w.device);
-    RTCGeometry instance = rtcNewGeometry(w.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(instance, inner);
-    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 5, 0, 0}; // column-major 3x4: moved to x = 5
-    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
-    rtcCommitGeometry(instance);
-    const unsigned instance_id = rtcAttachGeometry(top, instance);
-    rtcReleaseGeometry(instance);
+    const unsigned instance_id = add_instance(w.device, top, inner, {5, 0, 0}); // moved to x = 5
     rtcCommitScene(top);
     {
         SceneCache caches(Technique::cct);
@@ -471,13 +477,7 @@ TEST_CASE("primitive ranges that overlap, run past the geometry, or clash with a
 TEST_CASE("a primitive range inside an instance gets its cube from the caller's bounds and is found by hits through the instance") {
     Soup s;
     RTCScene top = rtcNewScene(s.device);
-    RTCGeometry instance = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(instance, s.scene);
-    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 100}; // moved to z + 100
-    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
-    rtcCommitGeometry(instance);
-    const unsigned instance_id = rtcAttachGeometry(top, instance);
-    rtcReleaseGeometry(instance);
+    const unsigned instance_id = add_instance(s.device, top, s.scene, {0, 0, 100});
     rtcCommitScene(top);
     {
         SceneCache caches(Technique::cct);
@@ -501,13 +501,7 @@ TEST_CASE("object_of(hit) of real Embree hits finds the cubes the README attache
     World w;
     RTCScene top = rtcNewScene(w.device);
     const unsigned plain = w.add_sphere(top, {0, 0, 10}, 1.0f);
-    RTCGeometry instance = rtcNewGeometry(w.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(instance, w.scene); // the World: mirror, floor and ball
-    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 20, 0, 0}; // moved to x + 20
-    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
-    rtcCommitGeometry(instance);
-    const unsigned instance_id = rtcAttachGeometry(top, instance);
-    rtcReleaseGeometry(instance);
+    const unsigned instance_id = add_instance(w.device, top, w.scene, {20, 0, 0}); // the World: mirror, floor, ball
     rtcCommitScene(top);
     {
         SceneCache caches(Technique::cct);

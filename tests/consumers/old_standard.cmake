@@ -1,25 +1,14 @@
-# run_old_standard.cmake: a consumer built as C++11 or C++14 must stop at RayCache's one #error naming
-# the requirement (raycache/requires_cpp17.hpp), not at a hundred errors from inside the headers. Run
-# with cmake -P. For every public header, and each standard in STANDARDS, compiles a one-line consumer
-# `#include <that header>` the way a Makefile-built tracer would (no CMake target, so nothing raises the
-# standard) and checks the compiler's output: the #error's exact message, once, and no other error but
-# the stop that follows it.
-#   -DCXX_COMPILER=...  -DRAYCACHE_SOURCE_DIR=...  -DWORK_DIR=... (wiped first)
-#   -DSTANDARDS=c++11|c++14 ('|'-separated)
-cmake_minimum_required(VERSION 3.20)
-
-foreach(_v CXX_COMPILER RAYCACHE_SOURCE_DIR WORK_DIR STANDARDS)
-  if(NOT DEFINED ${_v} OR "${${_v}}" STREQUAL "")
-    message(FATAL_ERROR "run_old_standard.cmake: -D${_v}=... is required")
-  endif()
-endforeach()
-string(REPLACE "|" ";" STANDARDS "${STANDARDS}")
+# old_standard.cmake (run_consumer.cmake's MODE=old_standard): a consumer built as C++11 or C++14 must
+# stop at RayCache's one #error naming the requirement (raycache/requires_cpp17.hpp), not at a hundred
+# errors from inside the headers. For every public header and each of those standards, compiles a
+# one-line consumer `#include <that header>` the way a Makefile-built tracer would (no CMake target, so
+# nothing raises the standard) and checks the compiler's output: the #error's exact message, once, and no
+# other error but the stop that follows it. Needs a GCC- or Clang-like CXX_COMPILER.
+set(_standards c++11 c++14)
 
 # The message a user sees; a change to it in requires_cpp17.hpp must be made here too, on purpose.
 set(_expected "RayCache needs C++17 or later: compile with -std=c++17 (CMake: link RayCache::RayCache, which asks for cxx_std_17)")
 
-file(REMOVE_RECURSE "${WORK_DIR}")
-file(MAKE_DIRECTORY "${WORK_DIR}")
 set(_core "${RAYCACHE_SOURCE_DIR}/include")
 set(_embree "${RAYCACHE_SOURCE_DIR}/adapters/embree/include")
 file(GLOB _headers RELATIVE "${_core}" "${_core}/raycache/*.hpp")
@@ -27,11 +16,11 @@ file(GLOB _adapter_headers RELATIVE "${_embree}" "${_embree}/raycache/embree/*.h
 list(APPEND _headers ${_adapter_headers})
 list(LENGTH _headers _count)
 if(_count LESS 10)
-  message(FATAL_ERROR "run_old_standard.cmake: found only ${_count} public headers under ${_core} and ${_embree}")
+  message(FATAL_ERROR "[${MODE}] FAILED: found only ${_count} public headers under ${_core} and ${_embree}")
 endif()
 
 set(_failures "")
-foreach(_standard IN LISTS STANDARDS)
+foreach(_standard IN LISTS _standards)
   foreach(_header IN LISTS _headers)
     string(MAKE_C_IDENTIFIER "${_standard}_${_header}" _name)
     set(_source "${WORK_DIR}/${_name}.cpp")
@@ -67,6 +56,6 @@ foreach(_standard IN LISTS STANDARDS)
 endforeach()
 
 if(_failures)
-  message(FATAL_ERROR "A consumer under an old standard did not get exactly RayCache's #error:${_failures}")
+  message(FATAL_ERROR "[${MODE}] FAILED: a consumer under an old standard did not get exactly RayCache's #error:${_failures}")
 endif()
-message(STATUS "${_count} headers x (${STANDARDS}): each stopped at the one #error \"${_expected}\"")
+message(STATUS "[${MODE}] ${_count} headers x (${_standards}): each stopped at the one #error \"${_expected}\"")
