@@ -60,7 +60,7 @@ int run(const rcx::Options& o) {
         throw InputError(e.what());
     }
     try {
-        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid), rcx::frame_images(o)});
+        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid && !o.secant), rcx::frame_images(o)});
     } catch (const std::runtime_error& e) {
         throw InputError(e.what());
     }
@@ -79,6 +79,8 @@ int run(const rcx::Options& o) {
         relief.epsilon = o.epsilon;
         relief.max_steps = o.max_steps;
         relief.max_gap = o.max_gap > 0.0f ? o.max_gap : std::numeric_limits<float>::infinity();
+        relief.search = o.secant ? raycache::DepthSearch::secant : raycache::DepthSearch::relief;
+        relief.max_reads = o.max_reads;
         try {
             raycache::embree::SceneCacheSettings cache_settings;
             cache_settings.relief = relief;

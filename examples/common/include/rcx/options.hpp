@@ -43,6 +43,8 @@ struct Options {
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss
+    bool secant = true;               // CDCT search: secant (a few reads) or, false, the thesis's relief walk
+    int max_reads = 8;                // CDCT secant search: reads before a miss
     bool pyramid = true;              // CDCT searches over a min-depth pyramid (false: the thesis's linear walk)
     float max_gap = 0.5f;             // CDCT: a crossing this far behind the cached surface is a miss (0 = off)
     bool prefill = false;             // trace every cube texel once before the first frame

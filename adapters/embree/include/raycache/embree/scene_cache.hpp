@@ -122,8 +122,8 @@ inline constexpr int adaptive_face_size = 0;
 
 // Everything a SceneCache can be tuned by; the defaults need no tuning.
 struct SceneCacheSettings {
-    ReliefParameters relief{};          // the CDCT's search
-    bool depth_pyramid = true;          // CDCT: search over a min-depth pyramid (false: the thesis's walk)
+    ReliefParameters relief{};          // the CDCT's search (relief.search: secant, the default, or relief)
+    bool depth_pyramid = true;          // CDCT relief search: over a min-depth pyramid (false: the thesis's walk)
     AdaptiveResolution adaptive{};      // how adaptive cubes pick their face size
     // CCT: a hit (the ray's own texel is visible) answers with the bilinear mean of the visible texels
     // around the ray's direction (raycache/filtered_lookup.hpp); false (the default): with the own texel
@@ -571,7 +571,7 @@ private:
             e.cct = std::make_unique<CctCube>(face_size, budget_);
         } else {
             e.cdct = std::make_unique<CdctCube>(face_size, budget_);
-            if (use_pyramid_) e.pyramid = std::make_unique<DepthPyramid>(face_size);
+            if (use_pyramid_ && relief_.search == DepthSearch::relief) e.pyramid = std::make_unique<DepthPyramid>(face_size);
         }
     }
 
