@@ -21,6 +21,8 @@
 // trace too) count themselves in_frame(), and the between-frames calls assert that nobody is counted.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #if !defined(RAYCACHE_CHECK_FRAME_RULE) && !defined(NDEBUG)
 #define RAYCACHE_CHECK_FRAME_RULE 1
 #endif

@@ -1,6 +1,8 @@
 // raycache/cached_trace.hpp: Algorithm 1 of the thesis (the CCT's whole ray path) as one generic helper.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <type_traits>
 #include <utility>
 

@@ -2,6 +2,8 @@
 // hit, and the relief search (thesis Algorithm 4) that finds a ray's hit in the cube's depth image.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <array>
 #include <cmath>
 #include <limits>

@@ -6,6 +6,8 @@
 // the pyramid from the texels stored in a frame just before that frame's CacheCube::begin_frame().
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
