@@ -117,21 +117,29 @@ TEST_CASE("a cache file is sparse: a 4096-texel cube holding one texel takes one
     CHECK(back[0].cube->valid_texels() == 1u);
 }
 
-TEST_CASE("several cubes in one file come back with their own object ids and placements") {
-    CctCube a(8), b(30);
+TEST_CASE("several cubes in one file come back with their own object ids, parts and placements") {
+    CctCube a(8), b(30), c(3);
     Lcg rng{17};
     fill_randomly(a, rng, 500);
     fill_randomly(b, rng, 100);
+    fill_randomly(c, rng, 500);
     const CubeBounds other{glm::vec3(-4.0f, 0.0f, 9.0f), 2.0f};
-    const std::vector<std::uint8_t> bytes =
-        raycache::encode_cache<CctTexel>(scene, {CubeToSave<CctTexel>{1, bounds, &a}, CubeToSave<CctTexel>{1ull << 40, other, &b}});
+    // b and c are two parts of one object (as primitive ranges of one geometry are).
+    const std::vector<std::uint8_t> bytes = raycache::encode_cache<CctTexel>(
+        scene, {CubeToSave<CctTexel>{1, bounds, &a}, CubeToSave<CctTexel>{1ull << 40, other, &b, 3}, CubeToSave<CctTexel>{1ull << 40, bounds, &c, 4}});
     std::vector<raycache::LoadedCube<CctTexel>> back = decode<CctTexel>(bytes);
-    REQUIRE(back.size() == 2u);
+    REQUIRE(back.size() == 3u);
     CHECK(back[0].object == 1u);
+    CHECK(back[0].part == 0u);
     CHECK(back[1].object == 1ull << 40);
+    CHECK(back[1].part == 3u);
+    CHECK(back[2].part == 4u);
     CHECK(raycache::same_placement(back[1].bounds, other));
     CHECK(same_texels(a, *back[0].cube));
     CHECK(same_texels(b, *back[1].cube));
+    CHECK(same_texels(c, *back[2].cube));
+    CHECK_THROWS_AS(raycache::encode_cache<CctTexel>(scene, {CubeToSave<CctTexel>{5, bounds, &a, 1}, CubeToSave<CctTexel>{5, other, &b, 1}}),
+                    std::invalid_argument);
 }
 
 TEST_CASE("a file saved for another scene, object, placement or technique is refused by name and loads nothing") {
@@ -155,7 +163,7 @@ TEST_CASE("a file saved for another scene, object, placement or technique is ref
     CHECK(contains(other_hash, path));
     CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, bounds, SceneIdentity{scene.hash, "other"}, 7); }),
                    "this is scene 'other'"));
-    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, bounds, scene, 8); }), "object 7, not 8"));
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, bounds, scene, 8); }), "its cube is object 7, not object 8"));
     CubeBounds moved = bounds;
     moved.centre.x = std::nextafter(moved.centre.x, 10.0f); // one ulp away is another placement
     CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, moved, scene, 7); }), "sits at centre"));

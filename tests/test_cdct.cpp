@@ -523,3 +523,108 @@ TEST_CASE("pre-filling traces every empty texel from the box surface and stores 
     CHECK(prefill(colours, bounds, p, trace) == 6 * 8 * 8);
     CHECK(colours.load({3, 4, 4})->x == doctest::Approx(0.25f));
 }
+
+TEST_CASE("the secant search finds the exit of a constant-depth sphere on its second read, within epsilon") {
+    // Every texel at distance 5: after the box exit (read 1), the jump to the sphere of radius 5 lands on
+    // it exactly (read 2). Expected hit: sphere_exit, worked in closed form above.
+    CdctCube cube(64);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    ReliefParameters p;
+    p.epsilon = 0.01f;
+    std::mt19937 rng(5);
+    float worst = 0.0f;
+    int most_reads = 0;
+    for (int i = 0; i < 500; ++i) {
+        const glm::vec3 o = random_origin(rng), d = random_direction(rng);
+        const ReliefResult r = secant_search(cube, bounds, o, d, p);
+        REQUIRE(r.hit);
+        worst = std::max(worst, std::abs(r.distance - sphere_exit(o, d, 5.0f)));
+        most_reads = std::max(most_reads, r.texels_read);
+    }
+    CHECK(worst <= p.epsilon);
+    CHECK(most_reads == 2);
+}
+
+TEST_CASE("above a plane the secant search finds the ray's hit within epsilon plus the texel's depth step, in at most max_reads reads") {
+    const float height = 2.0f;
+    ReliefParameters p;
+    p.epsilon = 0.005f;
+    p.max_reads = 16;
+    CdctCube cube(1024);
+    fill(cube, floor_depth(height, p.max_depth));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+    float worst = 0.0f;
+    long reads = 0;
+    int hits = 0, tries = 0;
+    for (int i = 0; i < 400; ++i) {
+        const glm::vec3 o = centre + glm::vec3(u(rng), u(rng), u(rng));
+        glm::vec3 d = random_direction(rng);
+        d.y = -std::abs(d.y);
+        if (-d.y < std::cos(glm::radians(45.0f))) continue; // within 45 degrees of straight down
+        ++tries;
+        const float t_exact = (centre.y - height - o.y) / d.y;
+        const ReliefResult r = secant_search(cube, bounds, o, d, p);
+        CHECK(r.texels_read <= p.max_reads);
+        reads += r.texels_read;
+        if (!r.hit) continue;
+        ++hits;
+        worst = std::max(worst, glm::length(r.point - (o + t_exact * d)));
+    }
+    MESSAGE("secant on a plane: " << hits << " of " << tries << " hit, " << static_cast<double>(reads) / tries
+                                  << " reads a search, worst distance from the exact hit " << worst);
+    // As for the relief search: the plane's depth changes by at most about 0.01 across a texel here.
+    CHECK(worst <= p.epsilon + 0.01f);
+    CHECK(hits >= tries * 9 / 10);
+    CHECK(static_cast<double>(reads) / tries <= 8.0);
+}
+
+TEST_CASE("the secant search misses on an empty texel, and behind a depth discontinuity wider than max_gap") {
+    // -Y filled with a floor 2 below the centre, the rest empty: straight down hits, straight up misses.
+    CdctCube cube(32);
+    const int n = cube.face_size();
+    for (int row = 0; row < n; ++row)
+        for (int column = 0; column < n; ++column) {
+            const TexelAddress t{3, column, row};
+            const glm::vec3 d = glm::normalize(texel_direction(t, n));
+            cube.store_at(t, DepthSample{face_color(3), 2.0f / -d.y});
+        }
+    cube.begin_frame();
+    ReliefParameters p;
+    CHECK(secant_search(cube, bounds, centre, glm::vec3(0, -1, 0), p).hit);
+    const ReliefResult up = secant_search(cube, bounds, centre, glm::vec3(0, 1, 0), p);
+    CHECK_FALSE(up.hit);
+    CHECK(up.texels_read == 1);
+
+    // A near wall (distance 1.5) over the half x > 0 and the far environment (100) over x < 0. The ray from
+    // (-0.5, 0, 0.9) along (1, 0, 2) crosses x = 0 at (0, 0, 1.9), 1.9 from the centre: behind the wall's
+    // edge, where the cube saw nothing. The crossing found there is 0.4 behind the wall: max_gap 0.3
+    // refuses it; without max_gap (the thesis) the wall's colour is taken.
+    CdctCube edge(128);
+    fill(edge, [](const glm::vec3& d) { return d.x > 0.0f ? 1.5f : 100.0f; });
+    p.max_reads = 64;
+    const glm::vec3 o = centre + glm::vec3(-0.5f, 0.0f, 0.9f), dir = glm::normalize(glm::vec3(1.0f, 0.0f, 2.0f));
+    const ReliefResult taken = secant_search(edge, bounds, o, dir, p);
+    CHECK(taken.hit);
+    CHECK(glm::length(taken.point - centre) == doctest::Approx(1.9f).epsilon(0.01));
+    p.max_gap = 0.3f;
+    CHECK_FALSE(secant_search(edge, bounds, o, dir, p).hit);
+}
+
+TEST_CASE("secant parameters are validated, and bad input misses without reading") {
+    ReliefParameters p;
+    p.max_reads = 0;
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_reads"), std::invalid_argument);
+    p.max_reads = RAYCACHE_SECANT_MAX_READS + 1;
+    CHECK_THROWS_WITH_AS(validate(p), doctest::Contains("max_reads"), std::invalid_argument);
+    CdctCube cube(8);
+    fill(cube, [](const glm::vec3&) { return 5.0f; });
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    CHECK(secant_search(cube, bounds, glm::vec3(nan), glm::vec3(1, 0, 0), ReliefParameters{}).texels_read == 0);
+    CHECK(secant_search(cube, bounds, centre, glm::vec3(0), ReliefParameters{}).texels_read == 0);
+    CHECK(secant_search(cube, CubeBounds{centre, -1.0f}, centre, glm::vec3(1, 0, 0), ReliefParameters{}).texels_read == 0);
+    // max_reads past the limit (not validated here) is clamped, never read past.
+    ReliefParameters many;
+    many.max_reads = 1 << 30;
+    CHECK(secant_search(cube, bounds, centre, glm::vec3(1, 0, 0), many).texels_read <= RAYCACHE_SECANT_MAX_READS);
+}

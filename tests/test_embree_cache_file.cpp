@@ -78,9 +78,12 @@ SceneCacheSettings settings_with_first_size(int first_face_size) {
     return s;
 }
 
-// A cache with a cube on each object: face_size texels, or adaptive (0) starting at 64.
-std::unique_ptr<SceneCache> make_cache(Technique technique, int face_size) {
-    auto caches = std::make_unique<SceneCache>(technique, settings_with_first_size(64));
+// A cache with a cube on each object: face_size texels, or adaptive (0) starting at 64; the CDCT searches
+// with the relief walk over a depth pyramid when `relief`, else with the default search.
+std::unique_ptr<SceneCache> make_cache(Technique technique, int face_size, bool relief = false) {
+    SceneCacheSettings settings = settings_with_first_size(64);
+    if (relief) settings.relief.search = raycache::DepthSearch::relief;
+    auto caches = std::make_unique<SceneCache>(technique, settings);
     for (int k = 0; k < 3; ++k) caches->attach(objects[k], face_size, placements[k]);
     return caches;
 }
@@ -90,9 +93,9 @@ std::vector<std::uint8_t> saved_bytes(const SceneCache& caches, const ScratchFol
     return raycache::read_whole_file(folder.file(name));
 }
 
-void check_round_trip(Technique technique, int face_size) {
+void check_round_trip(Technique technique, int face_size, bool relief = false) {
     ScratchFolder folder("scene-cache");
-    std::unique_ptr<SceneCache> warm_cache = make_cache(technique, face_size), loaded_cache = make_cache(technique, face_size);
+    std::unique_ptr<SceneCache> warm_cache = make_cache(technique, face_size, relief), loaded_cache = make_cache(technique, face_size, relief);
     SceneCache &warm = *warm_cache, &loaded = *loaded_cache;
     // Pre-filled (so CDCT searches find full cubes), then two frames of rays.
     for (const ObjectId& id : objects)
@@ -133,6 +136,10 @@ TEST_CASE("a CCT SceneCache loaded from its file holds every texel bit for bit a
 
 TEST_CASE("a CDCT SceneCache loaded from its file holds every texel bit for bit and searches as the saved one") {
     check_round_trip(Technique::cdct, 40);
+}
+
+TEST_CASE("a CDCT SceneCache searching over depth pyramids searches after a load exactly as before: its pyramids are rebuilt") {
+    check_round_trip(Technique::cdct, 40, true);
 }
 
 TEST_CASE("adaptive cubes load at the face size they were saved with") {
@@ -194,4 +201,52 @@ TEST_CASE("a SceneCache refuses a file that does not fit it, says why, and keeps
 
     // After all of that the target still holds what it held, bit for bit.
     CHECK(saved_bytes(target, folder, "after.rcc") == before);
+}
+
+TEST_CASE("primitive ranges of one geometry are saved as cubes of their own and loaded only into the same ranges") {
+    // One triangle geometry holding two quads (triangles 0-1 at x in [0, 1], 2-3 at x in [5, 6]).
+    RTCDevice device = rtcNewDevice(nullptr);
+    RTCScene embree_scene = rtcNewScene(device);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 8));
+    const float corners[24] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 5, 0, 0, 6, 0, 0, 6, 1, 0, 5, 1, 0};
+    for (int i = 0; i < 24; ++i) v[i] = corners[i];
+    auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 4));
+    const unsigned triangles[12] = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
+    for (int i = 0; i < 12; ++i) t[i] = triangles[i];
+    rtcCommitGeometry(g);
+    const unsigned geometry = rtcAttachGeometry(embree_scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(embree_scene);
+
+    // Ranges 0..split-1 and split..3, each with a 16-texel cube.
+    auto make = [&](unsigned split) {
+        auto caches = std::make_unique<SceneCache>(Technique::cct, SceneCacheSettings{});
+        caches->attach_primitives(embree_scene, ObjectId{geometry}, 0, split, 16);
+        caches->attach_primitives(embree_scene, ObjectId{geometry}, split, 4 - split, 16);
+        return caches;
+    };
+    ScratchFolder folder("ranges");
+    std::unique_ptr<SceneCache> warm = make(2), loaded = make(2), other = make(1);
+    Lcg rng{31};
+    for (int i = 0; i < 4000; ++i) {
+        const unsigned prim = rng.next() % 4;
+        const glm::vec3 origin(prim < 2 ? 0.5f : 5.5f, 0.5f, 0.0f);
+        const glm::vec3 direction(rng.signed_uniform(), rng.signed_uniform(), 1.0f);
+        warm->leaving_ray(ObjectId{geometry, RTC_INVALID_GEOMETRY_ID, prim}, origin, direction, [&] { return trace_world(origin, direction); });
+    }
+    warm->begin_frame();
+    const std::vector<std::uint8_t> bytes = saved_bytes(*warm, folder, "warm.rcc");
+    loaded->load(folder.file("warm.rcc"), scene);
+    CHECK(saved_bytes(*loaded, folder, "again.rcc") == bytes);
+    CHECK(loaded->statistics().valid_texels == warm->statistics().valid_texels);
+    CHECK(contains(cache_file_error([&] { other->load(folder.file("warm.rcc"), scene); }),
+                   "primitives 0..0 of geometry " + std::to_string(geometry) + " has a cube here but none in the file"));
+    CHECK(other->statistics().valid_texels == 0u);
+
+    warm.reset();
+    loaded.reset();
+    other.reset();
+    rtcReleaseScene(embree_scene);
+    rtcReleaseDevice(device);
 }

@@ -10,9 +10,21 @@
 
 #include "rcx/memory.hpp"
 
-TEST_CASE("cpu_cubes counts the texels, written bits and depth pyramids of the cubes the Embree tracer makes") {
-    const raycache::CdctCube cdct(64);
-    const raycache::CctCube cct(64);
+namespace {
+// Stores a value into every texel: the cube at its largest.
+template <class Cube, class Value>
+void fill(Cube& cube, const Value& value) {
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < cube.face_size(); ++row)
+            for (int column = 0; column < cube.face_size(); ++column) cube.store_at(raycache::TexelAddress{face, column, row}, value);
+}
+} // namespace
+
+TEST_CASE("cpu_cubes counts the tiles, tile tables and depth pyramids of full cubes of the Embree tracer") {
+    raycache::CdctCube cdct(64);
+    raycache::CctCube cct(64);
+    fill(cdct, raycache::DepthSample{glm::vec3(0.5f), 1.0f});
+    fill(cct, glm::vec3(0.5f));
     const raycache::DepthPyramid pyramid(64);
     const std::uint64_t with_pyramids = rcx::cpu_cubes(rcx::CacheMode::cdct, 3, 64, true).bytes;
     CHECK(with_pyramids >= 3 * (cdct.texel_bytes() + pyramid.bytes()));
@@ -26,11 +38,13 @@ TEST_CASE("cpu_cubes counts the texels, written bits and depth pyramids of the c
 }
 
 TEST_CASE("a run that needs more memory than is available is refused, naming the need and what is available") {
-    // behind-32 (33 cached objects) with 4096-texel CDCT faces: about 29 GiB.
+    // behind-32 (33 cached objects) with 4096-texel CDCT faces: per cube 6 x 256^2 tiles of 2112 bytes plus an
+    // 8-byte table entry each, and a depth pyramid of 6 x 4 x (2048^2 + 1024^2 + ... + 1) bytes:
+    // 33 x 967,835,640 bytes + 3 MiB of images = 29.7 GiB.
     const std::vector<rcx::MemoryNeed> needs{rcx::cpu_cubes(rcx::CacheMode::cdct, 33, 4096, true),
                                              rcx::MemoryNeed{"frame images", 3u << 20}};
     const rcx::AvailableMemory sixteen{16ull << 30, "MemAvailable in /proc/meminfo"};
-    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("needs about 29.3 GiB"), std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("needs about 29.7 GiB"), std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("33 cdct cubes of 6 x 4096 x 4096 texels"),
                          std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen),

@@ -23,20 +23,23 @@ using raycache::embree::SceneCache;
 using raycache::embree::SceneCacheStatistics;
 using raycache::embree::Technique;
 
-// How leaving rays are answered: the tracer's four modes, the CDCT with and without its depth pyramid.
+// How leaving rays are answered: the tracer's four modes, the CDCT's secant search and its relief walk with
+// and without the depth pyramid.
 struct Variant {
     const char* name;
     rcx::CacheMode mode;
-    bool pyramid; // CDCT only
+    bool pyramid; // CDCT relief walk only
+    bool secant;  // CDCT: the secant search instead of the relief walk
 };
 
-constexpr Variant off{"off", rcx::CacheMode::off, false};
-constexpr Variant cct{"cct", rcx::CacheMode::cct, false};
-constexpr Variant cdct_pyramid{"cdct+pyramid", rcx::CacheMode::cdct, true};
-constexpr Variant cdct_linear{"cdct linear", rcx::CacheMode::cdct, false};
-constexpr Variant ceiling{"ceiling", rcx::CacheMode::ceiling, false};
-constexpr Variant all_variants[] = {off, cct, cdct_pyramid, cdct_linear, ceiling};
-constexpr Variant cached_variants[] = {cct, cdct_pyramid, cdct_linear};
+constexpr Variant off{"off", rcx::CacheMode::off, false, false};
+constexpr Variant cct{"cct", rcx::CacheMode::cct, false, false};
+constexpr Variant cdct_secant{"cdct secant", rcx::CacheMode::cdct, false, true};
+constexpr Variant cdct_pyramid{"cdct+pyramid", rcx::CacheMode::cdct, true, false};
+constexpr Variant cdct_linear{"cdct linear", rcx::CacheMode::cdct, false, false};
+constexpr Variant ceiling{"ceiling", rcx::CacheMode::ceiling, false, false};
+constexpr Variant all_variants[] = {off, cct, cdct_secant, cdct_pyramid, cdct_linear, ceiling};
+constexpr Variant cached_variants[] = {cct, cdct_secant, cdct_pyramid, cdct_linear};
 
 // The scene's cubes for `v` (face_size texels per edge on every cached object), with the relief search
 // parameters the example's command line uses by default and the given CCT confidence threshold (the
@@ -51,6 +54,7 @@ std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const
     s.relief.max_steps = defaults.max_steps;
     s.relief.max_gap = defaults.max_gap;
     s.depth_pyramid = v.pyramid;
+    s.relief.search = v.secant ? raycache::DepthSearch::secant : raycache::DepthSearch::relief;
     s.edge_threshold = edge_threshold;
     auto caches = std::make_unique<SceneCache>(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, s);
     tracer.attach_caches(*caches, face_size);

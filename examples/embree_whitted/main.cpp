@@ -71,7 +71,7 @@ int run(const rcx::Options& o) {
         throw InputError(e.what());
     }
     try {
-        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid), rcx::frame_images(o)});
+        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid && !o.secant), rcx::frame_images(o)});
     } catch (const std::runtime_error& e) {
         throw InputError(e.what());
     }
@@ -90,6 +90,8 @@ int run(const rcx::Options& o) {
         relief.epsilon = o.epsilon;
         relief.max_steps = o.max_steps;
         relief.max_gap = o.max_gap > 0.0f ? o.max_gap : std::numeric_limits<float>::infinity();
+        relief.search = o.secant ? raycache::DepthSearch::secant : raycache::DepthSearch::relief;
+        relief.max_reads = o.max_reads;
         try {
             raycache::embree::SceneCacheSettings cache_settings;
             cache_settings.relief = relief;
@@ -151,6 +153,14 @@ int run(const rcx::Options& o) {
         std::fflush(stdout);
     }
 
+    if (o.compare) {
+        // One untimed uncached frame first: the process's first render pays for page faults and cold caches,
+        // which would otherwise land on frame 0's cached render and understate its speed-up.
+        rcx::embree::RenderSettings plain = settings;
+        plain.mode = rcx::CacheMode::off;
+        plain.caches = nullptr;
+        tracer.render(scene.camera_at(0), plain);
+    }
     rcx::ProgressBar bar("rendering", frames * (o.compare ? 2 : 1), rcx::progress_enabled(o.quiet, o.progress));
     std::vector<FrameRecord> records;
     std::size_t cache_bytes = 0;
@@ -158,6 +168,7 @@ int run(const rcx::Options& o) {
         const rcx::Camera camera = scene.camera_at(f);
         FrameRecord r;
         rcx::embree::FrameStats stats;
+        settings.warm_up_stride = f == 0 ? o.warm_up : 0; // only the first frame has nothing to reuse
         const rcx::Image image = tracer.render(camera, settings, &stats);
         r.cached_ms = stats.milliseconds;
         bar.advance();

@@ -9,7 +9,8 @@
 //   "HEAD"   u32 technique (1 CCT, 2 CDCT), u32 texel encoding (1: RGB9E5 in a u32; 2: RGB9E5 in the low u32
 //            and the float32 distance in the high u32 of a u64), u32 word bytes (4 or 8), u32 tile edge (16),
 //            u64 scene hash, u32 name bytes (at most 4096) and the name, u32 cube count (at most 65536)
-//   "CUBE"   one per cube: u64 object id, u32 face size N (1..4096), f32 x 3 centre, f32 half-size,
+//   "CUBE"   one per cube: u64 object id and u64 part (the caller's key of what the cube caches, unique in
+//            the file), u32 face size N (1..4096), f32 x 3 centre, f32 half-size,
 //            u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
 //            T = ceil(N / 16), strictly increasing, and its 16 x 16 words row by row (texels past the face's
 //            edge, and empty texels, hold the technique's empty word; any other word must be valid)
@@ -95,12 +96,14 @@ struct CacheFileTexel<CdctTexel> {
     static constexpr const char* name = "CDCT";
 };
 
-// One cube to save: the caller's id of the object it caches (unique in the file), where it sits, the cube.
+// One cube to save: the caller's key of what it caches, (object, part), unique in the file (part: for callers
+// whose objects have parts, e.g. primitive ranges of one geometry; 0 otherwise), where it sits, the cube.
 template <class Texel>
 struct CubeToSave {
     std::uint64_t object = 0;
     CubeBounds bounds;
     const CacheCube<Texel>* cube = nullptr;
+    std::uint64_t part = 0;
 };
 
 // One cube read back. Its texels are held as the current frame's stores: structures derived from the texels
@@ -110,6 +113,7 @@ struct LoadedCube {
     std::uint64_t object = 0;
     CubeBounds bounds;
     std::unique_ptr<CacheCube<Texel>> cube;
+    std::uint64_t part = 0;
 };
 
 // True when two placements are the same, float for float.
@@ -134,8 +138,8 @@ inline constexpr std::uint32_t max_scene_name_bytes = 4096;
 inline constexpr std::uint32_t max_cubes_in_file = 65536;
 inline constexpr int file_tile_edge = 16;
 inline constexpr std::size_t file_tile_texels = file_tile_edge * file_tile_edge;
-// Smallest CUBE chunk: frame, object, face size, bounds, tile count.
-inline constexpr std::size_t min_cube_chunk_bytes = chunk_frame_bytes + 8 + 4 + 16 + 4;
+// Smallest CUBE chunk: frame, object and part, face size, bounds, tile count.
+inline constexpr std::size_t min_cube_chunk_bytes = chunk_frame_bytes + 16 + 4 + 16 + 4;
 
 inline constexpr std::uint32_t tag(const char (&t)[5]) noexcept {
     return static_cast<std::uint32_t>(static_cast<unsigned char>(t[0])) |
@@ -152,6 +156,11 @@ inline std::string tag_text(std::uint32_t t) {
         s += c >= 32 && c < 127 ? std::string(1, c) : "\\x" + std::to_string(static_cast<unsigned char>(c));
     }
     return s;
+}
+
+// "object 7", "object 7 part 9".
+inline std::string key_text(std::uint64_t object, std::uint64_t part) {
+    return "object " + std::to_string(object) + (part ? " part " + std::to_string(part) : std::string());
 }
 
 inline std::string hex(std::uint64_t v) {
@@ -289,7 +298,7 @@ Word read_word(const std::uint8_t* p) noexcept {
 
 // A cube as the file describes it, checked, its tiles not yet copied.
 struct CubeRecord {
-    std::uint64_t object = 0;
+    std::uint64_t object = 0, part = 0;
     int face_size = 0;
     CubeBounds bounds;
     std::uint32_t tiles = 0;
@@ -326,6 +335,7 @@ CubeRecord read_cube_record(ByteReader& r) {
     using Word = typename Texel::Word;
     CubeRecord c;
     c.object = r.u64("the object id");
+    c.part = r.u64("the object part");
     const std::uint32_t face_size = r.u32("the face size");
     if (face_size < std::uint32_t{RAYCACHE_MIN_FACE_SIZE} || face_size > std::uint32_t{RAYCACHE_MAX_FACE_SIZE})
         r.fail("face size " + std::to_string(face_size) + " is outside 1..4096");
@@ -406,11 +416,11 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
         throw std::invalid_argument("RayCache: a cache file's scene name must be at most 4096 bytes");
     if (cubes.size() > detail::max_cubes_in_file)
         throw std::invalid_argument("RayCache: a cache file holds at most 65536 cubes, got " + std::to_string(cubes.size()));
-    std::set<std::uint64_t> objects;
+    std::set<std::pair<std::uint64_t, std::uint64_t>> keys;
     for (const CubeToSave<Texel>& c : cubes) {
         if (!c.cube) throw std::invalid_argument("RayCache: encode_cache: a null cube");
-        if (!objects.insert(c.object).second)
-            throw std::invalid_argument("RayCache: encode_cache: object id " + std::to_string(c.object) + " appears twice");
+        if (!keys.insert({c.object, c.part}).second)
+            throw std::invalid_argument("RayCache: encode_cache: " + detail::key_text(c.object, c.part) + " appears twice");
     }
     detail::ByteWriter w;
     w.text(std::string(detail::cache_file_magic, 8));
@@ -433,6 +443,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
         const std::vector<std::uint32_t> tiles = detail::tiles_holding_values(*c.cube);
         start = w.begin_chunk(detail::cube_tag);
         w.u64(c.object);
+        w.u64(c.part);
         w.u32(static_cast<std::uint32_t>(n));
         w.f32(c.bounds.centre.x);
         w.f32(c.bounds.centre.y);
@@ -506,13 +517,13 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
 
     std::vector<detail::CubeRecord> records;
     records.reserve(cube_count);
-    std::set<std::uint64_t> objects;
+    std::set<std::pair<std::uint64_t, std::uint64_t>> keys;
     for (std::uint32_t i = 0; i < cube_count; ++i) {
         const std::string what = "CUBE chunk " + std::to_string(i + 1) + " of " + std::to_string(cube_count);
         detail::ByteReader cube = r.chunk(detail::cube_tag, what);
         records.push_back(detail::read_cube_record<Texel>(cube));
-        if (!objects.insert(records.back().object).second)
-            r.fail("object id " + std::to_string(records.back().object) + " has two cubes");
+        if (!keys.insert({records.back().object, records.back().part}).second)
+            r.fail(detail::key_text(records.back().object, records.back().part) + " has two cubes");
     }
     detail::ByteReader end = r.chunk(detail::end_tag, "the END chunk");
     if (end.u32("the END chunk's cube count") != cube_count) r.fail("the END chunk's cube count is not the HEAD chunk's");
@@ -522,7 +533,7 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     std::vector<LoadedCube<Texel>> cubes;
     cubes.reserve(records.size());
     for (const detail::CubeRecord& c : records)
-        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r)});
+        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r), c.part});
     return cubes;
 }
 
@@ -602,8 +613,9 @@ void save_cube(const std::string& path, const CacheCube<Texel>& cube, const Cube
 }
 
 // Replaces `target` by the one cube saved in `path`, at the face size it was saved with, drawing on
-// target's budget; its texels are visible at once, none marked doubtful. The file must hold one cube, of object `object`, placed
-// at `bounds`, for `scene`. Otherwise throws CacheFileError and leaves `target` as it was. Between frames.
+// target's budget; its texels are visible at once, none marked doubtful. The file must hold one cube, of
+// object `object` (part 0), placed at `bounds`, for `scene`. Otherwise throws CacheFileError and leaves
+// `target` as it was. Between frames.
 // A DepthPyramid of the cube must be rebuilt (DepthPyramid(target.face_size()).rebuild(target)).
 template <class Texel>
 void load_cube(const std::string& path, CacheCube<Texel>& target, const CubeBounds& bounds, const SceneIdentity& scene,
@@ -612,9 +624,9 @@ void load_cube(const std::string& path, CacheCube<Texel>& target, const CubeBoun
     const std::string source = "RayCache: cache file '" + path + "': ";
     if (cubes.size() != 1)
         throw CacheFileError(source + "it holds " + std::to_string(cubes.size()) + " cubes, not one; nothing was loaded");
-    if (cubes[0].object != object)
-        throw CacheFileError(source + "its cube is object " + std::to_string(cubes[0].object) + ", not " + std::to_string(object) +
-                             "; nothing was loaded");
+    if (cubes[0].object != object || cubes[0].part != 0)
+        throw CacheFileError(source + "its cube is " + detail::key_text(cubes[0].object, cubes[0].part) + ", not object " +
+                             std::to_string(object) + "; nothing was loaded");
     if (!same_placement(cubes[0].bounds, bounds))
         throw CacheFileError(source + "its cube sits at " + describe(cubes[0].bounds) + ", this one at " + describe(bounds) +
                              "; nothing was loaded");

@@ -2,6 +2,8 @@
 // hit, and the relief search (thesis Algorithm 4) that finds a ray's hit in the cube's depth image.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <array>
 #include <cmath>
 #include <limits>
@@ -14,6 +16,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/depth_pyramid.hpp"
+#include "raycache/shared/depth_secant.h"
 #include "raycache/shared/ray_box.h"
 
 namespace raycache {
@@ -24,7 +27,13 @@ struct CubeBounds {
     float half_size = 1.0f;
 };
 
-// Tuning of the relief search; the defaults are one of the thesis's (delta, epsilon) pairs.
+// How a CDCT lookup finds the ray's hit in the cube's depth image.
+enum class DepthSearch {
+    secant, // a few reads: jump to the sphere of the distance read, then false position (shared/depth_secant.h)
+    relief, // the thesis's walk in steps of `step` (over a DepthPyramid when one is given), then bisection
+};
+
+// Tuning of the CDCT's search; step and epsilon default to one of the thesis's (delta, epsilon) pairs.
 struct ReliefParameters {
     float step = 0.2f;        // delta: length of a linear step along the ray, world units (linear walk only)
     float epsilon = 0.02f;    // binary refinement stops when the bracket is shorter than this
@@ -35,6 +44,8 @@ struct ReliefParameters {
     // refinement) is a depth discontinuity: the ray passed behind an edge, where the cube saw nothing.
     // Such a crossing is a miss instead of the wrong surface. Infinity (the thesis) accepts every crossing.
     float max_gap = std::numeric_limits<float>::infinity();
+    DepthSearch search = DepthSearch::secant; // what cdct_cached_trace uses (relief_search is always the walk)
+    int max_reads = 8;                        // secant: reads before giving up (a miss), 1..RAYCACHE_SECANT_MAX_READS
 };
 
 // Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive
@@ -51,6 +62,9 @@ inline void validate(const ReliefParameters& p) {
         throw std::invalid_argument("RayCache: ReliefParameters::max_steps must be 1 to " +
                                     std::to_string(RAYCACHE_MAX_RELIEF_STEPS) + ", got " + std::to_string(p.max_steps));
     if (!(p.max_gap > 0.0f)) bad("max_gap", p.max_gap);
+    if (p.max_reads < 1 || p.max_reads > RAYCACHE_SECANT_MAX_READS)
+        throw std::invalid_argument("RayCache: ReliefParameters::max_reads must be 1 to " +
+                                    std::to_string(RAYCACHE_SECANT_MAX_READS) + ", got " + std::to_string(p.max_reads));
 }
 
 // Outcome of a relief search. On a hit, `point` is within `epsilon` (along the ray) past the first
@@ -255,6 +269,7 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
     }
     RAYCACHE_ASSERT(!pyramid || pyramid->face_size() == cube.face_size());
     const glm::vec3 d = shared::raycache_unit(direction);
+    const auto use = cube.in_frame();
     detail::ReliefWalk walk(cube, bounds, origin, d, p);
     const float start = shared::raycache_box_exit_distance(origin, d, bounds.centre, bounds.half_size);
     ReliefResult result;
@@ -268,6 +283,49 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
         result = walk.linear(start);
     cube.record_lookup(result.hit);
     return result;
+}
+
+// The CDCT's cheap search (shared/depth_secant.h, the same steps as GLSL's): from where the ray leaves the
+// box, jump to where the ray reaches the distance read, then refine a bracketed crossing by false position;
+// answer only when the point read lies within p.epsilon of its texel's surface (or a bracket shorter than
+// p.epsilon ends at most p.max_gap behind it). A miss for an empty or not-yet-visible texel, after
+// p.max_reads reads without such an answer, and for bad input (no texel read). Reads at most
+// min(p.max_reads, RAYCACHE_SECANT_MAX_READS) texels. Counts one lookup. Thread-safe as CacheCube::lookup.
+inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
+                                  const glm::vec3& direction, const ReliefParameters& p) noexcept {
+    ReliefResult result;
+    if (!is_direction(direction) || !shared::raycache_is_finite3(origin) || !detail::is_usable(bounds) ||
+        !(p.epsilon > 0.0f)) {
+        cube.record_lookup(false);
+        return result;
+    }
+    const auto use = cube.in_frame();
+    const glm::vec3 d = shared::raycache_unit(direction);
+    const float start = shared::raycache_box_exit_distance(origin, d, bounds.centre, bounds.half_size);
+    shared::raycache_secant_search s =
+        shared::raycache_secant_begin(origin - bounds.centre, d, start, p.epsilon, p.max_gap, p.max_reads);
+    while (s.status == RAYCACHE_SECANT_READ) {
+        const std::optional<DepthSample> texel = cube.peek(shared::raycache_secant_point(s, s.t));
+        s = texel ? shared::raycache_secant_step(s, true, texel->distance, texel->color)
+                  : shared::raycache_secant_step(s, false, 0.0f, glm::vec3(0.0f));
+    }
+    result.texels_read = s.reads;
+    result.hit = s.status == RAYCACHE_SECANT_HIT;
+    if (result.hit) {
+        result.distance = s.t;
+        result.point = origin + s.t * d;
+        result.color = s.color;
+    }
+    cube.record_lookup(result.hit);
+    return result;
+}
+
+// The search p.search names: secant_search, or relief_search (over `pyramid` when given).
+inline ReliefResult depth_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
+                                 const glm::vec3& direction, const ReliefParameters& p,
+                                 const DepthPyramid* pyramid = nullptr) noexcept {
+    return p.search == DepthSearch::secant ? secant_search(cube, bounds, origin, direction, p)
+                                           : relief_search(cube, bounds, origin, direction, p, pyramid);
 }
 
 // Stores what a traced ray hit at `hit_point` under the key normalize(hit_point - centre), with distance
@@ -294,17 +352,18 @@ struct TracedRay {
     float distance = std::numeric_limits<float>::infinity();
 };
 
-// Algorithm 1 with the CDCT: the relief search answers when it can; otherwise trace() runs, its hit is
+// Algorithm 1 with the CDCT: the search p.search names (depth_search) answers when it can; otherwise trace() runs, its hit is
 // stored (store_hit, or store_escape when it escaped; nothing for a negative distance, which would key
 // the hit by a point behind the ray) and its colour returned unchanged.
 // trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
-// `pyramid`, when given, speeds up the search (see relief_search).
+// `pyramid`, when given, speeds up the relief search (see relief_search); the secant search needs none.
 template <class Trace>
 glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                             const glm::vec3& direction, const ReliefParameters& p, Trace&& trace,
                             int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr) {
     static_assert(std::is_invocable_r_v<TracedRay, Trace&>, "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()`");
-    const ReliefResult found = relief_search(cube, bounds, origin, direction, p, pyramid);
+    const auto use = cube.in_frame();
+    const ReliefResult found = depth_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
     const TracedRay traced = std::forward<Trace>(trace)();

@@ -46,11 +46,19 @@ struct Result {
     float pad2;
 };
 static_assert(sizeof(Result) == 48, "Result must match cdct_cross.comp");
-struct Push {
-    ReliefParameters parameters; // read in GLSL as raycache_relief_parameters: the same fields in order
-    std::uint32_t count;
+// GLSL's raycache_relief_parameters: the relief walk's fields of ReliefParameters, in order.
+struct GpuRelief {
+    float step, epsilon;
+    std::int32_t max_steps;
+    float max_depth, max_gap;
 };
-static_assert(sizeof(ReliefParameters) == 20 && sizeof(Push) == 24, "ReliefParameters must be 5 4-byte fields");
+struct Push {
+    GpuRelief parameters;
+    std::uint32_t count;
+    Push(const ReliefParameters& p, std::size_t n)
+        : parameters{p.step, p.epsilon, p.max_steps, p.max_depth, p.max_gap}, count(static_cast<std::uint32_t>(n)) {}
+};
+static_assert(sizeof(GpuRelief) == 20 && sizeof(Push) == 24, "raycache_relief_parameters is 5 4-byte fields");
 
 
 struct Scene {
@@ -198,7 +206,7 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
         CAPTURE(p.epsilon);
         CAPTURE(p.max_steps);
         CAPTURE(p.max_gap);
-        const Push push{p, static_cast<std::uint32_t>(queries.size())};
+        const Push push(p, queries.size());
         vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
                      rcx::vk::group_count(queries.size(), 64));
         const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
@@ -242,7 +250,7 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
     for (const ReliefParameters& p : sets) {
         CAPTURE(p.step);
         CAPTURE(p.max_steps);
-        const Push push{p, static_cast<std::uint32_t>(queries.size())};
+        const Push push(p, queries.size());
         vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
                      rcx::vk::group_count(queries.size(), 64));
         const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
@@ -332,8 +340,8 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Buffer next_buffer = rcx_test::buffer_of(*vk, next_queries);
     rcx::vk::Buffer frame_results(*vk, queries.size() * sizeof(Result));
     rcx::vk::Buffer next_results(*vk, next_queries.size() * sizeof(Result));
-    const Push push{p, static_cast<std::uint32_t>(queries.size())};
-    const Push next_push{p, static_cast<std::uint32_t>(next_queries.size())};
+    const Push push(p, queries.size());
+    const Push next_push(p, next_queries.size());
     vk->submit([&](rcx::vk::Commands& c) {
         c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results}, &push, sizeof(push),
                    rcx::vk::group_count(queries.size(), 64));

@@ -87,9 +87,11 @@ std::optional<AvailableMemory> available_memory() {
 MemoryNeed cpu_cubes(CacheMode mode, int count, int face_size, bool pyramid) {
     if (!uses_caches(mode) || count <= 0 || face_size <= 0) return {};
     const bool cdct = mode == CacheMode::cdct;
-    const std::uint64_t texels = 6ull * static_cast<std::uint64_t>(face_size) * static_cast<std::uint64_t>(face_size);
-    const std::uint64_t word = cdct ? sizeof(raycache::CdctCube::Word) : sizeof(raycache::CctCube::Word);
-    std::uint64_t one = texels * word + (texels + 63) / 64 * 8; // texels and written-texel bits
+    // Every tile allocated (texels, written and doubtful bits) and the tile table: a full cube.
+    const std::uint64_t per_edge = static_cast<std::uint64_t>((face_size + raycache::CctCube::tile_edge - 1) / raycache::CctCube::tile_edge);
+    const std::uint64_t tiles = 6ull * per_edge * per_edge;
+    const std::uint64_t tile = cdct ? raycache::CdctCube::tile_bytes() : raycache::CctCube::tile_bytes();
+    std::uint64_t one = tiles * (tile + sizeof(void*));
     if (cdct && pyramid) one += raycache::DepthPyramid::bytes_for(face_size);
     const std::string n = std::to_string(face_size);
     return MemoryNeed{std::to_string(count) + " " + to_string(mode) + " cube" + (count == 1 ? "" : "s") + " of 6 x " + n +

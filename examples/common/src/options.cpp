@@ -125,6 +125,7 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
         else if (arg == "--filtered") { flag(); o.filtered = true; }
+        else if (arg == "--warm-up") o.warm_up = static_cast<int>(parse_int(arg, next(), 0, 64));
         else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
@@ -134,6 +135,12 @@ Options parse_options(int argc, const char* const argv[]) {
             if (o.max_gap < 0.0f) throw UsageError("--max-gap: must be >= 0 (0 turns it off)");
         }
         else if (arg == "--no-pyramid") { flag(); o.pyramid = false; }
+        else if (arg == "--cdct-search") {
+            const std::string v = next();
+            if (v != "secant" && v != "relief") throw UsageError("--cdct-search: '" + v + "' is not secant or relief");
+            o.secant = v == "secant";
+        }
+        else if (arg == "--max-reads") o.max_reads = static_cast<int>(parse_int(arg, next(), 1, 64));
         else if (arg == "--prefill") { flag(); o.prefill = true; }
         else if (arg == "--load-cache" || arg == "--save-cache") {
             std::string& file = arg == "--load-cache" ? o.load_cache : o.save_cache;
@@ -193,15 +200,21 @@ std::string help_text(const std::string& program) {
         "  --filtered          CCT: bilinear lookups instead of the nearest texel (Embree tracer)\n"
         "  --edge-threshold F  CCT: texels differing from a neighbour by more than F are\n"
         "                      traced, not answered; negative: off (Embree tracer)   [0.1]\n"
+        "  --cdct-search S     secant (a few texel reads, then a consistency test) or\n"
+        "                      relief (the thesis's walk, over a depth pyramid)       [secant]\n"
+        "  --max-reads N       CDCT secant: texel reads before a miss, 1..64          [8]\n"
         "  --delta F           CDCT relief search step, world units                   [0.2]\n"
-        "  --epsilon F         CDCT binary refinement threshold                       [0.02]\n"
-        "  --max-steps N       CDCT linear steps (or pyramid nodes) before a miss     [1024]\n"
-        "  --no-pyramid        CDCT: the thesis's fixed-step walk, no min-depth pyramid\n"
+        "  --epsilon F         CDCT: a hit lies within F of the cached surface        [0.02]\n"
+        "  --max-steps N       CDCT relief: linear steps (or pyramid nodes) before a miss [1024]\n"
+        "  --no-pyramid        CDCT relief: the thesis's fixed-step walk, no min-depth pyramid\n"
         "  --max-gap F         CDCT: a crossing F behind the cached surface is a miss  [0.5; 0 = off]\n"
         "  --prefill           trace every cube texel once before the first frame\n"
         "  --load-cache FILE   start warm: load the cubes saved in FILE before the first frame (the\n"
         "                      scene, objects and technique must match; Embree tracer)\n"
         "  --save-cache FILE   save the cubes to FILE after the last frame (Embree tracer)\n"
+        "  --warm-up S         first frame: a pass over every S-th pixel in x and y first,\n"
+        "                      whose stores the full pass reads (for single images;\n"
+        "                      Embree tracer); 0: off                                 [0]\n"
         "Run\n"
         "  --threads N         worker threads, 0 = all cores                          [0]\n"
         "  --out DIR           folder for the PNGs (created when missing)             [out]\n"

@@ -39,10 +39,13 @@ struct Options {
     int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
     float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
+    int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss
+    bool secant = true;               // CDCT search: secant (a few reads) or, false, the thesis's relief walk
+    int max_reads = 8;                // CDCT secant search: reads before a miss
     bool pyramid = true;              // CDCT searches over a min-depth pyramid (false: the thesis's linear walk)
     float max_gap = 0.5f;             // CDCT: a crossing this far behind the cached surface is a miss (0 = off)
     bool prefill = false;             // trace every cube texel once before the first frame
