@@ -180,6 +180,14 @@ inline std::uint32_t file_tiles_per_edge(int face_size) noexcept {
     return static_cast<std::uint32_t>((face_size + file_tile_edge - 1) / file_tile_edge);
 }
 
+// The little-endian unsigned integer (a texel word, a size) at p.
+template <class Word>
+Word read_word(const std::uint8_t* p) noexcept {
+    Word v = 0;
+    for (std::size_t i = 0; i < sizeof(Word); ++i) v |= static_cast<Word>(p[i]) << (8 * i);
+    return v;
+}
+
 // Little-endian output.
 class ByteWriter {
 public:
@@ -229,20 +237,15 @@ public:
             fail("truncated: " + what + " needs " + std::to_string(bytes) + " bytes at byte " + std::to_string(position_) +
                  ", only " + std::to_string(remaining()) + " remain");
     }
-    std::uint32_t u32(const std::string& what) {
-        need(4, what);
-        std::uint32_t v = 0;
-        for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(data_[position_ + static_cast<std::size_t>(i)]) << (8 * i);
-        position_ += 4;
+    template <class Unsigned>
+    Unsigned little_endian(const std::string& what) {
+        need(sizeof(Unsigned), what);
+        const Unsigned v = read_word<Unsigned>(here());
+        position_ += sizeof(Unsigned);
         return v;
     }
-    std::uint64_t u64(const std::string& what) {
-        need(8, what);
-        std::uint64_t v = 0;
-        for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(data_[position_ + static_cast<std::size_t>(i)]) << (8 * i);
-        position_ += 8;
-        return v;
-    }
+    std::uint32_t u32(const std::string& what) { return little_endian<std::uint32_t>(what); }
+    std::uint64_t u64(const std::string& what) { return little_endian<std::uint64_t>(what); }
     float f32(const std::string& what) { return glm::uintBitsToFloat(u32(what)); }
     std::string text(std::size_t bytes, const std::string& what) {
         need(bytes, what);
@@ -287,14 +290,6 @@ private:
     std::size_t position_ = 0;
     std::string source_;
 };
-
-// Reads one word of the file's texel encoding.
-template <class Word>
-Word read_word(const std::uint8_t* p) noexcept {
-    Word v = 0;
-    for (std::size_t i = 0; i < sizeof(Word); ++i) v |= static_cast<Word>(p[i]) << (8 * i);
-    return v;
-}
 
 // A cube as the file describes it, checked, its tiles not yet copied.
 struct CubeRecord {
