@@ -178,38 +178,45 @@ Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const R
     return c;
 }
 
-} // namespace
-
-TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
-    rcx::vk::Context* vk = rcx_test::context();
-    if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
-    std::mt19937 rng(21);
-    Scene s = make_scene(rng, true);
-    const std::vector<Query> queries = search_queries(s, rng, 1500);
-
-    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-    rcx::vk::Buffer pending(*vk, s.elements * 8);
+// Runs the GLSL relief search (shaders/cdct_cross.comp) over `queries` with each parameter set and
+// compares every result with relief_search in C++; check(p, comparison) judges each set.
+template <class Check>
+void search_in_glsl_and_cpp(rcx::vk::Context& vk, Scene& s, const std::vector<Query>& queries,
+                            const std::vector<ReliefParameters>& sets, Check&& check) {
+    rcx::vk::ComputePipeline cross(vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    rcx::vk::Buffer texels = rcx_test::buffer_of(vk, s.words());
+    rcx::vk::Buffer pending(vk, s.elements * 8);
     pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
-
-    const float inf = std::numeric_limits<float>::infinity();
-    const ReliefParameters sets[] = {
-        {2.0f, 0.2f, 1024, 100.0f, inf},  {0.4f, 0.05f, 1024, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, inf},
-        {0.05f, 0.002f, 300, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, 0.3f}, {0.25f, 0.02f, 10, 100.0f, inf},
-    };
+    rcx::vk::Buffer cubes = rcx_test::buffer_of(vk, s.descriptors);
+    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(vk, queries);
+    rcx::vk::Buffer results(vk, queries.size() * sizeof(Result));
     for (const ReliefParameters& p : sets) {
         CAPTURE(p.step);
         CAPTURE(p.epsilon);
         CAPTURE(p.max_steps);
         CAPTURE(p.max_gap);
         const Push push(p, queries.size());
-        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        vk.dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                    rcx::vk::group_count(queries.size(), 64));
+        check(p, compare_searches(s, queries, results.as<Result>(), p));
+    }
+}
+
+} // namespace
+
+TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    std::mt19937 rng(21);
+    Scene s = make_scene(rng, true);
+    const std::vector<Query> queries = search_queries(s, rng, 1500);
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::vector<ReliefParameters> sets = {
+        {2.0f, 0.2f, 1024, 100.0f, inf},  {0.4f, 0.05f, 1024, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, inf},
+        {0.05f, 0.002f, 300, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, 0.3f}, {0.25f, 0.02f, 10, 100.0f, inf},
+    };
+    search_in_glsl_and_cpp(*vk, s, queries, sets, [&](const ReliefParameters& p, const Comparison& c) {
         std::printf("CDCT relief search (step %g, epsilon %g, %d steps, max_gap %g), C++ texels read in GLSL: %zu of "
                     "%zu equal to C++ (%zu hits, %.1f texels read per search)\n",
                     p.step, p.epsilon, p.max_steps, p.max_gap, c.same, queries.size(), c.hits,
@@ -217,14 +224,13 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
         CHECK(c.same == queries.size());
         CHECK(c.hits > queries.size() / 5);
         CHECK(c.hits < queries.size());
-    }
+    });
 }
 
 TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot move the ray or max_steps is over the limit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
     REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
     std::mt19937 rng(23);
     Scene s = make_scene(rng, true);
     // Origins inside the boxes (and the bad ones): the walk starts at the box exit, t > 0.05, where
@@ -236,24 +242,10 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
                                      return std::max(local.x, std::max(local.y, local.z)) > 0.95f * s.bounds[q.cube].half_size;
                                  }),
                   queries.end());
-
-    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-    rcx::vk::Buffer pending(*vk, s.elements * 8);
-    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
-
     const float inf = std::numeric_limits<float>::infinity();
-    const ReliefParameters sets[] = {{1e-30f, 0.02f, 100000, 100.0f, inf},
-                                     {0.2f, 0.02f, std::numeric_limits<int>::max(), 100.0f, inf}};
-    for (const ReliefParameters& p : sets) {
-        CAPTURE(p.step);
-        CAPTURE(p.max_steps);
-        const Push push(p, queries.size());
-        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+    const std::vector<ReliefParameters> sets = {{1e-30f, 0.02f, 100000, 100.0f, inf},
+                                                {0.2f, 0.02f, std::numeric_limits<int>::max(), 100.0f, inf}};
+    search_in_glsl_and_cpp(*vk, s, queries, sets, [&](const ReliefParameters& p, const Comparison& c) {
         CHECK(c.same == queries.size());
         if (p.max_steps > RAYCACHE_MAX_RELIEF_STEPS) { // parameters no search runs with: a miss, nothing read
             CHECK(c.hits == 0);
@@ -261,7 +253,7 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
         } else { // the box exit only (a hit where the cached surface lies inside the box)
             CHECK(c.texels <= static_cast<long long>(queries.size()));
         }
-    }
+    });
 }
 
 TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then smallest word wins, and C++ reads the result") {
