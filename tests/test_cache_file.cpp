@@ -244,7 +244,7 @@ TEST_CASE("a load that the memory budget cannot hold is refused and leaves the c
     CHECK(budget->used() == used); // the refused load gave every tile back
 }
 
-TEST_CASE("saving into a folder that does not exist throws naming the file, and writes nothing") {
+TEST_CASE("saving into a folder that does not exist, or loading a file that is missing or a folder, throws naming the file") {
     CctCube cube(4);
     ScratchFolder folder("missing");
     const std::string path = folder.file("no/such/folder/cube.rcc");
@@ -254,6 +254,11 @@ TEST_CASE("saving into a folder that does not exist throws naming the file, and 
                        raycache::load_cube(folder.file("absent.rcc"), target, bounds, scene);
                    }),
                    "cannot open cache file"));
+    CHECK(contains(cache_file_error([&] {
+                       CctCube target(4);
+                       raycache::load_cube(folder.path.string(), target, bounds, scene);
+                   }),
+                   "is a folder"));
 }
 
 TEST_CASE("a save killed at random moments leaves the old file or the new one, never one that loads partly") {

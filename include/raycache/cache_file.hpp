@@ -45,6 +45,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -579,6 +580,8 @@ inline void write_file_atomically(const std::string& path, const std::vector<std
 
 // The whole file. Throws CacheFileError naming the file and the system's reason.
 inline std::vector<std::uint8_t> read_whole_file(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw CacheFileError("RayCache: cache file '" + path + "' is a folder");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw CacheFileError("RayCache: cannot open cache file '" + path + "': " + std::strerror(errno));
     std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
