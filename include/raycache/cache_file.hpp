@@ -32,6 +32,8 @@
 // Threads: saving reads cubes, loading replaces them: both between frames.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <atomic>
 #include <cerrno>
 #include <cstddef>
