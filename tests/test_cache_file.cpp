@@ -270,6 +270,10 @@ TEST_CASE("a save killed at random moments leaves the old file or the new one, n
     fill_randomly(old_cube, rng, 1000);
     fill_randomly(new_cube, rng, 1000);
     raycache::save_cube(path, old_cube, bounds, scene);
+    // The child writes the files save_cube writes, encoded once beforehand, so that its time goes to the
+    // writing that must be atomic (encoding alone takes longer than the delays below in a Debug+ASan build).
+    const std::vector<std::uint8_t> files[2] = {raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{0, bounds, &new_cube}}),
+                                                raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{0, bounds, &old_cube}})};
 
     int old_seen = 0, new_seen = 0, mid_save = 0;
     const int kills = 40;
@@ -278,7 +282,7 @@ TEST_CASE("a save killed at random moments leaves the old file or the new one, n
         REQUIRE(child >= 0);
         if (child == 0) { // saves new, old, new, ... until killed
             try {
-                for (int i = 0;; ++i) raycache::save_cube(path, i % 2 ? old_cube : new_cube, bounds, scene);
+                for (int i = 0;; ++i) raycache::write_file_atomically(path, files[i % 2]);
             } catch (...) {
                 ::_exit(3);
             }
