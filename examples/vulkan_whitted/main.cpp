@@ -51,6 +51,8 @@ int run(const rcx::Options& o, bool hybrid) {
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (o.edge_threshold != defaults.edge_threshold)
         throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
+    if (o.origin_drift != defaults.origin_drift)
+        throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     rcx::Scene scene;

@@ -133,6 +133,11 @@ struct SceneCacheSettings {
     // neighbour's by more than this (linear radiance, any channel) are not answered; their rays are
     // traced. Negative: off.
     float edge_threshold = 0.1f;
+    // CCT: a texel answers a ray only while the ray leaves within this fraction of the cube's half-size of
+    // the origins its tile was stored from; a tile met from further away is dropped and refills (the CCT
+    // ignores where rays start, so a circling camera would otherwise read colours from the old viewpoint).
+    // Negative: off.
+    float origin_drift = 0.1f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -267,6 +272,7 @@ public:
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
+          origin_drift_(settings.origin_drift),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
@@ -373,6 +379,11 @@ public:
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
             auto colour = [&] { return trace().color; };
+            if (origin_drift_ >= 0.0f) {
+                const float drift = origin_drift_ * e.bounds.half_size;
+                return filtered_ ? filtered_cached_trace(*e.cct, direction, origin, drift, colour)
+                                 : cached_trace(*e.cct, direction, origin, drift, colour);
+            }
             return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
         }
         int read = 0;
@@ -611,6 +622,7 @@ private:
     AdaptiveResolution adaptive_;
     bool filtered_;
     float edge_threshold_;
+    float origin_drift_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).
