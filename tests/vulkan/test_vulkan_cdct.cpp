@@ -18,6 +18,7 @@
 #include <raycache/raycache.hpp>
 
 #include "vulkan_test.hpp"
+#include "../cdct_scenes.hpp"
 #include "../test_bits.hpp"
 
 using namespace raycache;
@@ -61,92 +62,21 @@ struct Push {
 static_assert(sizeof(GpuRelief) == 20 && sizeof(Push) == 24, "raycache_relief_parameters is 5 4-byte fields");
 
 
-struct Scene {
-    std::vector<CdctCube> cubes;
-    std::vector<CubeBounds> bounds;
-    std::vector<gpu::raycache_gpu_cube> descriptors;
-    std::size_t elements = 0;
+using Scene = rcx_test::CdctScene;
+using rcx_test::random_direction;
 
-    void add(int n, CubeBounds b) {
-        cubes.emplace_back(n);
-        bounds.push_back(b);
-        descriptors.push_back(gpu::raycache_make_gpu_cube(b.centre, b.half_size, static_cast<std::uint32_t>(elements), n));
-        elements += cubes.back().texel_count();
-    }
-    std::vector<std::uint64_t> words() const {
-        std::vector<std::uint64_t> all;
-        for (const CdctCube& cube : cubes) {
-            const std::vector<std::uint64_t> w = rcx_test::words_of(cube);
-            all.insert(all.end(), w.begin(), w.end());
-        }
-        return all;
-    }
-};
+Scene make_scene(std::mt19937& rng, bool fill) { return rcx_test::make_analytic_scene(rng, fill); }
 
-// Three cubes in one buffer: a sphere of radius 5 with an unfilled cap (rays through it miss); rolling
-// hills of depth 2..5 with parallax; and a small cube of random depths. Texel colours are random.
-Scene make_scene(std::mt19937& rng, bool fill) {
-    Scene s;
-    s.add(32, CubeBounds{glm::vec3(1.0f, 2.0f, 3.0f), 1.0f});
-    s.add(64, CubeBounds{glm::vec3(-4.0f, 0.5f, 2.0f), 0.75f});
-    s.add(7, CubeBounds{glm::vec3(0.0f), 2.0f});
-    if (!fill) return s;
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    for (std::size_t c = 0; c < s.cubes.size(); ++c) {
-        CdctCube& cube = s.cubes[c];
-        const int n = cube.face_size();
-        for (int face = 0; face < 6; ++face)
-            for (int row = 0; row < n; ++row)
-                for (int column = 0; column < n; ++column) {
-                    const TexelAddress t{face, column, row};
-                    const glm::vec3 d = glm::normalize(texel_direction(t, n));
-                    float depth;
-                    if (c == 0) {
-                        if (d.y > 0.8f) continue; // the hole
-                        depth = 5.0f;
-                    } else if (c == 1) {
-                        depth = 3.5f + 1.5f * std::sin(3.0f * d.x) * std::cos(2.0f * d.z);
-                    } else {
-                        depth = 2.5f + 5.0f * u(rng);
-                    }
-                    cube.store_at(t, DepthSample{glm::vec3(u(rng), u(rng), u(rng)), depth});
-                }
-        cube.begin_frame();
-    }
-    return s;
-}
-
-glm::vec3 random_direction(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    return glm::vec3(g(rng), g(rng), g(rng)) * std::exp2(std::uniform_real_distribution<float>(-10, 10)(rng));
-}
-
-// Rays from inside and around each cube's box, plus bad ones (NaN or infinite origins, zero, NaN and
-// infinite directions, ties and signed zeros).
+// rcx_test::search_rays as search queries (mode 0).
 std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube) {
     std::vector<Query> queries;
-    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    const float inf = std::numeric_limits<float>::infinity(), nan = std::nanf("");
-    for (std::uint32_t c = 0; c < s.cubes.size(); ++c)
-        for (int i = 0; i < per_cube; ++i) {
-            const float reach = i % 5 == 0 ? 3.0f : 0.95f; // every fifth origin may lie outside the box
-            Query q{};
-            q.origin = s.bounds[c].centre + s.bounds[c].half_size * reach * glm::vec3(u(rng), u(rng), u(rng));
-            q.direction = random_direction(rng);
-            q.cube = c;
-            switch (i % 97) {
-            case 1: q.origin.x = nan; break;
-            case 2: q.origin.y = inf; break;
-            case 3: q.direction = glm::vec3(0.0f); break;
-            case 4: q.direction = glm::vec3(nan, 1.0f, 0.0f); break;
-            case 5: q.direction = glm::vec3(-0.0f, 1.0f, 0.0f); break;
-            case 6: q.direction = glm::vec3(1.0f, -1.0f, 1.0f); break;
-            case 7: q.direction = glm::vec3(2.0f, 2.0f, -0.0f); break;
-            case 8: q.direction = glm::vec3(0.0f, 0.0f, -inf); break;
-            default: break;
-            }
-            queries.push_back(q);
-        }
+    for (const rcx_test::CdctRay& ray : rcx_test::search_rays(s, rng, per_cube)) {
+        Query q{};
+        q.origin = ray.origin;
+        q.cube = ray.cube;
+        q.direction = ray.direction;
+        queries.push_back(q);
+    }
     return queries;
 }
 
