@@ -83,12 +83,6 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
     return raycache_cdct_texels[i];
 }
 
-/* The ray's point at t, from the cube's centre: (o + t * d) - centre, without FMA. */
-vec3 raycache_ray_from_centre(vec3 o, vec3 d, float t, vec3 centre) {
-    precise vec3 v = (o + t * d) - centre;
-    return v;
-}
-
 /* Thesis Algorithm 4 on the cube's depth image, as raycache::relief_search without a pyramid: walk the
  * ray origin + t * unit(direction) from where it leaves the cube's box, in steps of p.step; at each point
  * Q read the texel in direction Q - centre; a crossing (stored distance <= |Q - centre|) is bisected
@@ -156,8 +150,7 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
     }
     r.hit = true;
     r.distance = hi;
-    precise vec3 point = origin + hi * d;
-    r.point = point;
+    r.point = raycache_ray_point(origin, d, hi);
     r.color = raycache_cdct_color(texel);
     return r;
 }

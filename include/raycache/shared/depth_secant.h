@@ -12,14 +12,17 @@
  * most max_gap past its texel's surface. An empty texel, a step that cannot move on, or max_reads reads
  * without such an answer make the search a miss: a doubtful answer is traced, not guessed.
  *
- * The language supplies the texel read. Both drive the same state:
- *     s = raycache_secant_begin(start, d, t_box_exit, epsilon, max_gap, max_reads);
+ * The language supplies the texel read (visible texels only). Both drive the same state:
+ *     s = raycache_secant_start(origin, direction, centre, half_size, epsilon, max_gap, max_reads);
  *     while (s.status == RAYCACHE_SECANT_READ) {
  *         read the texel of direction raycache_secant_point(s, s.t) -> (valid, distance, colour);
  *         s = raycache_secant_step(s, valid, distance, colour);
  *     }
- *     s.status == RAYCACHE_SECANT_HIT: the ray meets the cached surface at s.t and sees s.color.
- * Products are rounded on their own (never fused into an FMA), so both languages give the same bits.
+ *     s.status == RAYCACHE_SECANT_HIT: the ray meets the cached surface at s.t, at the point
+ *     raycache_ray_point(origin, s.d, s.t), and sees s.color; s.reads texels were read, hit or miss.
+ * (raycache::secant_search in C++, raycache_cdct_secant_search in GLSL.) Products are rounded on their own
+ * (never fused into an FMA), so both languages, and C++ built with or without FMA contraction, give the
+ * same bits.
  */
 #ifndef RAYCACHE_SHARED_DEPTH_SECANT_H
 #define RAYCACHE_SHARED_DEPTH_SECANT_H
@@ -98,6 +101,21 @@ RAYCACHE_FN raycache_secant_search raycache_secant_begin(vec3 start, vec3 d, flo
     s.hi_color = vec3(0.0f, 0.0f, 0.0f);
     s.bracketed = false;
     s.last_side = 0;
+    return s;
+}
+
+/* A search along origin + t unit(direction) through the cube of box centre +- half_size, starting where
+ * the ray leaves the box; already a miss, with no read, for a direction that is not one (zero, NaN,
+ * infinite), a non-finite origin, a box that cannot be searched or epsilon not > 0. */
+RAYCACHE_FN raycache_secant_search raycache_secant_start(vec3 origin, vec3 direction, vec3 centre, float half_size,
+                                                         float epsilon, float max_gap, int max_reads) {
+    bool usable = raycache_is_direction(direction) && raycache_is_finite3(origin) &&
+                  raycache_box_is_usable(centre, half_size) && epsilon > 0.0f;
+    vec3 d = usable ? raycache_unit(direction) : vec3(0.0f, 0.0f, 1.0f);
+    float t_start = usable ? raycache_box_exit_distance(origin, d, centre, half_size) : 0.0f;
+    RAYCACHE_PRECISE vec3 start = origin - centre;
+    raycache_secant_search s = raycache_secant_begin(start, d, t_start, epsilon, max_gap, max_reads);
+    if (!usable) s.status = RAYCACHE_SECANT_MISS;
     return s;
 }
 
