@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -27,8 +28,10 @@ struct CubeBounds {
 
 // How a CDCT lookup finds the ray's hit in the cube's depth image.
 enum class DepthSearch {
-    secant, // a few reads: jump to the sphere of the distance read, then false position (shared/depth_secant.h)
-    relief, // the thesis's walk in steps of `step` (over a DepthPyramid when one is given), then bisection
+    secant = RAYCACHE_DEPTH_SEARCH_SECANT, // a few reads: jump to the sphere of the distance read, then false
+                                           // position (shared/depth_secant.h)
+    relief = RAYCACHE_DEPTH_SEARCH_RELIEF, // the thesis's walk in steps of `step` (over a DepthPyramid when one
+                                           // is given), then bisection
 };
 
 // Tuning of the CDCT's search; step and epsilon default to one of the thesis's (delta, epsilon) pairs.
@@ -45,6 +48,12 @@ struct ReliefParameters {
     DepthSearch search = DepthSearch::secant; // what cdct_cached_trace uses (relief_search is always the walk)
     int max_reads = 8;                        // secant: reads before giving up (a miss), 1..RAYCACHE_SECANT_MAX_READS
 };
+// GLSL's raycache_relief_parameters (raycache/cdct.glsl) is this struct field for field: a std430 copy of
+// its bytes (a push constant, a buffer) reads as the same parameters in a shader.
+static_assert(sizeof(ReliefParameters) == 28 && offsetof(ReliefParameters, max_gap) == 16 &&
+                  offsetof(ReliefParameters, search) == 20 && offsetof(ReliefParameters, max_reads) == 24 &&
+                  sizeof(DepthSearch) == 4,
+              "ReliefParameters must keep the layout of GLSL's raycache_relief_parameters");
 
 // Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive
 // and max_steps is 1..RAYCACHE_MAX_RELIEF_STEPS.

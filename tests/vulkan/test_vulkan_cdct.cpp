@@ -31,7 +31,8 @@ struct Query {
     glm::vec3 origin; // search: ray origin; store_hit: the hit point
     std::uint32_t cube;
     glm::vec3 direction; // search and store_escape: ray direction; store: key
-    std::uint32_t mode;  // 0: search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance)
+    std::uint32_t mode;  // 0: relief search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance),
+                         // 4: secant search, 5: depth_search (the parameters' search)
     glm::vec3 color;
     float distance;
 };
@@ -47,19 +48,14 @@ struct Result {
     float pad2;
 };
 static_assert(sizeof(Result) == 48, "Result must match cdct_cross.comp");
-// GLSL's raycache_relief_parameters: the relief walk's fields of ReliefParameters, in order.
-struct GpuRelief {
-    float step, epsilon;
-    std::int32_t max_steps;
-    float max_depth, max_gap;
-};
+// GLSL's raycache_relief_parameters is ReliefParameters field for field (cdct.hpp asserts the layout):
+// the push constants hold its bytes as they are.
 struct Push {
-    GpuRelief parameters;
+    ReliefParameters parameters;
     std::uint32_t count;
-    Push(const ReliefParameters& p, std::size_t n)
-        : parameters{p.step, p.epsilon, p.max_steps, p.max_depth, p.max_gap}, count(static_cast<std::uint32_t>(n)) {}
+    Push(const ReliefParameters& p, std::size_t n) : parameters(p), count(static_cast<std::uint32_t>(n)) {}
 };
-static_assert(sizeof(GpuRelief) == 20 && sizeof(Push) == 24, "raycache_relief_parameters is 5 4-byte fields");
+static_assert(sizeof(Push) == 32, "raycache_relief_parameters is 7 4-byte fields, then the count");
 
 
 using Scene = rcx_test::CdctScene;
@@ -67,14 +63,15 @@ using rcx_test::random_direction;
 
 Scene make_scene(std::mt19937& rng, bool fill) { return rcx_test::make_analytic_scene(rng, fill); }
 
-// rcx_test::search_rays as search queries (mode 0).
-std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube) {
+// rcx_test::search_rays as search queries (mode 0: relief; 4: secant; 5: the parameters' search).
+std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube, std::uint32_t mode = 0) {
     std::vector<Query> queries;
     for (const rcx_test::CdctRay& ray : rcx_test::search_rays(s, rng, per_cube)) {
         Query q{};
         q.origin = ray.origin;
         q.cube = ray.cube;
         q.direction = ray.direction;
+        q.mode = mode;
         queries.push_back(q);
     }
     return queries;
@@ -85,14 +82,19 @@ struct Comparison {
     long long texels = 0;
 };
 
-// Compares GPU search results with relief_search on the C++ cubes; prints the first differences.
+// Compares GPU search results with the C++ search of each query's mode (0: relief_search, 4: secant_search,
+// 5: depth_search) on the C++ cubes; prints the first differences.
 Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const Result* r, const ReliefParameters& p) {
     Comparison c;
     int printed = 0;
     for (std::size_t i = 0; i < queries.size(); ++i) {
-        if (queries[i].mode != 0) continue;
+        if (queries[i].mode != 0 && queries[i].mode != 4 && queries[i].mode != 5) continue;
         const Query& q = queries[i];
-        const ReliefResult e = relief_search(s.cubes[q.cube], s.bounds[q.cube], q.origin, q.direction, p);
+        CdctCube& cube = s.cubes[q.cube];
+        const CubeBounds& b = s.bounds[q.cube];
+        const ReliefResult e = q.mode == 0   ? relief_search(cube, b, q.origin, q.direction, p)
+                               : q.mode == 4 ? secant_search(cube, b, q.origin, q.direction, p)
+                                             : depth_search(cube, b, q.origin, q.direction, p);
         const bool ok = (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
                         glm::floatBitsToUint(r[i].distance) == glm::floatBitsToUint(e.distance) && same_bits(r[i].point, e.point) &&
                         same_bits(r[i].color, e.color);
@@ -268,8 +270,12 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
     std::vector<Query> next_queries = search_queries(s, rng, 1500);
     rcx::vk::Buffer next_buffer = rcx_test::buffer_of(*vk, next_queries);
+    std::vector<Query> next_secant_queries = next_queries;
+    for (Query& q : next_secant_queries) q.mode = 4;
+    rcx::vk::Buffer next_secant_buffer = rcx_test::buffer_of(*vk, next_secant_queries);
     rcx::vk::Buffer frame_results(*vk, queries.size() * sizeof(Result));
     rcx::vk::Buffer next_results(*vk, next_queries.size() * sizeof(Result));
+    rcx::vk::Buffer next_secant_results(*vk, next_queries.size() * sizeof(Result));
     const Push push(p, queries.size());
     const Push next_push(p, next_queries.size());
     vk->submit([&](rcx::vk::Commands& c) {
@@ -280,6 +286,8 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
         c.barrier();
         c.dispatch(cross, {texels, pending, cubes, next_buffer, next_results}, &next_push, sizeof(next_push),
                    rcx::vk::group_count(next_queries.size(), 64));
+        c.dispatch(cross, {texels, pending, cubes, next_secant_buffer, next_secant_results}, &next_push,
+                   sizeof(next_push), rcx::vk::group_count(next_queries.size(), 64));
     });
 
     // The same stores in C++, in order; count the texels that several different words competed for.
@@ -361,4 +369,89 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
                 next_queries.size(), next.hits);
     CHECK(next.same == next_queries.size());
     CHECK(next.hits > 0);
+    const Comparison next_secant = compare_searches(s, next_secant_queries, next_secant_results.as<Result>(), p);
+    std::printf("CDCT secant search in the next frame: %zu of %zu equal to C++ (%zu hits)\n", next_secant.same,
+                next_queries.size(), next_secant.hits);
+    CHECK(next_secant.same == next_queries.size());
+    CHECK(next_secant.hits > 0);
+}
+
+TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on analytic cubes and on cubes filled by stores") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    std::mt19937 rng(24);
+    // Analytic cubes (every texel but the first cube's cap filled), and cubes filled by 7,500 traced rays
+    // through cdct_cached_trace over three frames (holes where no ray went).
+    std::vector<rcx_test::TracedSample> samples;
+    Scene scenes[2] = {rcx_test::make_analytic_scene(rng, true), rcx_test::make_stored_scene(rng, 2500, 3, samples)};
+    rcx_test::apply_samples(scenes[1], samples, ReliefParameters{});
+    const char* names[2] = {"analytic cubes", "cubes filled by stores"};
+
+    std::size_t compared = 0, all_same = 0;
+    for (int k = 0; k < 2; ++k) {
+        Scene& s = scenes[k];
+        CAPTURE(names[k]);
+        const std::vector<Query> queries = search_queries(s, rng, 1000, 4);
+        rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
+        rcx::vk::Buffer pending(*vk, s.elements * 8);
+        pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+        rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+        rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+        rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+        std::size_t hits = 0;
+        for (const ReliefParameters& p : rcx_test::secant_parameter_sets()) {
+            CAPTURE(p.epsilon);
+            CAPTURE(p.max_gap);
+            CAPTURE(p.max_reads);
+            const Push push(p, queries.size());
+            vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                         rcx::vk::group_count(queries.size(), 64));
+            const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+            std::printf("CDCT secant search on %s (epsilon %g, max_gap %g, max_reads %d): %zu of %zu equal to C++ "
+                        "(%zu hits, %.2f texels read per search)\n",
+                        names[k], p.epsilon, p.max_gap, p.max_reads, c.same, queries.size(), c.hits,
+                        static_cast<double>(c.texels) / queries.size());
+            CHECK(c.same == queries.size());
+            CHECK(c.hits < queries.size());
+            CHECK(c.texels <= static_cast<long long>(queries.size()) * p.max_reads);
+            compared += queries.size();
+            all_same += c.same;
+            hits += c.hits;
+        }
+        CHECK(hits > queries.size()); // both kinds of cube answer many searches over the sets
+    }
+    std::printf("CDCT secant search: %zu of %zu GLSL searches equal to C++ bit for bit\n", all_same, compared);
+    CHECK(compared >= 20000);
+    CHECK(all_same == compared);
+}
+
+TEST_CASE("raycache_cdct_search makes the search the parameters name, as depth_search does") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    std::mt19937 rng(25);
+    Scene s = make_scene(rng, true);
+    const std::vector<Query> queries = search_queries(s, rng, 500, 5);
+    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
+    rcx::vk::Buffer pending(*vk, s.elements * 8);
+    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+    long long texels_read[2] = {0, 0};
+    for (const DepthSearch search : {DepthSearch::secant, DepthSearch::relief}) {
+        ReliefParameters p;
+        p.search = search;
+        const Push push(p, queries.size());
+        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                     rcx::vk::group_count(queries.size(), 64));
+        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        CHECK(c.same == queries.size());
+        CHECK(c.hits > 0);
+        texels_read[search == DepthSearch::relief] = c.texels;
+    }
+    CHECK(texels_read[0] < texels_read[1]); // the secant search did read fewer texels: it was the one made
 }

@@ -34,6 +34,9 @@
 #define RAYCACHE_SECANT_MISS 2
 /* The most reads one search may take: max_reads above it is clamped to it. */
 #define RAYCACHE_SECANT_MAX_READS 64
+/* Which search a CDCT lookup makes (raycache::DepthSearch, the search field of the parameters). */
+#define RAYCACHE_DEPTH_SEARCH_SECANT 0
+#define RAYCACHE_DEPTH_SEARCH_RELIEF 1
 
 #ifdef __cplusplus
 namespace raycache {
