@@ -56,6 +56,18 @@ inline glm::vec3 random_direction(std::mt19937& rng) {
     return glm::vec3(g(rng), g(rng), g(rng)) * std::exp2(std::uniform_real_distribution<float>(-10, 10)(rng));
 }
 
+// Calls f(texel, unit direction from the centre through the texel's centre) for every texel of the cube.
+template <class F>
+void for_each_texel_direction(const raycache::CdctCube& cube, F&& f) {
+    const int n = cube.face_size();
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column) {
+                const raycache::TexelAddress t{face, column, row};
+                f(t, glm::normalize(raycache::texel_direction(t, n)));
+            }
+}
+
 // Three cubes in one buffer, filled analytically when `fill` (see the top of the file); texel colours random.
 inline CdctScene make_analytic_scene(std::mt19937& rng, bool fill) {
     using namespace raycache;
@@ -67,23 +79,18 @@ inline CdctScene make_analytic_scene(std::mt19937& rng, bool fill) {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     for (std::size_t c = 0; c < s.cubes.size(); ++c) {
         CdctCube& cube = s.cubes[c];
-        const int n = cube.face_size();
-        for (int face = 0; face < 6; ++face)
-            for (int row = 0; row < n; ++row)
-                for (int column = 0; column < n; ++column) {
-                    const TexelAddress t{face, column, row};
-                    const glm::vec3 d = glm::normalize(texel_direction(t, n));
-                    float depth;
-                    if (c == 0) {
-                        if (d.y > 0.8f) continue; // the hole
-                        depth = 5.0f;
-                    } else if (c == 1) {
-                        depth = 3.5f + 1.5f * std::sin(3.0f * d.x) * std::cos(2.0f * d.z);
-                    } else {
-                        depth = 2.5f + 5.0f * u(rng);
-                    }
-                    cube.store_at(t, DepthSample{glm::vec3(u(rng), u(rng), u(rng)), depth});
-                }
+        for_each_texel_direction(cube, [&](const TexelAddress& t, const glm::vec3& d) {
+            float depth;
+            if (c == 0) {
+                if (d.y > 0.8f) return; // the hole
+                depth = 5.0f;
+            } else if (c == 1) {
+                depth = 3.5f + 1.5f * std::sin(3.0f * d.x) * std::cos(2.0f * d.z);
+            } else {
+                depth = 2.5f + 5.0f * u(rng);
+            }
+            cube.store_at(t, DepthSample{glm::vec3(u(rng), u(rng), u(rng)), depth});
+        });
         cube.begin_frame();
     }
     return s;

@@ -13,6 +13,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include <raycache/raycache.hpp>
@@ -110,23 +111,45 @@ Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const R
     return c;
 }
 
+// shaders/cdct_cross.comp, on a device with the 64-bit atomics that the include's CDCT stores need.
+rcx::vk::ComputePipeline cross_pipeline(rcx::vk::Context& vk) {
+    REQUIRE_MESSAGE(vk.int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    return rcx::vk::ComputePipeline(vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+}
+
+// A scene's cubes and a batch of search queries in the buffers of the cross-check shader (nothing pending),
+// searched in GLSL with any parameters and compared with C++.
+struct GpuSearches {
+    rcx::vk::Context& vk;
+    const rcx::vk::ComputePipeline& cross;
+    Scene& s;
+    std::vector<Query> queries;
+    rcx::vk::Buffer texels, pending, cubes, query_buffer, results;
+
+    GpuSearches(rcx::vk::Context& context, const rcx::vk::ComputePipeline& pipeline, Scene& scene, std::vector<Query> q)
+        : vk(context), cross(pipeline), s(scene), queries(std::move(q)), texels(rcx_test::buffer_of(vk, s.words())),
+          pending(vk, s.elements * 8), cubes(rcx_test::buffer_of(vk, s.descriptors)),
+          query_buffer(rcx_test::buffer_of(vk, queries)), results(vk, queries.size() * sizeof(Result)) {
+        pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    }
+    Comparison run(const ReliefParameters& p) {
+        const Push push(p, queries.size());
+        vk.dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+                    rcx::vk::group_count(queries.size(), 64));
+        return compare_searches(s, queries, results.as<Result>(), p);
+    }
+};
+
 } // namespace
 
 TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(21);
     Scene s = make_scene(rng, true);
-    const std::vector<Query> queries = search_queries(s, rng, 1500);
-
-    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-    rcx::vk::Buffer pending(*vk, s.elements * 8);
-    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+    GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 1500));
+    const std::vector<Query>& queries = gpu.queries;
 
     const float inf = std::numeric_limits<float>::infinity();
     const ReliefParameters sets[] = {
@@ -138,10 +161,7 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
         CAPTURE(p.epsilon);
         CAPTURE(p.max_steps);
         CAPTURE(p.max_gap);
-        const Push push(p, queries.size());
-        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        const Comparison c = gpu.run(p);
         std::printf("CDCT relief search (step %g, epsilon %g, %d steps, max_gap %g), C++ texels read in GLSL: %zu of "
                     "%zu equal to C++ (%zu hits, %.1f texels read per search)\n",
                     p.step, p.epsilon, p.max_steps, p.max_gap, c.same, queries.size(), c.hits,
@@ -155,8 +175,7 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
 TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot move the ray or max_steps is over the limit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(23);
     Scene s = make_scene(rng, true);
     // Origins inside the boxes (and the bad ones): the walk starts at the box exit, t > 0.05, where
@@ -168,13 +187,7 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
                                      return std::max(local.x, std::max(local.y, local.z)) > 0.95f * s.bounds[q.cube].half_size;
                                  }),
                   queries.end());
-
-    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-    rcx::vk::Buffer pending(*vk, s.elements * 8);
-    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+    GpuSearches gpu(*vk, cross, s, queries);
 
     const float inf = std::numeric_limits<float>::infinity();
     const ReliefParameters sets[] = {{1e-30f, 0.02f, 100000, 100.0f, inf},
@@ -182,10 +195,7 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
     for (const ReliefParameters& p : sets) {
         CAPTURE(p.step);
         CAPTURE(p.max_steps);
-        const Push push(p, queries.size());
-        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        const Comparison c = gpu.run(p);
         CHECK(c.same == queries.size());
         if (p.max_steps > RAYCACHE_MAX_RELIEF_STEPS) { // parameters no search runs with: a miss, nothing read
             CHECK(c.hits == 0);
@@ -199,8 +209,7 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
 TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then smallest word wins, and C++ reads the result") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), rcx_test::end_frame_bindings, 0);
     std::mt19937 rng(22);
     // The scene filled, then 3 of every 4 texels emptied: stores into the rest are refused.
@@ -379,8 +388,7 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
 TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on analytic cubes and on cubes filled by stores") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(24);
     // Analytic cubes (every texel but the first cube's cap filled), and cubes filled by 7,500 traced rays
     // through cdct_cached_trace over three frames (holes where no ray went).
@@ -393,22 +401,14 @@ TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on 
     for (int k = 0; k < 2; ++k) {
         Scene& s = scenes[k];
         CAPTURE(names[k]);
-        const std::vector<Query> queries = search_queries(s, rng, 1000, 4);
-        rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-        rcx::vk::Buffer pending(*vk, s.elements * 8);
-        pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-        rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-        rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-        rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+        GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 1000, 4));
+        const std::vector<Query>& queries = gpu.queries;
         std::size_t hits = 0;
         for (const ReliefParameters& p : rcx_test::secant_parameter_sets()) {
             CAPTURE(p.epsilon);
             CAPTURE(p.max_gap);
             CAPTURE(p.max_reads);
-            const Push push(p, queries.size());
-            vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                         rcx::vk::group_count(queries.size(), 64));
-            const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+            const Comparison c = gpu.run(p);
             std::printf("CDCT secant search on %s (epsilon %g, max_gap %g, max_reads %d): %zu of %zu equal to C++ "
                         "(%zu hits, %.2f texels read per search)\n",
                         names[k], p.epsilon, p.max_gap, p.max_reads, c.same, queries.size(), c.hits,
@@ -430,26 +430,16 @@ TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on 
 TEST_CASE("raycache_cdct_search makes the search the parameters name, as depth_search does") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(25);
     Scene s = make_scene(rng, true);
-    const std::vector<Query> queries = search_queries(s, rng, 500, 5);
-    rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, s.words());
-    rcx::vk::Buffer pending(*vk, s.elements * 8);
-    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
-    rcx::vk::Buffer results(*vk, queries.size() * sizeof(Result));
+    GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 500, 5));
     long long texels_read[2] = {0, 0};
     for (const DepthSearch search : {DepthSearch::secant, DepthSearch::relief}) {
         ReliefParameters p;
         p.search = search;
-        const Push push(p, queries.size());
-        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
-                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
-        CHECK(c.same == queries.size());
+        const Comparison c = gpu.run(p);
+        CHECK(c.same == gpu.queries.size());
         CHECK(c.hits > 0);
         texels_read[search == DepthSearch::relief] = c.texels;
     }
