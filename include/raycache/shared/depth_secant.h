@@ -138,12 +138,12 @@ RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s
         return s;
     }
     if (f < 0.0f) {
-        if (s.last_side < 0 && s.bracketed) s.hi_f = 0.5f * s.hi_f; /* Illinois: the same end again */
+        if (s.last_side < 0 && s.bracketed) s.hi_f = raycache_no_fma(0.5f * s.hi_f); /* Illinois: the same end again */
         s.lo_t = s.t;
         s.lo_f = f;
         s.last_side = -1;
     } else {
-        if (s.last_side > 0) s.lo_f = 0.5f * s.lo_f;
+        if (s.last_side > 0) s.lo_f = raycache_no_fma(0.5f * s.lo_f);
         s.hi_t = s.t;
         s.hi_f = f;
         s.hi_color = color;
