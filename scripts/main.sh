@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # main.sh: installs the dependencies, builds the Embree example tracer (Release, build-release/) and runs
-# the main job: behind-32 (thesis Figure 5.2) rendered with the cache off and with each technique, frame
-# by frame from the same viewpoint, printing per frame the speed-up over the cache off and the PSNR
-# against the uncached frame. PNGs and difference images go to out/main/.
-# Arguments are passed to every tracer run (for example: --size 512x512 --face-size 256).
+# the main job: a walkthrough of behind-32 (the camera orbits the main mirror 1 degree a frame), rendered
+# with the cache off and with each technique, frame by frame, printing per frame the speed-up over the
+# cache off and the PSNR against the uncached frame, then the means after frame 0 (which is cold).
+# PNGs and difference images go to out/main/. Arguments are passed to every tracer run
+# (for example: --size 512x512 --path pan).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -15,15 +16,16 @@ cmake -S . -B build-release "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DRAYCA
 cmake --build build-release --target raycache_embree_whitted -j"$(nproc 2>/dev/null || echo 2)"
 
 tracer=build-release/examples/embree_whitted/raycache_embree_whitted
-common=(--scene behind-32 --size 1024x1024 --face-size 512 --path fixed --frames 5 --compare)
+common=(--scene behind-32 --size 1024x1024 --path orbit --step 1 --frames 16 --compare)
 echo
-echo "===== CCT: colour caching (frame 0 is cold: every ray traced and stored) ====="
+echo "===== CCT: colour caching; adaptive cube sizes, texels at colour edges traced (frame 0 is cold) ====="
 "$tracer" "${common[@]}" --cache cct --out out/main/cct "$@"
 echo
-echo "===== CDCT: colour + depth, relief search over a min-depth pyramid ====="
+echo "===== CDCT: colour + depth, secant search (a few texel reads), doubtful answers traced ====="
 "$tracer" "${common[@]}" --cache cdct --out out/main/cdct "$@"
 echo
 echo "Images: out/main/{cct,cdct}/ (frames, uncached references, difference images: blue = equal, red = different)."
+echo "Other paths: --path pan or --path fixed; a single image with a warm-up pass: --frames 1 --warm-up 2."
 echo "The same on Vulkan (lavapipe): cmake --build build-release --target raycache_vulkan_whitted, then"
-echo "  RCX_VULKAN_VALIDATION=0 build-release/examples/vulkan_whitted/raycache_vulkan_whitted --scene behind-32 --size 512x512 --path fixed --frames 4 --cache cct --compare [--hybrid]"
-echo "Full benchmarks (thesis Tables 5.1 on Vulkan, 5.2, 5.3, Figure 5.9, quality, memory): scripts/bench.sh -> docs/RESULTS.md"
+echo "  RCX_VULKAN_VALIDATION=0 build-release/examples/vulkan_whitted/raycache_vulkan_whitted --scene behind-32 --size 512x512 --path orbit --frames 4 --cache cct --compare [--hybrid]"
+echo "Full benchmarks (the walkthrough table, thesis Tables 5.1-5.3, Figure 5.9, memory): scripts/bench.sh -> docs/RESULTS.md"

@@ -281,3 +281,37 @@ TEST_CASE("cached_trace answers a vector that is not a direction by tracing, wit
     CHECK(calls == 2 * count);
     CHECK(cube.valid_texels() == 0u);
 }
+
+TEST_CASE("begin_frame, clear, invalidate and a pyramid update inside a frame's lookup or search assert, naming the rule") {
+    // The caller's trace runs inside cached_trace's (and the CDCT's) frame scope: calling a between-frames
+    // function from it is the misuse the rule forbids, detected deterministically here.
+#if RAYCACHE_CHECK_FRAME_RULE
+    raycache::CctCube cct(8);
+    int before = failures_now();
+    raycache::cached_trace(cct, glm::vec3(1, 0, 0), [&] {
+        cct.begin_frame();
+        cct.clear();
+        cct.invalidate(raycache::TexelAddress{0, 1, 1});
+        return glm::vec3(1.0f);
+    });
+    CHECK(failures_now() - before == 3);
+    cct.begin_frame(); // between frames: fine
+    CHECK(failures_now() - before == 3);
+
+    raycache::CdctCube cdct(8);
+    raycache::DepthPyramid pyramid(8);
+    before = failures_now();
+    raycache::cdct_cached_trace(cdct, raycache::CubeBounds{glm::vec3(0), 1.0f}, glm::vec3(0), glm::vec3(0, 1, 0),
+                                raycache::ReliefParameters{}, [&] {
+                                    pyramid.update(cdct);
+                                    cdct.begin_frame();
+                                    return raycache::TracedRay{glm::vec3(1.0f), 2.0f};
+                                });
+    CHECK(failures_now() - before == 2);
+    pyramid.update(cdct);
+    cdct.begin_frame();
+    CHECK(failures_now() - before == 2);
+#else
+    MESSAGE("RAYCACHE_CHECK_FRAME_RULE is off in this build (NDEBUG): the rule is not checked");
+#endif
+}

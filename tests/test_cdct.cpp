@@ -44,6 +44,18 @@ void fill(CdctCube& cube, Depth depth) {
     cube.begin_frame();
 }
 
+// Fills only the -Y face, with a floor 2 below the centre; the rest of the cube stays empty.
+void fill_floor_face_only(CdctCube& cube) {
+    const int n = cube.face_size();
+    for (int row = 0; row < n; ++row)
+        for (int column = 0; column < n; ++column) {
+            const TexelAddress t{3, column, row};
+            const glm::vec3 d = glm::normalize(texel_direction(t, n));
+            cube.store_at(t, DepthSample{face_color(3), 2.0f / -d.y});
+        }
+    cube.begin_frame();
+}
+
 // Distance along unit d from o, inside the sphere of `radius` around the centre, to where it leaves it:
 // |o + t d - C| = R  =>  t = -b + sqrt(b^2 - c), b = d.(o - C), c = |o - C|^2 - R^2.
 float sphere_exit(const glm::vec3& o, const glm::vec3& d, float radius) {
@@ -146,14 +158,7 @@ TEST_CASE("above a plane the search finds the ray's hit on the plane") {
 TEST_CASE("a ray whose path crosses an unfilled part of the cube misses") {
     // Only the -Y face is filled (a floor 2 below the centre); the rest of the cube is empty.
     CdctCube cube(32);
-    const int n = cube.face_size();
-    for (int row = 0; row < n; ++row)
-        for (int column = 0; column < n; ++column) {
-            const TexelAddress t{3, column, row};
-            const glm::vec3 d = glm::normalize(texel_direction(t, n));
-            cube.store_at(t, DepthSample{face_color(3), 2.0f / -d.y});
-        }
-    cube.begin_frame();
+    fill_floor_face_only(cube);
     const ReliefParameters p{0.1f, 0.01f, 1000, 100.0f};
     CHECK(relief_search(cube, bounds, centre, glm::vec3(0, -1, 0), p).hit);   // straight down: all -Y
     CHECK_FALSE(relief_search(cube, bounds, centre, glm::vec3(0, 1, 0), p).hit); // up: empty +Y
@@ -579,14 +584,7 @@ TEST_CASE("above a plane the secant search finds the ray's hit within epsilon pl
 TEST_CASE("the secant search misses on an empty texel, and behind a depth discontinuity wider than max_gap") {
     // -Y filled with a floor 2 below the centre, the rest empty: straight down hits, straight up misses.
     CdctCube cube(32);
-    const int n = cube.face_size();
-    for (int row = 0; row < n; ++row)
-        for (int column = 0; column < n; ++column) {
-            const TexelAddress t{3, column, row};
-            const glm::vec3 d = glm::normalize(texel_direction(t, n));
-            cube.store_at(t, DepthSample{face_color(3), 2.0f / -d.y});
-        }
-    cube.begin_frame();
+    fill_floor_face_only(cube);
     ReliefParameters p;
     CHECK(secant_search(cube, bounds, centre, glm::vec3(0, -1, 0), p).hit);
     const ReliefResult up = secant_search(cube, bounds, centre, glm::vec3(0, 1, 0), p);

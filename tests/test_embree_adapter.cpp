@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include <raycache/embree/scene_cache.hpp>
@@ -66,6 +67,18 @@ struct World {
         return {rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<float>::infinity() : rh.ray.tfar, rh.hit.geomID};
     }
 };
+
+// Instances committed scene `inner` into `top`, moved by `offset`; the instance's geometry id in `top`.
+unsigned add_instance(RTCDevice device, RTCScene top, RTCScene inner, glm::vec3 offset) {
+    RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(instance, inner);
+    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, offset.x, offset.y, offset.z}; // column-major 3x4
+    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    rtcCommitGeometry(instance);
+    const unsigned id = rtcAttachGeometry(top, instance);
+    rtcReleaseGeometry(instance);
+    return id;
+}
 
 } // namespace
 
@@ -264,13 +277,7 @@ TEST_CASE("an instance attached by its own id caches every geometry reached thro
     const unsigned inner_sphere = w.add_sphere(inner, {0, 0, 0}, 1.0f);
     rtcCommitScene(inner);
     RTCScene top = rtcNewScene(w.device);
-    RTCGeometry instance = rtcNewGeometry(w.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(instance, inner);
-    const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 5, 0, 0}; // column-major 3x4: moved to x = 5
-    rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
-    rtcCommitGeometry(instance);
-    const unsigned instance_id = rtcAttachGeometry(top, instance);
-    rtcReleaseGeometry(instance);
+    const unsigned instance_id = add_instance(w.device, top, inner, {5, 0, 0}); // moved to x = 5
     rtcCommitScene(top);
     {
         SceneCache caches(Technique::cct);
@@ -288,4 +295,231 @@ TEST_CASE("an instance attached by its own id caches every geometry reached thro
     }
     rtcReleaseScene(top);
     rtcReleaseScene(inner);
+}
+
+namespace {
+
+// One Embree triangle geometry holding three objects, as a tracer that keeps every triangle together
+// builds it: object A, triangles 0-1, a unit square at z = 5 over x, y in [0, 1]; object B, triangles 2-5,
+// two 2 x 2 squares at z = 5 and z = 6 over x in [3, 5], y in [0, 2]; a backdrop, triangles 6-7, at z = 10
+// over x, y in [-10, 10]. Vertices are FLOAT3 in a 16-byte stride, with junk in the fourth float.
+struct Soup {
+    RTCDevice device = rtcNewDevice(nullptr);
+    RTCScene scene = rtcNewScene(device);
+    unsigned soup = 0;
+
+    Soup() {
+        const float squares[4][5] = {{0, 1, 0, 1, 5}, {3, 5, 0, 2, 5}, {3, 5, 0, 2, 6}, {-10, 10, -10, 10, 10}};
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float), 16));
+        auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 8));
+        for (unsigned q = 0; q < 4; ++q) {
+            const float* s = squares[q];
+            const float corners[4][2] = {{s[0], s[2]}, {s[1], s[2]}, {s[1], s[3]}, {s[0], s[3]}};
+            for (unsigned c = 0; c < 4; ++c) {
+                float* p = v + 4 * (4 * q + c);
+                p[0] = corners[c][0], p[1] = corners[c][1], p[2] = s[4], p[3] = -1e30f;
+            }
+            const unsigned tris[6] = {0, 1, 2, 0, 2, 3};
+            for (unsigned i = 0; i < 6; ++i) t[6 * q + i] = 4 * q + tris[i];
+        }
+        rtcCommitGeometry(g);
+        soup = rtcAttachGeometry(scene, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(scene);
+    }
+    ~Soup() {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+    }
+};
+
+// The hit of a ray from `o` along unit `d` in `scene`, as a tracer gets it from rtcIntersect1. instID[0]
+// starts as junk: Embree itself must report RTC_INVALID_GEOMETRY_ID there for a hit outside instances.
+RTCHit hit_in(RTCScene scene, glm::vec3 o, glm::vec3 d) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh{};
+    rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = 12345;
+    rtcIntersect1(scene, &context, &rh);
+    return rh.hit;
+}
+
+void check_bounds(const std::optional<raycache::CubeBounds>& b, glm::vec3 centre, float half_size) {
+    REQUIRE(b);
+    CHECK(b->centre.x == doctest::Approx(centre.x));
+    CHECK(b->centre.y == doctest::Approx(centre.y));
+    CHECK(b->centre.z == doctest::Approx(centre.z));
+    CHECK(b->half_size == doctest::Approx(half_size));
+}
+
+} // namespace
+
+TEST_CASE("primitives are counted and triangle ranges measured from the Embree geometry, whatever its vertex stride") {
+    Soup s;
+    CHECK(raycache::embree::primitive_count(s.scene, s.soup) == 8u);
+    World w;
+    CHECK(raycache::embree::primitive_count(w.scene, w.floor) == 2u);
+    CHECK_THROWS_WITH_AS(raycache::embree::primitive_count(w.scene, w.mirror), doctest::Contains("cannot count the primitives"),
+                         std::invalid_argument); // a sphere: Embree's point queries do not reach it
+    const raycache::CubeBounds b = raycache::embree::triangle_bounds(s.scene, s.soup, 2, 4);
+    CHECK(b.centre.x == doctest::Approx(4.0f));
+    CHECK(b.centre.y == doctest::Approx(1.0f));
+    CHECK(b.centre.z == doctest::Approx(5.5f));
+    CHECK(b.half_size == doctest::Approx(1.0f));
+    CHECK_THROWS_WITH_AS(raycache::embree::triangle_bounds(s.scene, s.soup, 6, 3),
+                         doctest::Contains("primitives 6..8 are past the end of geometry 0, which has 8 primitives"),
+                         std::invalid_argument);
+}
+
+TEST_CASE("two objects in one triangle geometry get a cube each, and a hit's primID finds its object's cube") {
+    Soup s;
+    SceneCache caches(Technique::cct);
+    caches.attach_primitives(s.scene, {s.soup}, 2, 4, 8); // B first: ranges need not come in order
+    caches.attach_primitives(s.scene, {s.soup}, 0, 2, 16);
+    CHECK(caches.object_count() == 2);
+    const std::vector<ObjectId> objects = caches.objects();
+    CHECK(objects[0].prim_id == 2u);
+    CHECK(objects[1].prim_id == 0u);
+    // Each cube sits around its own triangles.
+    check_bounds(caches.object_bounds({s.soup, RTC_INVALID_GEOMETRY_ID, 1}), {0.5f, 0.5f, 5.0f}, 0.5f);
+    check_bounds(caches.object_bounds({s.soup, RTC_INVALID_GEOMETRY_ID, 5}), {4.0f, 1.0f, 5.5f}, 1.0f);
+    CHECK(caches.face_size({s.soup, RTC_INVALID_GEOMETRY_ID, 0}) == 16);
+    CHECK(caches.face_size({s.soup, RTC_INVALID_GEOMETRY_ID, 3}) == 8);
+    // The backdrop's triangles, and the geometry without a primitive, have none.
+    CHECK_FALSE(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, 6}));
+    CHECK_FALSE(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, 7}));
+    CHECK_FALSE(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, 8}));
+    CHECK_FALSE(caches.has_cache({s.soup}));
+
+    // Real hits, through object_of(hit), each on its object's cube.
+    int traces = 0;
+    auto leave = [&](glm::vec3 from) {
+        const RTCHit hit = hit_in(s.scene, from, {0, 0, 1});
+        REQUIRE(hit.geomID == s.soup);
+        CHECK(hit.instID[0] == RTC_INVALID_GEOMETRY_ID); // Embree's own answer for a plain hit
+        const ObjectId id = raycache::embree::object_of(hit);
+        CHECK(id.geom_id == s.soup);
+        CHECK(id.inst_id == RTC_INVALID_GEOMETRY_ID);
+        CHECK(id.prim_id == hit.primID);
+        caches.leaving_ray(id, from, {0, 0, -1}, [&] { ++traces; return TracedRay{glm::vec3(0.5f), 5.0f}; });
+        return hit.primID;
+    };
+    CHECK(leave({0.25f, 0.75f, 0}) <= 1u);         // object A
+    const unsigned on_b = leave({4.5f, 0.5f, 0}); // object B's front square
+    CHECK((on_b == 2u || on_b == 3u));
+    CHECK(leave({-5, -5, 0}) >= 6u);              // the backdrop: traced, no cube
+    CHECK(traces == 3);
+    CHECK(caches.object_statistics({s.soup, RTC_INVALID_GEOMETRY_ID, 0})->lookups == 1u);
+    CHECK(caches.object_statistics({s.soup, RTC_INVALID_GEOMETRY_ID, 2})->lookups == 1u);
+    CHECK_FALSE(caches.object_statistics({s.soup, RTC_INVALID_GEOMETRY_ID, 6}));
+    const auto frame = caches.begin_frame();
+    CHECK(frame.lookups == 2u);
+    CHECK(frame.stores == 2u);
+    // Next frame: both answered from their own cubes.
+    leave({0.25f, 0.75f, 0});
+    leave({4.5f, 0.5f, 0});
+    CHECK(traces == 3);
+    CHECK(caches.begin_frame().hits == 2u);
+}
+
+TEST_CASE("primitive ranges that overlap, run past the geometry, or clash with a whole-geometry cube are refused clearly") {
+    Soup s;
+    World w;
+    SceneCache caches(Technique::cct);
+    caches.attach_primitives(s.scene, {s.soup}, 2, 4, 8);
+    using doctest::Contains;
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 5, 2, 8),
+                         Contains("primitives 5..6 of geometry 0 overlap primitives 2..5, which already have a cube"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 0, 3, 8), Contains("overlap primitives 2..5"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 3, 1, 8), Contains("overlap primitives 2..5"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 0, 8, 8), Contains("overlap"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 6, 3, 8),
+                         Contains("primitives 6..8 are past the end of geometry 0, which has 8 primitives (0..7)"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 4294967295u, 2, 8, raycache::CubeBounds{{0, 0, 0}, 1.0f}),
+                         Contains("past the end"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 0, 0, 8), Contains("empty primitive range"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup}, 0, 2, -1), Contains("face size"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach(s.scene, {s.soup}, 8), Contains("split into primitive ranges"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach(s.scene, raycache::embree::ObjectId{s.soup, RTC_INVALID_GEOMETRY_ID, 0}, 8),
+                         Contains("attach_primitives()"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(caches.attach_primitives(s.scene, {s.soup, 3}, 0, 2, 8), Contains("pass their cube's bounds"),
+                         std::invalid_argument);
+    // A geometry with a cube as a whole cannot have ranges; one whose primitives Embree cannot count neither.
+    SceneCache whole(Technique::cct);
+    whole.attach(w.scene, {w.floor}, 8);
+    CHECK_THROWS_WITH_AS(whole.attach_primitives(w.scene, {w.floor}, 0, 1, 8), Contains("already has a cube for all its primitives"),
+                         std::invalid_argument);
+    CHECK_THROWS_WITH_AS(whole.attach_primitives(w.scene, {w.mirror}, 0, 1, 8, raycache::CubeBounds{{1, 2, 3}, 0.5f}),
+                         Contains("cannot count the primitives of geometry"), std::invalid_argument);
+    // The refusals changed nothing: still one range, found as before, its neighbours free.
+    CHECK(caches.object_count() == 1);
+    CHECK(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, 2}));
+    CHECK_FALSE(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, 1}));
+    caches.attach_primitives(s.scene, {s.soup}, 0, 2, 8); // adjacent ranges are fine
+    caches.attach_primitives(s.scene, {s.soup}, 6, 2, 8);
+    CHECK(caches.object_count() == 3);
+    check_bounds(caches.object_bounds({s.soup, RTC_INVALID_GEOMETRY_ID, 1}), {0.5f, 0.5f, 5.0f}, 0.5f);
+    check_bounds(caches.object_bounds({s.soup, RTC_INVALID_GEOMETRY_ID, 4}), {4.0f, 1.0f, 5.5f}, 1.0f);
+    check_bounds(caches.object_bounds({s.soup, RTC_INVALID_GEOMETRY_ID, 7}), {0.0f, 0.0f, 10.0f}, 10.0f);
+    // A geometry detached from the scene has no primitives to give a cube.
+    SceneCache later(Technique::cct);
+    rtcDetachGeometry(s.scene, s.soup);
+    rtcCommitScene(s.scene);
+    CHECK_THROWS_WITH_AS(later.attach_primitives(s.scene, {s.soup}, 0, 2, 8), Contains("no geometry with id"), std::invalid_argument);
+}
+
+TEST_CASE("a primitive range inside an instance gets its cube from the caller's bounds and is found by hits through the instance") {
+    Soup s;
+    RTCScene top = rtcNewScene(s.device);
+    const unsigned instance_id = add_instance(s.device, top, s.scene, {0, 0, 100});
+    rtcCommitScene(top);
+    {
+        SceneCache caches(Technique::cct);
+        // `scene` is the instanced scene, which holds the geometry; the bounds are in world space.
+        caches.attach_primitives(s.scene, {s.soup, instance_id}, 0, 2, 16, raycache::CubeBounds{{0.5f, 0.5f, 105}, 0.5f});
+        const RTCHit hit = hit_in(top, {0.5f, 0.25f, 0}, {0, 0, 1});
+        REQUIRE(hit.geomID == s.soup);
+        CHECK(hit.instID[0] == instance_id);
+        const ObjectId id = raycache::embree::object_of(hit);
+        CHECK(caches.has_cache(id));
+        check_bounds(caches.object_bounds(id), {0.5f, 0.5f, 105}, 0.5f);
+        CHECK_FALSE(caches.has_cache({s.soup, RTC_INVALID_GEOMETRY_ID, hit.primID})); // not outside the instance
+        CHECK_FALSE(caches.has_cache(raycache::embree::object_of(hit_in(top, {4.5f, 0.5f, 0}, {0, 0, 1})))); // object B
+        caches.leaving_ray(id, {0.5f, 0.25f, 105}, {0, 0, -1}, [] { return TracedRay{glm::vec3(0.5f), 2.0f}; });
+        CHECK(caches.begin_frame().stores == 1u);
+    }
+    rtcReleaseScene(top);
+}
+
+TEST_CASE("object_of(hit) of real Embree hits finds the cubes the README attaches: a geometry, and an instance by its own id") {
+    World w;
+    RTCScene top = rtcNewScene(w.device);
+    const unsigned plain = w.add_sphere(top, {0, 0, 10}, 1.0f);
+    const unsigned instance_id = add_instance(w.device, top, w.scene, {20, 0, 0}); // the World: mirror, floor, ball
+    rtcCommitScene(top);
+    {
+        SceneCache caches(Technique::cct);
+        caches.attach(top, {plain});
+        caches.attach(top, {instance_id});
+        const RTCHit on_plain = hit_in(top, {0, 0, 0}, {0, 0, 1});
+        REQUIRE(on_plain.geomID == plain);
+        CHECK(on_plain.instID[0] == RTC_INVALID_GEOMETRY_ID);
+        const RTCHit on_mirror = hit_in(top, {21, 2, 0}, {0, 0, 1}); // the instanced mirror sphere
+        REQUIRE(on_mirror.geomID == w.mirror);
+        CHECK(on_mirror.instID[0] == instance_id);
+        const RTCHit on_floor = hit_in(top, {15, 5, 0}, {0, -1, 0}); // the instanced floor
+        REQUIRE(on_floor.geomID == w.floor);
+        for (const RTCHit& hit : {on_plain, on_mirror, on_floor})
+            caches.leaving_ray(raycache::embree::object_of(hit), {0, 0, 0}, {0, 1, 0}, [] { return TracedRay{glm::vec3(0.5f), 1.0f}; });
+        CHECK(caches.object_statistics({plain})->lookups == 1u);
+        CHECK(caches.object_statistics({instance_id})->lookups == 2u); // both geometries reached through it
+        CHECK(caches.begin_frame().lookups == 3u);
+    }
+    rtcReleaseScene(top);
 }

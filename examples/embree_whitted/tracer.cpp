@@ -356,21 +356,34 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     const int tiles_y = (settings.height + tile_size - 1) / tile_size;
     std::vector<FrameStats> tile_stats(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
 
-    auto render_tiles = [&](const tbb::blocked_range<int>& range) {
-        for (int tile = range.begin(); tile != range.end(); ++tile) {
-            Shader shader{*impl_, settings.mode, settings.caches};
-            const int x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
-            const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x)
-                    image.at(x, y) = shader.trace(basis.eye, primary_direction(basis, x, y), 0).color;
-            tile_stats[static_cast<std::size_t>(tile)] = shader.stats;
-        }
+    // One pass over the pixels whose x and y are multiples of `stride` (1: every pixel), tile by tile.
+    auto pass = [&](int stride) {
+        return [&, stride](const tbb::blocked_range<int>& range) {
+            for (int tile = range.begin(); tile != range.end(); ++tile) {
+                Shader shader{*impl_, settings.mode, settings.caches};
+                const int x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
+                const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
+                for (int y = y0; y < y1; ++y) {
+                    if (y % stride) continue;
+                    for (int x = x0; x < x1; ++x)
+                        if (x % stride == 0) image.at(x, y) = shader.trace(basis.eye, primary_direction(basis, x, y), 0).color;
+                }
+                FrameStats& s = tile_stats[static_cast<std::size_t>(tile)];
+                s.rays += shader.stats.rays;
+                s.shadow_rays += shader.stats.shadow_rays;
+                s.leaving_rays += shader.stats.leaving_rays;
+            }
+        };
     };
 
     tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
     const auto start = std::chrono::steady_clock::now();
-    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), render_tiles); });
+    const int tiles = tiles_x * tiles_y;
+    if (settings.warm_up_stride > 1 && uses_caches(settings.mode)) {
+        arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(settings.warm_up_stride)); });
+        settings.caches->begin_frame(); // the warm-up's stores become visible to the full pass
+    }
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(1)); });
     const auto end = std::chrono::steady_clock::now();
 
     if (stats) {

@@ -31,6 +31,10 @@ struct RenderSettings {
     CacheMode mode = CacheMode::off;
     raycache::embree::SceneCache* caches = nullptr; // required for cct and cdct, unused otherwise
     int threads = 0;                                // 0 = every core (TBB's default)
+    // cct/cdct: before the frame, a warm-up pass over every warm_up_stride-th pixel in x and y whose stores
+    // the caches publish (SceneCache::begin_frame(); adaptive cubes take that pass's ray density) before the
+    // full pass, so a single image reuses what it traced. 0 or 1: no warm-up (a cold frame traces every ray).
+    int warm_up_stride = 0;
 };
 
 // What one render did. Sums over 8x8 tiles, so the same inputs give the same counts on any thread count.

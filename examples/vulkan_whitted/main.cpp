@@ -45,6 +45,14 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const st
 
 int run(const rcx::Options& o, bool hybrid) {
     if (o.prefill) throw InputError("--prefill is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    // What the GPU side does not do yet: refused rather than ignored.
+    const rcx::Options defaults;
+    if (o.warm_up != defaults.warm_up) throw InputError("--warm-up is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (o.edge_threshold != defaults.edge_threshold)
+        throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
+    if (o.rays_per_texel != defaults.rays_per_texel)
+        throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     rcx::Scene scene;
     try {
         scene = rcx::scene_from_options(o);

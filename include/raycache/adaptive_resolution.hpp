@@ -16,6 +16,8 @@
 // valid fine texel nearest its centre), so shrinking a cube keeps it warm.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>

@@ -4,6 +4,8 @@
 // Define RAYCACHE_ASSERT before including any RayCache header to route these checks to your own handler.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #ifndef RAYCACHE_ASSERT
 #include <cassert>
 #define RAYCACHE_ASSERT(condition) assert(condition)

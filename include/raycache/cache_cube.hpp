@@ -16,7 +16,16 @@
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
 // locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
 // begin_frame(), clear() and invalidate() must run between frames, when no other thread uses the cube.
+// Debug builds check that rule (RAYCACHE_CHECK_FRAME_RULE, on unless NDEBUG): lookups, stores and the
+// helpers that wrap them (cached_trace, the CDCT searches, SceneCache::leaving_ray: across the caller's
+// trace too) count themselves in_frame(), and the between-frames calls assert that nobody is counted.
 #pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#if !defined(RAYCACHE_CHECK_FRAME_RULE) && !defined(NDEBUG)
+#define RAYCACHE_CHECK_FRAME_RULE 1
+#endif
 
 #include <algorithm>
 #include <atomic>
@@ -91,9 +100,41 @@ public:
     static constexpr std::size_t tile_bytes() noexcept { return sizeof(Tile); }
     const std::shared_ptr<MemoryBudget>& budget() const noexcept { return budget_; }
 
+    // Counts the calling thread as using the cube within a frame for as long as the returned object lives
+    // (debug builds; nothing in release builds). Between-frames calls assert that no such object lives.
+    class InFrame {
+    public:
+        explicit InFrame(const CacheCube* cube) noexcept : cube_(cube) { enter(1); }
+        ~InFrame() { enter(-1); }
+        InFrame(const InFrame&) = delete;
+        InFrame& operator=(const InFrame&) = delete;
+
+    private:
+        void enter(int delta) noexcept {
+#if RAYCACHE_CHECK_FRAME_RULE
+            cube_->state_->users.fetch_add(delta, std::memory_order_relaxed);
+#else
+            (void)delta;
+#endif
+        }
+        const CacheCube* cube_;
+    };
+    InFrame in_frame() const noexcept { return InFrame(this); }
+
+    // Asserts (debug builds) that no thread is inside a lookup, store or in_frame() scope of this cube:
+    // the rule for begin_frame(), clear(), invalidate() and structures updated from the cube between frames.
+    void assert_between_frames() const noexcept {
+#if RAYCACHE_CHECK_FRAME_RULE
+        RAYCACHE_ASSERT(state_->users.load(std::memory_order_relaxed) == 0 &&
+                        "RayCache: begin_frame(), clear(), invalidate() and pyramid updates run between frames, "
+                        "while no thread looks up, stores or searches");
+#endif
+    }
+
     // The value cached for `direction`, counted as a hit or a miss. std::nullopt (a miss) when the
     // texel is empty, was written this frame, or `direction` is not a direction. Thread-safe, wait-free.
     std::optional<Value> lookup(const glm::vec3& direction) noexcept {
+        const InFrame use = in_frame();
         std::optional<Value> value = peek(direction);
         record_lookup(value.has_value());
         return value;
@@ -124,6 +165,7 @@ public:
     // value, a smaller word was stored into it this frame, or its tile does not fit the budget.
     // Visible from the next begin_frame(). Thread-safe, lock-free.
     bool store(const glm::vec3& direction, const Value& value) noexcept {
+        const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE) return refuse();
         return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
@@ -152,6 +194,7 @@ public:
     // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
     // reads it) until clear() or invalidate(). False when the texel holds no value. Between frames only.
     bool set_doubtful(const TexelAddress& texel) noexcept {
+        assert_between_frames();
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return false;
         Tile* tile = tile_of(texel);
@@ -172,6 +215,7 @@ public:
 
     // Empties one texel (and drops its doubtful mark). Between frames only.
     void invalidate(const TexelAddress& texel) noexcept {
+        assert_between_frames();
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return;
         Tile* tile = tile_of(texel);
@@ -186,6 +230,7 @@ public:
 
     // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
     void clear() noexcept {
+        assert_between_frames();
         free_tiles();
         state_->written_this_frame.store(false, std::memory_order_relaxed);
         state_->valid_texels.store(0, std::memory_order_relaxed);
@@ -196,6 +241,7 @@ public:
     // Ends a frame: this frame's stores become visible; returns the frame's counters and resets them.
     // Between frames only.
     CubeStatistics begin_frame() noexcept {
+        assert_between_frames();
         const CubeStatistics finished = statistics();
         if (state_->written_this_frame.exchange(false, std::memory_order_relaxed)) clear_written_bits();
         state_->counters.reset();
@@ -271,6 +317,7 @@ private:
         std::atomic<bool> written_this_frame{false};
         std::atomic<std::int64_t> valid_texels{0};
         std::atomic<std::size_t> doubtful_texels{0};
+        std::atomic<int> users{0}; // threads inside in_frame() scopes (debug builds)
         detail::StripedCounters<counter_count> counters;
     };
 

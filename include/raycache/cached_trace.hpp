@@ -1,6 +1,8 @@
 // raycache/cached_trace.hpp: Algorithm 1 of the thesis (the CCT's whole ray path) as one generic helper.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <type_traits>
 #include <utility>
 
@@ -20,6 +22,7 @@ template <class Texel, class Trace>
 typename Texel::Value cached_trace(CacheCube<Texel>& cube, const glm::vec3& direction, Trace&& trace) {
     using Value = typename Texel::Value;
     static_assert(std::is_invocable_r_v<Value, Trace&>, "RayCache cached_trace: trace must be callable as `Value trace()`");
+    const auto use = cube.in_frame();
     if (std::optional<Value> cached = cube.lookup(direction)) return *cached;
     Value traced = std::forward<Trace>(trace)();
     cube.store(direction, traced);
@@ -35,6 +38,7 @@ template <class Trace>
 glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace&& trace) {
     static_assert(std::is_invocable_r_v<glm::vec3, Trace&>,
                   "RayCache filtered_cached_trace: trace must be callable as `glm::vec3 trace()`");
+    const auto use = cube.in_frame();
     const bool hit = cube.peek(direction).has_value();
     cube.record_lookup(hit);
     if (hit) return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });

@@ -2,6 +2,8 @@
 // hit, and the relief search (thesis Algorithm 4) that finds a ray's hit in the cube's depth image.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -274,6 +276,7 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
     }
     RAYCACHE_ASSERT(!pyramid || pyramid->face_size() == cube.face_size());
     const glm::vec3 d = shared::raycache_unit(direction);
+    const auto use = cube.in_frame();
     detail::ReliefWalk walk(cube, bounds, origin, d, p);
     const float start = shared::raycache_box_exit_distance(origin, d, bounds.centre, bounds.half_size);
     ReliefResult result;
@@ -298,6 +301,7 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
 inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p) noexcept {
     ReliefResult result;
+    const auto use = cube.in_frame();
     shared::raycache_secant_search s = shared::raycache_secant_start(origin, direction, bounds.centre, bounds.half_size,
                                                                      p.epsilon, p.max_gap, p.max_reads);
     while (s.status == RAYCACHE_SECANT_READ) {
@@ -358,6 +362,7 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
                             const glm::vec3& direction, const ReliefParameters& p, Trace&& trace,
                             int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr) {
     static_assert(std::is_invocable_r_v<TracedRay, Trace&>, "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()`");
+    const auto use = cube.in_frame();
     const ReliefResult found = depth_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;

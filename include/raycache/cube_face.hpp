@@ -3,6 +3,8 @@
 // The face table, tie rule and rounding are defined once, in shared/cube_face.h, which GLSL includes too.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <optional>
 
 #include <glm/glm.hpp>

@@ -6,6 +6,8 @@
 // the pyramid from the texels stored in a frame just before that frame's CacheCube::begin_frame().
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -76,6 +78,7 @@ public:
     // before the cube's begin_frame(). Cost: proportional to the texels stored, times levels().
     // Throws std::invalid_argument when the cube's face size is not the pyramid's (nothing is changed).
     void update(const CdctCube& cube) {
+        cube.assert_between_frames();
         check_face_size(cube);
         std::vector<std::uint32_t> dirty; // (face, column, row) of blocks at the current level, packed
         cube.for_each_written_texel([&](const TexelAddress& t) { dirty.push_back(pack(t.face, t.column, t.row)); });

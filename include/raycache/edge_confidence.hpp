@@ -9,6 +9,8 @@
 // neighbours on the same face (a texel on a face's edge is not compared across it).
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>

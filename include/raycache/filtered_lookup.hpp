@@ -11,6 +11,8 @@
 // left out and the others' weights renormalised, so an empty neighbour does not darken the result.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <array>
 #include <optional>
 #include <type_traits>

@@ -7,6 +7,8 @@
 // not the hit rate. A cube's fixed part (its tile table) is charged too, and is always granted.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <atomic>
 #include <cstddef>
 #include <limits>

@@ -7,6 +7,8 @@
 // start under the floor an object rests on. For the CCT this is the classic environment-map approximation.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <cmath>
 #include <cstddef>
 #include <type_traits>

@@ -1,6 +1,8 @@
 // raycache/raycache.hpp: the whole core library (everything but the opt-in adapters).
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include "raycache/version.hpp"
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"

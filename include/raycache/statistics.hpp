@@ -1,6 +1,8 @@
 // raycache/statistics.hpp: per-cube counters of lookups, hits, misses and stores, cheap to bump from many threads.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <algorithm>
 #include <array>
 #include <atomic>

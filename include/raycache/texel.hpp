@@ -1,6 +1,8 @@
 // raycache/texel.hpp: what a texel type must provide, and the two that RayCache ships (CCT and CDCT).
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #include <atomic>
 #include <cstdint>
 #include <type_traits>

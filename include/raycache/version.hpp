@@ -1,6 +1,8 @@
 // raycache/version.hpp: the library's version, as macros for the preprocessor and a string at run time.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
 #define RAYCACHE_VERSION_MAJOR 0
 #define RAYCACHE_VERSION_MINOR 1
 #define RAYCACHE_VERSION_PATCH 0

@@ -7,6 +7,8 @@
 #   -DMODE=missing_component    find_package(RayCache REQUIRED COMPONENTS NoSuchThing) must fail
 #                               at configure; as OPTIONAL_COMPONENTS it must succeed
 #   -DMODE=embree_component     find_package(RayCache REQUIRED COMPONENTS Embree) and use Embree
+#   -DMODE=old_standard         every public header, compiled as C++11 and C++14, stops at one #error
+#                               naming C++17 (old_standard.cmake)
 # Also: RAYCACHE_SOURCE_DIR, RAYCACHE_BINARY_DIR, CONSUMERS_DIR, WORK_DIR (wiped first), CONFIG,
 #       GENERATOR, MAKE_PROGRAM, CXX_COMPILER, PREFIX_PATH ('|'-separated).
 cmake_minimum_required(VERSION 3.20)
@@ -150,6 +152,9 @@ target_link_libraries(embree_consumer PRIVATE RayCache::Embree)
 enable_testing()
 add_test(NAME embree_consumer COMMAND embree_consumer)]])
   build_and_run("${WORK_DIR}/embree" "${WORK_DIR}/embree/build")
+
+elseif(MODE STREQUAL "old_standard")
+  include("${CONSUMERS_DIR}/old_standard.cmake")
 
 else()
   message(FATAL_ERROR "run_consumer.cmake: unknown MODE '${MODE}'")

@@ -125,6 +125,7 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--rays-per-texel") o.rays_per_texel = parse_float(arg, next(), true);
         else if (arg == "--filtered") { flag(); o.filtered = true; }
+        else if (arg == "--warm-up") o.warm_up = static_cast<int>(parse_int(arg, next(), 0, 64));
         else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
@@ -200,6 +201,9 @@ std::string help_text(const std::string& program) {
         "  --no-pyramid        CDCT relief: the thesis's fixed-step walk, no min-depth pyramid\n"
         "  --max-gap F         CDCT: a crossing F behind the cached surface is a miss  [0.5; 0 = off]\n"
         "  --prefill           trace every cube texel once before the first frame\n"
+        "  --warm-up S         first frame: a pass over every S-th pixel in x and y first,\n"
+        "                      whose stores the full pass reads (for single images;\n"
+        "                      Embree tracer); 0: off                                 [0]\n"
         "Run\n"
         "  --threads N         worker threads, 0 = all cores                          [0]\n"
         "  --out DIR           folder for the PNGs (created when missing)             [out]\n"

@@ -5,8 +5,10 @@
 //
 //     raycache::embree::SceneCache caches(raycache::embree::Technique::cct);
 //     caches.attach(scene, {mirror_geom_id});   // once, after rtcCommitScene; face size chosen per frame
+//     caches.attach(scene, {instance_geom_id}); // an instance: every geometry reached through it
+//     caches.attach_primitives(scene, {all_triangles_id}, first, count); // one object of a shared geometry
 //     ...
-//     glm::vec3 reflected = caches.leaving_ray({hit.geomID, hit.instID[0]}, p, r, [&] {
+//     glm::vec3 reflected = caches.leaving_ray(raycache::embree::object_of(hit), p, r, [&] {
 //         return trace_leaving(p, r, depth + 1);  // your trace: TracedRay{colour, hit distance or inf}
 //     });
 //     ...
@@ -21,10 +23,14 @@
 // is not cached, its rays are traced. An explicit face size keeps a cube at that size.
 #pragma once
 
+#include "raycache/requires_cpp17.hpp"
+
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -40,6 +46,72 @@
 #include "raycache/raycache.hpp"
 
 namespace raycache {
+
+// Helpers of the Embree adapter (geometry measurement and primitive ranges).
+namespace detail {
+// "first..last" of a primitive range.
+inline std::string range_text(unsigned first_prim, unsigned prim_count) {
+    return std::to_string(first_prim) + ".." + std::to_string(std::uint64_t{first_prim} + prim_count - 1);
+}
+
+// Throws std::invalid_argument unless the range is non-empty and inside a geometry of `total` primitives.
+inline void check_primitive_range(unsigned geom_id, unsigned first_prim, unsigned prim_count, unsigned total) {
+    if (prim_count == 0)
+        throw std::invalid_argument("RayCache: an empty primitive range (prim_count 0) of geometry " +
+                                    std::to_string(geom_id) + " has nothing to cache");
+    if (first_prim >= total || prim_count > total - first_prim)
+        throw std::invalid_argument("RayCache: primitives " + range_text(first_prim, prim_count) +
+                                    " are past the end of geometry " + std::to_string(geom_id) + ", which has " +
+                                    std::to_string(total) + " primitives (0.." + std::to_string(total - 1) + ")");
+}
+
+// The cube around the box [lower, upper]: its centre, half-size = the largest half-extent. Throws
+// std::invalid_argument naming `what` when the box is empty or infinite.
+inline CubeBounds enclosing_cube(const glm::vec3& lower, const glm::vec3& upper, const std::string& what) {
+    const glm::vec3 half = 0.5f * (upper - lower);
+    const float half_size = glm::max(half.x, glm::max(half.y, half.z));
+    if (!(half_size > 0.0f) || !std::isfinite(half_size))
+        throw std::invalid_argument("RayCache: " + what + " has empty or infinite bounds");
+    return CubeBounds{0.5f * (lower + upper), half_size};
+}
+
+// f(alone) on a committed scene that holds only geometry `id` of `scene` (Embree answers bounds and point
+// queries per scene). Throws std::invalid_argument when `scene` has no geometry `id`.
+template <class F>
+auto with_geometry_alone(RTCScene scene, unsigned id, F&& f) {
+    RTCGeometry geometry = scene ? rtcGetGeometry(scene, id) : nullptr;
+    if (!geometry)
+        throw std::invalid_argument("RayCache: the Embree scene has no geometry with id " + std::to_string(id) +
+                                    " (attach after rtcCommitScene, with the id rtcAttachGeometry returned)");
+    RTCDevice device = rtcGetSceneDevice(scene); // a reference of its own, released below
+    RTCScene alone = rtcNewScene(device);
+    rtcAttachGeometry(alone, geometry);
+    rtcCommitScene(alone);
+    const auto result = std::forward<F>(f)(alone);
+    rtcReleaseScene(alone);
+    rtcReleaseDevice(device);
+    return result;
+}
+
+// triangle_bounds() of a range already checked against the geometry's primitive count.
+inline CubeBounds measure_triangles(RTCGeometry geometry, unsigned geom_id, unsigned first_prim, unsigned prim_count) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    glm::vec3 lower(std::numeric_limits<float>::infinity()), upper(-std::numeric_limits<float>::infinity());
+    for (unsigned prim = first_prim; prim - first_prim < prim_count; ++prim)
+        for (const glm::vec2 corner : {glm::vec2(0, 0), glm::vec2(1, 0), glm::vec2(0, 1)}) {
+            glm::vec3 p(nan);
+            rtcInterpolate0(geometry, prim, corner.x, corner.y, RTC_BUFFER_TYPE_VERTEX, 0, &p.x, 3);
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw std::invalid_argument("RayCache: cannot read finite triangle corners of geometry " +
+                                            std::to_string(geom_id) + " (triangle_bounds needs a triangle geometry)");
+            lower = glm::min(lower, p);
+            upper = glm::max(upper, p);
+        }
+    return enclosing_cube(lower, upper, "primitives " + range_text(first_prim, prim_count) + " of geometry " +
+                                            std::to_string(geom_id));
+}
+} // namespace detail
+
 namespace embree {
 
 // Which technique a SceneCache's cubes use.
@@ -64,11 +136,17 @@ struct SceneCacheSettings {
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
-// An object as Embree reports it in a hit: geomID, and instID[0] when it was reached through an instance.
+// An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
+// (Embree reports RTC_INVALID_GEOMETRY_ID there for a plain hit); primID, which matters only for a
+// geometry split into objects by SceneCache::attach_primitives(). object_of(hit) fills all three.
 struct ObjectId {
     unsigned geom_id = RTC_INVALID_GEOMETRY_ID;
     unsigned inst_id = RTC_INVALID_GEOMETRY_ID;
+    unsigned prim_id = RTC_INVALID_GEOMETRY_ID;
 };
+
+// The object an Embree hit landed on: {hit.geomID, hit.instID[0], hit.primID}.
+inline ObjectId object_of(const RTCHit& hit) noexcept { return {hit.geomID, hit.instID[0], hit.primID}; }
 
 // Counters summed over every cube of a SceneCache, for one frame.
 struct SceneCacheStatistics {
@@ -102,23 +180,46 @@ struct SceneCacheStatistics {
 // geometry was detached, or its bounds are empty or infinite.
 inline CubeBounds bounds_of(RTCScene scene, ObjectId id) {
     const unsigned outer = id.inst_id != RTC_INVALID_GEOMETRY_ID ? id.inst_id : id.geom_id;
-    RTCGeometry geometry = scene ? rtcGetGeometry(scene, outer) : nullptr;
-    if (!geometry)
-        throw std::invalid_argument("RayCache: the Embree scene has no geometry with id " + std::to_string(outer) +
-                                    " (attach after rtcCommitScene, with the id rtcAttachGeometry returned)");
-    // Embree gives bounds per scene only: measure a scene holding just this geometry.
-    RTCScene alone = rtcNewScene(rtcGetSceneDevice(scene));
-    rtcAttachGeometry(alone, geometry);
-    rtcCommitScene(alone);
-    RTCBounds b;
-    rtcGetSceneBounds(alone, &b);
-    rtcReleaseScene(alone);
-    const glm::vec3 lower(b.lower_x, b.lower_y, b.lower_z), upper(b.upper_x, b.upper_y, b.upper_z);
-    const glm::vec3 half = 0.5f * (upper - lower);
-    const float half_size = glm::max(half.x, glm::max(half.y, half.z));
-    if (!(half_size > 0.0f) || !std::isfinite(half_size))
-        throw std::invalid_argument("RayCache: geometry " + std::to_string(outer) + " has empty or infinite bounds");
-    return CubeBounds{0.5f * (lower + upper), half_size};
+    const RTCBounds b = detail::with_geometry_alone(scene, outer, [](RTCScene alone) {
+        RTCBounds bounds;
+        rtcGetSceneBounds(alone, &bounds);
+        return bounds;
+    });
+    return detail::enclosing_cube(glm::vec3(b.lower_x, b.lower_y, b.lower_z), glm::vec3(b.upper_x, b.upper_y, b.upper_z),
+                                  "geometry " + std::to_string(outer));
+}
+
+// How many primitives geometry `geom_id` of the committed `scene` has, counted by a point query over all
+// of space (Embree 3 has no call that tells). Embree answers point queries for triangle, quad and user
+// geometries; for others (curves, points, ...) this throws std::invalid_argument, as for an unknown id.
+inline unsigned primitive_count(RTCScene scene, unsigned geom_id) {
+    const unsigned count = detail::with_geometry_alone(scene, geom_id, [](RTCScene alone) {
+        RTCPointQuery query{};
+        query.radius = std::numeric_limits<float>::infinity();
+        RTCPointQueryContext context;
+        rtcInitPointQueryContext(&context);
+        unsigned end = 0; // one past the largest primID met
+        rtcPointQuery(alone, &query, &context, [](RTCPointQueryFunctionArguments* a) {
+            unsigned& e = *static_cast<unsigned*>(a->userPtr);
+            e = std::max(e, a->primID + 1);
+            return false;
+        }, &end);
+        return end;
+    });
+    if (count == 0)
+        throw std::invalid_argument("RayCache: cannot count the primitives of geometry " + std::to_string(geom_id) +
+                                    " (Embree's point queries reach triangle, quad and user geometries only)");
+    return count;
+}
+
+// The cube placement (as bounds_of) of triangles first_prim .. first_prim + prim_count - 1 of triangle
+// geometry `geom_id` (RTC_GEOMETRY_TYPE_TRIANGLE) of the committed `scene`, from their corners as
+// rtcInterpolate reads them (any vertex format and stride). For other geometry types pass your own
+// bounds. Throws std::invalid_argument when the range is empty or past the geometry's primitive_count(),
+// or the corners cannot be read or are not finite.
+inline CubeBounds triangle_bounds(RTCScene scene, unsigned geom_id, unsigned first_prim, unsigned prim_count) {
+    detail::check_primitive_range(geom_id, first_prim, prim_count, primitive_count(scene, geom_id));
+    return detail::measure_triangles(rtcGetGeometry(scene, geom_id), geom_id, first_prim, prim_count);
 }
 
 // The caching cubes of one Embree scene, one per attached object, all of one technique.
@@ -133,6 +234,17 @@ class SceneCache {
         std::unique_ptr<CdctCube> cdct;
         std::unique_ptr<DepthPyramid> pyramid;       // CDCT with depth_pyramid only
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
+    };
+
+    // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
+    struct PrimitiveRange {
+        unsigned first, end;
+        int entry;
+    };
+    // A geometry split into primitive ranges: its primitive count, and its ranges sorted and disjoint.
+    struct RangedGeometry {
+        unsigned primitive_count;
+        std::vector<PrimitiveRange> ranges;
     };
 
     // f(cube) on the entry's cube, whichever technique it holds (f is instantiated for both).
@@ -175,30 +287,51 @@ public:
 
     // Gives object `id` a cube around `bounds` (face_size as above).
     void attach(ObjectId id, int face_size, CubeBounds bounds) {
-        if (id.geom_id == RTC_INVALID_GEOMETRY_ID)
-            throw std::invalid_argument("RayCache: cannot attach a cube to RTC_INVALID_GEOMETRY_ID");
-        if (!detail::is_usable(bounds))
-            throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
+        check_attachable(id, bounds);
+        if (id.prim_id != RTC_INVALID_GEOMETRY_ID)
+            throw std::invalid_argument("RayCache: attach() gives a whole geometry a cube; give primitive " +
+                                        std::to_string(id.prim_id) + "'s range its own with attach_primitives()");
         if (has_cache(id))
             throw std::invalid_argument("RayCache: geometry " + std::to_string(id.geom_id) + " already has a cube");
-        const bool adaptive = face_size == adaptive_face_size;
-        Entry entry{id, bounds, nullptr, nullptr, nullptr, nullptr};
-        make_cube(entry, adaptive ? adaptive_.first_face_size : face_size);
-        if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
-        const int index = static_cast<int>(entries_.size());
-        entries_.push_back(std::move(entry));
-        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) {
-            if (direct_.size() <= id.geom_id) direct_.resize(id.geom_id + std::size_t{1}, -1);
-            direct_[id.geom_id] = index;
-        } else {
-            instanced_[{id.inst_id, id.geom_id}] = index;
-        }
+        if (slot_of(id) < -1)
+            throw std::invalid_argument("RayCache: geometry " + std::to_string(id.geom_id) +
+                                        " is split into primitive ranges with cubes of their own; it cannot also have one as a whole");
+        slot(id) = add_entry(id, face_size, bounds);
+    }
+
+    // Gives primitives first_prim .. first_prim + prim_count - 1 of `geometry` a cube of their own, for
+    // tracers that keep several objects in one Embree geometry. A hit finds it when its ObjectId carries
+    // the hit's primID (object_of(hit)); a hit on a primitive of that geometry outside every range finds
+    // no cube. This overload measures the cube's placement with triangle_bounds(), so it needs a triangle
+    // geometry (RTC_GEOMETRY_TYPE_TRIANGLE) of `scene` not reached through an instance; for other
+    // geometries, pass the bounds. face_size as in attach(). Throws std::invalid_argument for an empty
+    // range, one past the geometry's primitive_count(), one overlapping a range with a cube, a geometry
+    // that has a cube as a whole (attach()), or a bad face size.
+    void attach_primitives(RTCScene scene, ObjectId geometry, unsigned first_prim, unsigned prim_count,
+                           int face_size = adaptive_face_size) {
+        if (geometry.inst_id != RTC_INVALID_GEOMETRY_ID)
+            throw std::invalid_argument("RayCache: primitives inside instance " + std::to_string(geometry.inst_id) +
+                                        " cannot be measured in world space; pass their cube's bounds to attach_primitives()");
+        const unsigned total = known_primitive_count(scene, geometry);
+        detail::check_primitive_range(geometry.geom_id, first_prim, prim_count, total);
+        const CubeBounds bounds = detail::measure_triangles(rtcGetGeometry(scene, geometry.geom_id), geometry.geom_id,
+                                                            first_prim, prim_count);
+        attach_range(geometry, first_prim, prim_count, face_size, bounds, total);
+    }
+
+    // attach_primitives() with the caller's bounds (world space), for any geometry type whose primitives
+    // Embree can count (primitive_count()). `scene` is the scene that holds geometry.geom_id: for a
+    // geometry reached through instance geometry.inst_id, the instanced scene.
+    void attach_primitives(RTCScene scene, ObjectId geometry, unsigned first_prim, unsigned prim_count, int face_size,
+                           CubeBounds bounds) {
+        check_attachable(geometry, bounds);
+        attach_range(geometry, first_prim, prim_count, face_size, bounds, known_primitive_count(scene, geometry));
     }
 
     bool has_cache(ObjectId id) const noexcept { return find(id) >= 0; }
     std::size_t object_count() const noexcept { return entries_.size(); }
 
-    // The objects with cubes, in attach order.
+    // The objects with cubes, in attach order (a primitive range: its geometry, prim_id = its first primitive).
     std::vector<ObjectId> objects() const {
         std::vector<ObjectId> ids;
         for (const Entry& e : entries_) ids.push_back(e.id);
@@ -334,13 +467,96 @@ public:
     }
 
 private:
-    // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance.
+    // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
+    // geometry split into primitive ranges, the range that holds id.prim_id. -1: none.
     int find(ObjectId id) const noexcept {
-        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return direct(id.geom_id);
+        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return resolve(direct(id.geom_id), id.prim_id);
         const auto it = instanced_.find({id.inst_id, id.geom_id});
-        return it != instanced_.end() ? it->second : direct(id.inst_id);
+        return it != instanced_.end() ? resolve(it->second, id.prim_id) : resolve(direct(id.inst_id), RTC_INVALID_GEOMETRY_ID);
     }
     int direct(unsigned geom_id) const noexcept { return geom_id < direct_.size() ? direct_[geom_id] : -1; }
+    // The entry a slot of direct_ or instanced_ names: itself (-1: none), or for a ranged geometry (slot
+    // -2 - i, ranged_[i]) the range holding `prim_id`, by binary search.
+    int resolve(int slot, unsigned prim_id) const noexcept {
+        if (slot >= -1) return slot;
+        const std::vector<PrimitiveRange>& ranges = split(slot).ranges;
+        const std::size_t after = first_after(ranges, prim_id);
+        return after > 0 && prim_id < ranges[after - 1].end ? ranges[after - 1].entry : -1;
+    }
+    // The split geometry a slot < -1 names.
+    const RangedGeometry& split(int slot) const noexcept { return ranged_[static_cast<std::size_t>(-2 - slot)]; }
+    // The index of the first of the sorted `ranges` that starts after primitive `prim`.
+    static std::size_t first_after(const std::vector<PrimitiveRange>& ranges, unsigned prim) noexcept {
+        const auto after = std::upper_bound(ranges.begin(), ranges.end(), prim,
+                                            [](unsigned p, const PrimitiveRange& r) { return p < r.first; });
+        return static_cast<std::size_t>(after - ranges.begin());
+    }
+    // The slot of exactly this (instance, geometry), whatever the instance as a whole has; -1 when none.
+    int slot_of(ObjectId id) const noexcept {
+        if (id.inst_id == RTC_INVALID_GEOMETRY_ID) return direct(id.geom_id);
+        const auto it = instanced_.find({id.inst_id, id.geom_id});
+        return it != instanced_.end() ? it->second : -1;
+    }
+    // The slot of this (instance, geometry), made (as -1) when missing.
+    int& slot(ObjectId id) {
+        if (id.inst_id != RTC_INVALID_GEOMETRY_ID) return instanced_.try_emplace({id.inst_id, id.geom_id}, -1).first->second;
+        if (direct_.size() <= id.geom_id) direct_.resize(id.geom_id + std::size_t{1}, -1);
+        return direct_[id.geom_id];
+    }
+
+    static void check_attachable(ObjectId id, const CubeBounds& bounds) {
+        if (id.geom_id == RTC_INVALID_GEOMETRY_ID)
+            throw std::invalid_argument("RayCache: cannot attach a cube to RTC_INVALID_GEOMETRY_ID");
+        if (!detail::is_usable(bounds))
+            throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
+    }
+
+    // A new entry for object `id` with a cube around `bounds` (face_size as in attach()); its index.
+    int add_entry(ObjectId id, int face_size, const CubeBounds& bounds) {
+        const bool adaptive = face_size == adaptive_face_size;
+        Entry entry{id, bounds, nullptr, nullptr, nullptr, nullptr};
+        make_cube(entry, adaptive ? adaptive_.first_face_size : face_size);
+        if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
+        entries_.push_back(std::move(entry));
+        return static_cast<int>(entries_.size() - 1);
+    }
+
+    // The primitive count of `geometry` (in `scene`), asked of Embree once per split geometry.
+    unsigned known_primitive_count(RTCScene scene, ObjectId geometry) const {
+        const int s = slot_of(geometry);
+        return s < -1 ? split(s).primitive_count : primitive_count(scene, geometry.geom_id);
+    }
+
+    // attach_primitives() once the geometry's primitive count `total` is known.
+    void attach_range(ObjectId geometry, unsigned first_prim, unsigned prim_count, int face_size, const CubeBounds& bounds,
+                      unsigned total) {
+        detail::check_primitive_range(geometry.geom_id, first_prim, prim_count, total);
+        const ObjectId whole{geometry.geom_id, geometry.inst_id};
+        if (has_cache(whole))
+            throw std::invalid_argument("RayCache: geometry " + std::to_string(geometry.geom_id) +
+                                        " already has a cube for all its primitives; a range of it cannot have its own");
+        int s = slot_of(whole);
+        std::size_t at = 0; // where the new range goes among the geometry's ranges
+        if (s < -1) {
+            const std::vector<PrimitiveRange>& ranges = split(s).ranges;
+            at = first_after(ranges, first_prim);
+            const PrimitiveRange* clash = at > 0 && ranges[at - 1].end > first_prim ? &ranges[at - 1]
+                                          : at < ranges.size() && ranges[at].first - first_prim < prim_count ? &ranges[at]
+                                                                                                              : nullptr;
+            if (clash)
+                throw std::invalid_argument("RayCache: primitives " + detail::range_text(first_prim, prim_count) +
+                                            " of geometry " + std::to_string(geometry.geom_id) + " overlap primitives " +
+                                            detail::range_text(clash->first, clash->end - clash->first) +
+                                            ", which already have a cube");
+        }
+        const int index = add_entry(ObjectId{geometry.geom_id, geometry.inst_id, first_prim}, face_size, bounds);
+        if (s >= -1) {
+            ranged_.push_back(RangedGeometry{total, {}});
+            s = slot(whole) = -2 - static_cast<int>(ranged_.size() - 1);
+        }
+        std::vector<PrimitiveRange>& ranges = ranged_[static_cast<std::size_t>(-2 - s)].ranges;
+        ranges.insert(ranges.begin() + static_cast<std::ptrdiff_t>(at), PrimitiveRange{first_prim, first_prim + prim_count, index});
+    }
 
     static SceneCacheSettings make_settings(const ReliefParameters& relief, bool depth_pyramid) {
         SceneCacheSettings s;
@@ -397,8 +613,10 @@ private:
     float edge_threshold_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
-    std::vector<int> direct_;                                // geom_id -> entry, objects not instanced
-    std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> entry
+    // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).
+    std::vector<int> direct_;                                // geom_id -> slot, objects not instanced
+    std::map<std::pair<unsigned, unsigned>, int> instanced_; // (inst_id, geom_id) -> slot
+    std::vector<RangedGeometry> ranged_;
     detail::StripedCounters<1> texels_read_;
     std::atomic<std::uint64_t> max_texels_read_{0};
 };
