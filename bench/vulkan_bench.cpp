@@ -80,7 +80,7 @@ void run(const Config& c, rcx::vk::Context& context) {
        << c.rounds << " interleaved rounds of all eight variants. Ceiling: every cached secondary ray answered by "
        << "the environment colour. All cubes of a technique share one storage buffer, so where they exceed the "
        << "device's maxStorageBufferRange the face size is lowered (columns *faces*). The CDCT search is the "
-       << "GLSL include's linear walk (no depth pyramid on the GPU yet).\n\n"
+       << "GLSL include's secant search (raycache_cdct_search, as in the Embree tracer).\n\n"
        << "| N | pipeline | faces CCT / CDCT | off ms | CCT ms | CDCT ms | ceiling ms | CCT speed-up | CDCT speed-up | "
           "ceiling | CCT hit rate | CDCT hit rate | CCT PSNR dB | CDCT PSNR dB | thesis CCT |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";

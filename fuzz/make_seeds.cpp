@@ -2,7 +2,7 @@
 // run it again when the cache-file format or a target's input layout changes):
 //   raycache_fuzz_make_seeds <repository>/fuzz/corpus
 // Cache-file seeds are small valid files (CCT and CDCT, one to three cubes, partial edge tiles, a 4096-texel
-// cube with one tile) behind a byte that asks for checksums to be fixed; the other targets' inputs are read
+// cube with one tile, origin boxes and doubtful marks) behind a byte that asks for checksums to be fixed; the other targets' inputs are read
 // as a stream of choices, so their seeds are a few short byte strings from a fixed generator.
 #include <cstdint>
 #include <cstdio>
@@ -51,6 +51,14 @@ std::vector<std::uint8_t> cache_seed(std::uint8_t mode, const std::vector<int>& 
                     else
                         cubes.back()->store_word_at({face, column, row}, std::uint64_t{rng.next() % 0x7F800000u} << 32 | rng.next());
                 }
+        // A store with the origin it left from (its tile gets an origin box) and a doubtful texel.
+        if constexpr (std::is_same_v<Texel, raycache::CctTexel>)
+            cubes.back()->store(glm::vec3(1.0f, 0.2f, 0.1f), glm::vec3(0.5f), glm::vec3(0.3f, 1.0f, 2.0f));
+        else
+            cubes.back()->store(glm::vec3(1.0f, 0.2f, 0.1f), raycache::DepthSample{glm::vec3(0.5f), 2.0f}, glm::vec3(0.3f, 1.0f, 2.0f));
+        cubes.back()->begin_frame();
+        bool marked = false;
+        cubes.back()->for_each_valid_texel([&](const raycache::TexelAddress& t) { marked = marked || cubes.back()->set_doubtful(t); });
         save.push_back({static_cast<std::uint64_t>(save.size()) * 3 + 1, raycache::CubeBounds{glm::vec3(1.0f, -2.0f, 0.5f), 0.25f}, cubes.back().get()});
     }
     std::vector<std::uint8_t> bytes{mode};

@@ -68,6 +68,17 @@ bool same_texels(const raycache::CacheCube<Texel>& a, const raycache::CacheCube<
     return true;
 }
 
+// True when every texel holding a value in `a` has the same doubtful mark in `b`, and its tile the same
+// origin box (or none in both).
+template <class Texel>
+bool same_marks_and_origins(const raycache::CacheCube<Texel>& a, const raycache::CacheCube<Texel>& b) {
+    bool same = true;
+    a.for_each_valid_texel([&](const raycache::TexelAddress& t) {
+        same = same && a.is_doubtful(t) == b.is_doubtful(t) && a.origin_box(t) == b.origin_box(t);
+    });
+    return same;
+}
+
 // The message of the CacheFileError that f() throws; "" when it throws none (other exceptions propagate).
 template <class F>
 std::string cache_file_error(F&& f) {

@@ -8,6 +8,8 @@
 
 #include <raycache/raycache.hpp>
 
+#include "cdct_scenes.hpp"
+
 using namespace raycache;
 
 namespace {
@@ -36,14 +38,9 @@ bool near_face_edge(const glm::vec3& v) {
 // Fills every texel with the surroundings described by depth(direction from the centre, unit length).
 template <class Depth>
 void fill(CdctCube& cube, Depth depth) {
-    const int n = cube.face_size();
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < n; ++row)
-            for (int column = 0; column < n; ++column) {
-                const TexelAddress t{face, column, row};
-                const glm::vec3 d = glm::normalize(texel_direction(t, n));
-                cube.store_at(t, DepthSample{face_color(face), depth(d)});
-            }
+    rcx_test::for_each_texel_direction(cube, [&](const TexelAddress& t, const glm::vec3& d) {
+        cube.store_at(t, DepthSample{face_color(t.face), depth(d)});
+    });
     cube.begin_frame();
 }
 

@@ -1,6 +1,6 @@
 // SceneCache::save and load: a whole scene's cubes go to one file and come back into a fresh SceneCache bit
-// for bit, answering the next frame's rays exactly as the saved cache would (pyramids rebuilt, CCT edge
-// marks made again); a file that does not fit the
+// for bit, answering the next frame's rays exactly as the saved cache would (tile origin boxes and CCT edge
+// marks saved, pyramids rebuilt); a file that does not fit the
 // cache (scene, objects, placements, fixed face sizes, technique) is refused and the cache keeps its cubes.
 // No Embree scene is needed: cubes are attached with explicit bounds and rays traced against an analytic world.
 #include <doctest/doctest.h>
@@ -118,10 +118,10 @@ void check_round_trip(Technique technique, int face_size, bool relief = false) {
     raycache::embree::SceneCacheStatistics a, b;
     const std::vector<Ray> next = rays_of_frame(999, 3000);
     const std::vector<glm::vec3> from_warm = frame(warm, next, &a), from_loaded = frame(loaded, next, &b);
-    CHECK(a.hits > a.lookups / 4);
+    CHECK(a.hits > a.lookups / 20); // rays leaving from all over the box: the CCT's origin test traces many
     CHECK(b.hits == a.hits);
     CHECK(b.texels_read == a.texels_read);
-    CHECK(b.doubtful_texels == a.doubtful_texels); // the CCT's edge marks were made again
+    CHECK(b.doubtful_texels == a.doubtful_texels); // the CCT's edge marks came back
     if (technique == Technique::cct) CHECK(a.doubtful_texels > 0u);
     int same = 0;
     for (std::size_t i = 0; i < next.size(); ++i) same += same_bits(from_warm[i], from_loaded[i]);

@@ -19,13 +19,14 @@ using raycache::TexelAddress;
 
 const glm::vec3 grey(0.5f);
 
-// 16 x 16 words, four 64-bit written masks and four 64-bit doubtful masks.
-constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8;
-constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8;
+// 16 x 16 words, four 64-bit written masks, four 64-bit doubtful masks, the pending and visible origin
+// boxes (6 + 6 four-byte values), a has-box flag (1 byte, padded to 4) and the stale mark (4 bytes).
+constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8 + 12 * 4 + 4 + 4;
+constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8 + 12 * 4 + 4 + 4;
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels and their written and doubtful bits: 1088 bytes for the CCT, 2112 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits and an origin box: 1144 bytes for the CCT, 2168 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }
@@ -104,7 +105,7 @@ TEST_CASE("cubes sharing a budget draw on it together") {
     auto budget = std::make_shared<MemoryBudget>(10000);
     CdctCube a(16, budget), b(16, budget); // one tile a face each; tables 6 x 8 bytes
     CHECK(budget->used() == 2u * 48u);
-    // 10000 - 96 = 9904 bytes: four CDCT tiles (8448), not five (10560).
+    // 10000 - 96 = 9904 bytes: four CDCT tiles (8672), not five (10840).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});

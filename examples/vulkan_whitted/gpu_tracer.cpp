@@ -11,6 +11,7 @@
 
 #include <embree3/rtcore.h>
 #include <glm/glm.hpp>
+#include <raycache/shared/depth_secant.h>
 #include <raycache/shared/gpu_layout.h>
 
 #include "rcx/meshes.hpp"
@@ -217,7 +218,7 @@ struct GpuParams {
     float environment[4];     // w: aspect
     std::int32_t frame[4];    // width, height, mode, max depth
     float relief[4];          // step, epsilon, max depth, max gap
-    std::int32_t relief_i[4]; // max steps
+    std::int32_t relief_i[4]; // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads
 };
 
 int mode_number(CacheMode mode) {
@@ -660,6 +661,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.relief[0] = t.settings.delta, p.relief[1] = t.settings.epsilon, p.relief[2] = 100.0f;
     p.relief[3] = t.settings.max_gap > 0.0f ? t.settings.max_gap : std::numeric_limits<float>::infinity();
     p.relief_i[0] = t.settings.max_steps;
+    p.relief_i[1] = t.settings.secant ? RAYCACHE_DEPTH_SEARCH_SECANT : RAYCACHE_DEPTH_SEARCH_RELIEF;
+    p.relief_i[2] = t.settings.max_reads;
     t.params->upload(&p, sizeof p);
     t.counters->fill(0u);
 

@@ -45,7 +45,9 @@ FlatBvh build_bvh(const Scene& scene);
 struct TracerSettings {
     CacheMode mode = CacheMode::off;
     int face_size = 512;      // cube face texels (cct, cdct)
-    float delta = 0.2f;       // CDCT relief search: step, epsilon, linear steps, gap (0 = none)
+    bool secant = true;       // CDCT search: the secant search (a few reads) or, false, the relief walk
+    int max_reads = 8;        // CDCT secant search: reads before a miss, 1..64
+    float delta = 0.2f;       // CDCT relief walk: step; epsilon (both searches), linear steps, gap (0 = none)
     float epsilon = 0.02f;
     int max_steps = 1024;
     float max_gap = 0.5f;

@@ -6,7 +6,7 @@
 //   raycache_vulkan_whitted --scene behind-32 --size 256x256 --cache cct --frames 10 --compare
 //
 // Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill,
-// --load-cache and --save-cache are refused, the CDCT search is the linear walk (no depth pyramid in
+// --load-cache and --save-cache are refused, --cdct-search relief is the linear walk (no depth pyramid in
 // GLSL), and a ray leaving a cached object inside the subtree of a missed leaving ray is traced without
 // a lookup (no recursion in GLSL).
 // --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
@@ -52,6 +52,8 @@ int run(const rcx::Options& o, bool hybrid) {
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (o.edge_threshold != defaults.edge_threshold)
         throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
+    if (o.origin_drift != defaults.origin_drift)
+        throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     if (!o.load_cache.empty() || !o.save_cache.empty())
@@ -93,6 +95,8 @@ int run(const rcx::Options& o, bool hybrid) {
     rcx::gpu::TracerSettings settings;
     settings.mode = o.cache;
     settings.face_size = o.face_size > 0 ? o.face_size : 512; // auto: the largest up to 512 that fits
+    settings.secant = o.secant;
+    settings.max_reads = o.max_reads;
     settings.delta = o.delta;
     settings.epsilon = o.epsilon;
     settings.max_steps = o.max_steps;
@@ -132,7 +136,9 @@ int run(const rcx::Options& o, bool hybrid) {
                     rcx::to_string(o.cache));
         if (caching) std::printf(", faces %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
                                  static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
-        if (o.cache == rcx::CacheMode::cdct)
+        if (o.cache == rcx::CacheMode::cdct && o.secant)
+            std::printf(", secant search, epsilon %g, max reads %d", static_cast<double>(o.epsilon), o.max_reads);
+        else if (o.cache == rcx::CacheMode::cdct)
             std::printf(", delta %g, epsilon %g, max steps %d, linear search", static_cast<double>(o.delta),
                         static_cast<double>(o.epsilon), o.max_steps);
         std::printf("; PNGs in %s\n", o.out.c_str());

@@ -1,5 +1,6 @@
 /* raycache/cdct.glsl: the colour and depth caching technique (CDCT, thesis ch. 4) in GLSL, the same
- * texels and the same relief search as raycache::CdctCube and raycache::relief_search (linear walk).
+ * texels and the same searches as raycache::CdctCube, raycache::secant_search and raycache::relief_search
+ * (linear walk), bit for bit.
  *
  * Buffers (std430, set RAYCACHE_CDCT_SET = RAYCACHE_SET):
  *   binding RAYCACHE_CDCT_BINDING (2)          uvec2 raycache_cdct_texels[]      what searches read
@@ -9,7 +10,7 @@
  * word, exactly as in C++: the device needs shaderInt64 and shaderBufferInt64Atomics (lavapipe has
  * both); RAYCACHE_READ_ONLY needs neither. Layout, frames and clearing: raycache/shared/gpu_layout.h.
  * Algorithm 1 in a shader:
- *   raycache_relief_result f = raycache_relief_search(cube, origin, direction, parameters);
+ *   raycache_relief_result f = raycache_cdct_search(cube, origin, direction, parameters); // as p.search says
  *   if (!f.hit) { trace; then raycache_cdct_store_hit(cube, hit point, colour, parameters),
  *                 or raycache_cdct_store_escape(cube, direction, colour, parameters) }
  */
@@ -17,6 +18,7 @@
 #define RAYCACHE_CDCT_GLSL
 
 #include "raycache/cube.glsl"
+#include "raycache/shared/depth_secant.h"
 
 #ifndef RAYCACHE_READ_ONLY
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -42,22 +44,26 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_PENDING_BINDING)
 };
 #endif
 
-/* Tuning of the relief search, raycache::ReliefParameters field for field (so a std430 copy of the
+/* Tuning of the CDCT's searches, raycache::ReliefParameters field for field (so a std430 copy of the
  * C++ struct reads as this one). */
 struct raycache_relief_parameters {
-    float step;      /* delta: length of a linear step along the ray, world units, > 0 */
-    float epsilon;   /* bisection stops when the bracket is shorter than this, > 0 */
-    int max_steps;   /* linear steps before giving up (a miss), at most RAYCACHE_MAX_RELIEF_STEPS */
+    float step;      /* relief: delta, length of a linear step along the ray, world units, > 0 */
+    float epsilon;   /* relief: bisection stops when the bracket is shorter than this; secant: accept
+                        |f| <= epsilon or a bracket this short; > 0 */
+    int max_steps;   /* relief: linear steps before giving up (a miss), at most RAYCACHE_MAX_RELIEF_STEPS */
     float max_depth; /* distance at which rays that escaped to the environment are stored */
     float max_gap;   /* a crossing more than this beyond the cached surface is a miss (infinity: never) */
+    int search;      /* what raycache_cdct_search makes: RAYCACHE_DEPTH_SEARCH_SECANT or _RELIEF */
+    int max_reads;   /* secant: reads before giving up (a miss), 1..RAYCACHE_SECANT_MAX_READS (clamped) */
 };
 
-/* The C++ defaults: step 0.2, epsilon 0.02, 1024 steps, depth 100, no gap limit. */
+/* The C++ defaults: step 0.2, epsilon 0.02, 1024 steps, depth 100, no gap limit, the secant search with
+ * 8 reads. */
 raycache_relief_parameters raycache_default_relief_parameters() {
-    return raycache_relief_parameters(0.2, 0.02, 1024, 100.0, RAYCACHE_INFINITY);
+    return raycache_relief_parameters(0.2, 0.02, 1024, 100.0, RAYCACHE_INFINITY, RAYCACHE_DEPTH_SEARCH_SECANT, 8);
 }
 
-/* Outcome of a relief search, raycache::ReliefResult field for field. On a miss only texels_read is set. */
+/* Outcome of a search, raycache::ReliefResult field for field. On a miss only texels_read is set. */
 struct raycache_relief_result {
     bool hit;
     vec3 color;      /* the texel seen at the crossing */
@@ -81,12 +87,6 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
     uint i = raycache_cube_texel(cube, v);
     if (i >= uint(raycache_cdct_texels.length())) return raycache_cdct_invalid_texel();
     return raycache_cdct_texels[i];
-}
-
-/* The ray's point at t, from the cube's centre: (o + t * d) - centre, without FMA. */
-vec3 raycache_ray_from_centre(vec3 o, vec3 d, float t, vec3 centre) {
-    precise vec3 v = (o + t * d) - centre;
-    return v;
 }
 
 /* Thesis Algorithm 4 on the cube's depth image, as raycache::relief_search without a pyramid: walk the
@@ -156,10 +156,43 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
     }
     r.hit = true;
     r.distance = hi;
-    precise vec3 point = origin + hi * d;
-    r.point = point;
+    r.point = raycache_ray_point(origin, d, hi);
     r.color = raycache_cdct_color(texel);
     return r;
+}
+
+/* The CDCT's cheap search, as raycache::secant_search (raycache/shared/depth_secant.h drives it; this
+ * function only reads the texels): from where the ray leaves the box, jump to where the ray reaches the
+ * distance read, then refine a bracketed crossing by false position; answer only when the point read lies
+ * within p.epsilon of its texel's surface (or a bracket shorter than p.epsilon ends at most p.max_gap
+ * behind it). Reads the texels lookups read (visible ones: not this frame's stores). A miss: an empty or
+ * this-frame texel, p.max_reads reads without such an answer, a bad origin, direction or box, or
+ * p.epsilon not > 0 (then nothing is read). Reads at most min(p.max_reads, RAYCACHE_SECANT_MAX_READS)
+ * texels; p.step and p.max_steps are not used. */
+raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,
+                                                   raycache_relief_parameters p) {
+    raycache_secant_search s = raycache_secant_start(origin, direction, cube.centre, cube.half_size, p.epsilon,
+                                                     p.max_gap, p.max_reads);
+    while (s.status == RAYCACHE_SECANT_READ) {
+        uvec2 texel = raycache_cdct_texel_at(cube, raycache_secant_point(s, s.t));
+        s = raycache_secant_step(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
+                                 raycache_cdct_color(texel));
+    }
+    raycache_relief_result r;
+    r.hit = s.status == RAYCACHE_SECANT_HIT;
+    r.color = r.hit ? s.color : vec3(0.0);
+    r.point = r.hit ? raycache_ray_point(origin, s.d, s.t) : vec3(0.0);
+    r.distance = r.hit ? s.t : 0.0;
+    r.texels_read = s.reads;
+    return r;
+}
+
+/* The search p.search names, as raycache::depth_search without a pyramid: RAYCACHE_DEPTH_SEARCH_SECANT
+ * the secant search, anything else the relief walk. */
+raycache_relief_result raycache_cdct_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,
+                                            raycache_relief_parameters p) {
+    if (p.search == RAYCACHE_DEPTH_SEARCH_SECANT) return raycache_cdct_secant_search(cube, origin, direction, p);
+    return raycache_relief_search(cube, origin, direction, p);
 }
 
 #ifndef RAYCACHE_READ_ONLY

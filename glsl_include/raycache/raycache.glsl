@@ -8,7 +8,8 @@
  *   raycache_gpu_cube cube = my_cubes[object];  // descriptor: raycache/shared/gpu_layout.h, C++ too
  *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
  *   if (!c.hit) { c.color = trace(hit, reflected); raycache_cct_store(cube, reflected, c.color); }
- *   raycache_relief_result f = raycache_relief_search(cube, hit, reflected, parameters); // CDCT
+ *   raycache_relief_result f = raycache_cdct_search(cube, hit, reflected, parameters); // CDCT: the
+ *                              // secant search or the relief walk, as parameters.search says
  *   raycache_filter_result b = raycache_filtered_value(reflected, N, 0.0); // bilinear, over the texel
  *                              // fetch named by RAYCACHE_FILTER_FETCH before the include (filter.glsl)
  * Between frames, one pass compiled with RAYCACHE_END_FRAME calls raycache_cct_end_frame(i) (and

@@ -4,7 +4,8 @@
 // frame it was made in, its texel reads as empty. So every lookup of a frame sees the same cube whatever
 // the thread timing, and a frame rendered with a cold cube traces every cached ray, exactly as without
 // the cache. When several stores reach one texel in the same frame, the smallest packed word wins.
-// A texel that is already visible keeps its value until clear() or invalidate(). A texel marked
+// A texel that is already visible keeps its value until clear() or invalidate(), or until its tile is
+// dropped as stale (below). A texel marked
 // doubtful (set_doubtful(), between frames; see raycache/edge_confidence.hpp) keeps its value but reads
 // as empty to lookups, so the rays that reach it are traced.
 //
@@ -12,6 +13,13 @@
 // first store, so a cube costs what its rays have touched, not 6 N^2 texels: most of a large cube is
 // never reached. With a MemoryBudget, a tile that does not fit is not allocated and its stores are
 // refused (the ray is traced as without a cache). clear() gives every tile back.
+//
+// Origins. The CCT keys texels by direction alone and so assumes the surroundings are far away; when the
+// camera circles a mirror, the point a direction leaves from drifts and the cached colour goes stale.
+// store(direction, value, origin) widens its tile's box of origins (pending until the next begin_frame()),
+// and lookup(direction, origin, drift) misses, marking the tile stale, when the origin lies more than
+// `drift` outside the tile's visible box. begin_frame() drops stale tiles, which refill from the current
+// rays. Boxes and marks are order-independent (min, max, or), read only from frame-constant state.
 //
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
 // locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
@@ -36,12 +44,14 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <glm/glm.hpp>
 
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/memory_budget.hpp"
+#include "raycache/shared/ray_box.h"
 #include "raycache/statistics.hpp"
 #include "raycache/texel.hpp"
 
@@ -140,6 +150,28 @@ public:
         return value;
     }
 
+    // lookup() for a ray leaving from `origin`: a miss also when `origin` lies more than `drift` outside the
+    // box of the origins its tile's visible texels were stored from; the tile is then marked stale and
+    // dropped at the next begin_frame(). Thread-safe, wait-free (a marking is one relaxed store).
+    std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, float drift) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        std::optional<Value> value;
+        if (a.face != RAYCACHE_NO_FACE) {
+            const TexelAddress t{a.face, a.column, a.row};
+            value = visible_value(t);
+            if (value) {
+                Tile* tile = tile_of(t);
+                if (!tile->origins_cover(origin, drift)) {
+                    tile->stale.store(1u, std::memory_order_relaxed);
+                    value.reset();
+                }
+            }
+        }
+        record_lookup(value.has_value());
+        return value;
+    }
+
     // lookup() without counting, for searches that read many texels per ray (count them with record_lookup()).
     std::optional<Value> peek(const glm::vec3& direction) const noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
@@ -169,6 +201,21 @@ public:
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE) return refuse();
         return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
+    }
+
+    // store() for a ray that left from `origin`: also widens its tile's pending box of origins (whether or
+    // not the word is written), which lookup(direction, origin, drift) reads from the next frame on.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin)) return refuse();
+        const TexelAddress t{a.face, a.column, a.row};
+        const Word word = Texel::encode(value);
+        if (!Texel::is_valid(word)) return refuse();
+        Tile* tile = tile_for_store(t);
+        if (!tile) return refuse();
+        tile->widen_pending(origin);
+        return store_word(t, word);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -206,6 +253,27 @@ public:
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return refuse();
         return store_word(texel, word);
+    }
+
+    // The visible box {lo, hi} of the origins that `texel`'s tile was stored from (what lookup(direction,
+    // origin, drift) compares with); std::nullopt when its tile has none. For saving a cube. Between frames.
+    std::optional<std::pair<glm::vec3, glm::vec3>> origin_box(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        const Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
+        if (!tile || !tile->has_box) return std::nullopt;
+        return std::make_pair(glm::vec3(tile->box_min[0], tile->box_min[1], tile->box_min[2]),
+                              glm::vec3(tile->box_max[0], tile->box_max[1], tile->box_max[2]));
+    }
+
+    // Makes [lo, hi] the visible origin box of `texel`'s tile, for loading a saved cube; false (nothing set)
+    // when the tile holds no texel yet. Between frames.
+    bool set_origin_box(const TexelAddress& texel, const glm::vec3& lo, const glm::vec3& hi) noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
+        if (!tile) return false;
+        for (int k = 0; k < 3; ++k) tile->box_min[k] = lo[k], tile->box_max[k] = hi[k];
+        tile->has_box = true;
+        return true;
     }
 
     // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
@@ -257,13 +325,19 @@ public:
 
     // Ends a frame: this frame's stores become visible; returns the frame's counters and resets them.
     // Between frames only.
+    // Ends a frame: this frame's stores become visible, tiles marked stale are dropped (their texels empty,
+    // their memory given back), pending origin boxes become visible; returns the frame's counters and
+    // resets them. Between frames only.
     CubeStatistics begin_frame() noexcept {
         assert_between_frames();
         const CubeStatistics finished = statistics();
         if (state_->written_this_frame.exchange(false, std::memory_order_relaxed)) clear_written_bits();
+        end_frame_origins();
         state_->counters.reset();
         return finished;
     }
+    // Tiles dropped as stale since the cube was made.
+    std::size_t dropped_tiles() const noexcept { return state_->dropped_tiles.load(std::memory_order_relaxed); }
 
     // The counters since the last reset (approximate while other threads are counting).
     CubeStatistics statistics() const noexcept {
@@ -312,17 +386,54 @@ private:
     static constexpr int tile_texels = tile_edge * tile_edge;
     static constexpr int bit_words = tile_texels / 64;
 
+    // A float's bits mapped so that unsigned order is the float's order (for atomic min and max).
+    static std::uint32_t ordered(float f) noexcept {
+        const std::uint32_t bits = glm::floatBitsToUint(f);
+        return (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
+    }
+    static float unordered(std::uint32_t key) noexcept {
+        return glm::uintBitsToFloat((key & 0x80000000u) ? key & 0x7FFFFFFFu : ~key);
+    }
+
     struct Tile {
         Tile() noexcept {
             for (auto& t : texels) t.store(Texel::invalid, std::memory_order_relaxed);
             for (auto& w : written_bits) w.store(0, std::memory_order_relaxed);
             for (auto& w : doubtful_bits) w.store(0, std::memory_order_relaxed);
+            for (int k = 0; k < 3; ++k) {
+                pending_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                pending_max[k].store(0u, std::memory_order_relaxed);
+            }
+        }
+        // Widens the pending origin box by `o` (atomic min and max on ordered float bits).
+        void widen_pending(const glm::vec3& o) noexcept {
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t key = ordered(o[k] + 0.0f); // -0 as +0
+                std::uint32_t lo = pending_min[k].load(std::memory_order_relaxed);
+                while (key < lo && !pending_min[k].compare_exchange_weak(lo, key, std::memory_order_relaxed)) {}
+                std::uint32_t hi = pending_max[k].load(std::memory_order_relaxed);
+                while (key > hi && !pending_max[k].compare_exchange_weak(hi, key, std::memory_order_relaxed)) {}
+            }
+        }
+        // Whether `o` lies within `drift` of the visible origin box (true when no box is known: stores made
+        // without an origin give none).
+        bool origins_cover(const glm::vec3& o, float drift) const noexcept {
+            if (!has_box) return true;
+            for (int k = 0; k < 3; ++k)
+                if (!(o[k] >= box_min[k] - drift && o[k] <= box_max[k] + drift)) return false;
+            return true;
         }
         std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet).
         std::atomic<std::uint64_t> written_bits[bit_words];
         // One bit per texel: its value is kept but not answered (set_doubtful()).
         std::atomic<std::uint64_t> doubtful_bits[bit_words];
+        // Origins of the stores into this tile: this frame's (pending) and earlier frames' (visible, written
+        // between frames only, so lookups read them without synchronisation of their own).
+        std::atomic<std::uint32_t> pending_min[3], pending_max[3];
+        float box_min[3] = {0, 0, 0}, box_max[3] = {0, 0, 0};
+        bool has_box = false;
+        std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
     };
 
     struct State {
@@ -335,6 +446,7 @@ private:
         std::atomic<std::int64_t> valid_texels{0};
         std::atomic<std::size_t> doubtful_texels{0};
         std::atomic<int> users{0}; // threads inside in_frame() scopes (debug builds)
+        std::atomic<std::size_t> dropped_tiles{0};
         detail::StripedCounters<counter_count> counters;
     };
 
@@ -422,6 +534,40 @@ private:
                     }
                 }
             }
+    }
+
+    // Between frames: drops the tiles marked stale and makes pending origin boxes visible.
+    void end_frame_origins() noexcept {
+        for (std::size_t i = 0; i < tile_count(); ++i) {
+            Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
+            if (!tile) continue;
+            if (tile->stale.load(std::memory_order_relaxed)) {
+                std::int64_t valid = 0;
+                std::size_t doubtful_count = 0;
+                for (int slot = 0; slot < tile_texels; ++slot) {
+                    valid += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed));
+                    doubtful_count += doubtful(*tile, slot);
+                }
+                state_->valid_texels.fetch_sub(valid, std::memory_order_relaxed);
+                state_->doubtful_texels.fetch_sub(doubtful_count, std::memory_order_relaxed);
+                state_->tiles[i].store(nullptr, std::memory_order_relaxed);
+                delete tile;
+                if (budget_) budget_->release(sizeof(Tile));
+                state_->allocated_tiles.fetch_sub(1, std::memory_order_relaxed);
+                state_->dropped_tiles.fetch_add(1, std::memory_order_relaxed);
+                continue;
+            }
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
+                const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
+                if (lo > hi) continue; // no origin stored this frame
+                const float a = unordered(lo), b = unordered(hi);
+                tile->box_min[k] = tile->has_box ? std::min(tile->box_min[k], a) : a;
+                tile->box_max[k] = tile->has_box ? std::max(tile->box_max[k], b) : b;
+            }
+            if (tile->pending_min[0].load(std::memory_order_relaxed) <= tile->pending_max[0].load(std::memory_order_relaxed))
+                tile->has_box = true;
+        }
     }
 
     void clear_written_bits() noexcept {

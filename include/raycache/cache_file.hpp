@@ -12,8 +12,12 @@
 //   "CUBE"   one per cube: u64 object id and u64 part (the caller's key of what the cube caches, unique in
 //            the file), u32 face size N (1..4096), f32 x 3 centre, f32 half-size,
 //            u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
-//            T = ceil(N / 16), strictly increasing, and its 16 x 16 words row by row (texels past the face's
-//            edge, and empty texels, hold the technique's empty word; any other word must be valid)
+//            T = ceil(N / 16), strictly increasing; u32 1 and f32 x 6 (low and high corner) for the box of
+//            the origins its texels were stored from (CacheCube::origin_box), or u32 0 and six zeros;
+//            u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
+//            doubtful (CacheCube::is_doubtful; only texels holding a value); and its 16 x 16 words row by
+//            row (texels past the face's edge, and empty texels, hold the technique's empty word; any other
+//            word must be valid)
 //   "END "   u32 cube count; nothing may follow
 //
 // Only tiles holding a value are written (sparse, as cubes allocate them). The scene identity is the
@@ -26,8 +30,8 @@
 // the bytes that remain before reading, every checksum, the scene, the technique and the version, then
 // fills fresh cubes; a CacheFileError names the file and what is wrong, and the caller's cubes are left as
 // they were. Loaded texels are visible at once, as a frame's stores are after begin_frame(): the next frame
-// rendered sees them. What is derived from the texels is not saved but made again: a CDCT cube's
-// DepthPyramid must be rebuilt and a CCT cube's doubtful edges marked (SceneCache::load does both).
+// rendered sees them. Each tile's origin box and doubtful marks travel with it; a CDCT cube's DepthPyramid,
+// derived from the texels alone, is not saved and must be rebuilt (SceneCache::load does it).
 //
 // Threads: saving reads cubes, loading replaces them: both between frames.
 #pragma once
@@ -109,8 +113,8 @@ struct CubeToSave {
     std::uint64_t part = 0;
 };
 
-// One cube read back. Its texels are held as the current frame's stores: structures derived from the texels
-// (edge marks, raycache/edge_confidence.hpp) are made as after a frame, then begin_frame() makes them visible.
+// One cube read back, with its tiles' origin boxes and doubtful marks. Its texels are held as the current
+// frame's stores: begin_frame() makes them visible.
 template <class Texel>
 struct LoadedCube {
     std::uint64_t object = 0;
@@ -300,8 +304,34 @@ struct CubeRecord {
     int face_size = 0;
     CubeBounds bounds;
     std::uint32_t tiles = 0;
-    const std::uint8_t* tile_data = nullptr; // `tiles` times (u32 index, 256 words)
+    const std::uint8_t* tile_data = nullptr; // `tiles` times a tile_header_bytes header and 256 words
 };
+
+// A tile's index, origin box and doubtful marks, as the file stores them before its words.
+struct TileHeader {
+    std::uint32_t index = 0;
+    bool has_box = false;
+    glm::vec3 lo{0.0f}, hi{0.0f};
+    std::uint64_t doubtful[4] = {0, 0, 0, 0};
+    bool is_doubtful(int slot) const noexcept { return (doubtful[slot / 64] >> (slot % 64)) & 1u; }
+};
+inline constexpr std::size_t tile_header_bytes = 4 + 4 + 6 * 4 + 4 * 8;
+
+inline TileHeader read_tile_header(ByteReader& r) {
+    TileHeader h;
+    h.index = r.u32("a tile index");
+    const std::uint32_t flag = r.u32("a tile's origin flag");
+    for (int k = 0; k < 3; ++k) h.lo[k] = r.f32("a tile's origin box");
+    for (int k = 0; k < 3; ++k) h.hi[k] = r.f32("a tile's origin box");
+    if (flag > 1) r.fail("tile " + std::to_string(h.index) + " has origin flag " + std::to_string(flag) + " (0 or 1)");
+    h.has_box = flag == 1;
+    const bool zero = glm::floatBitsToUint(h.lo) == glm::uvec3(0u) && glm::floatBitsToUint(h.hi) == glm::uvec3(0u);
+    const bool box = glm::all(glm::lessThanEqual(h.lo, h.hi)) && shared::raycache_is_finite3(h.lo) && shared::raycache_is_finite3(h.hi);
+    if (h.has_box ? !box : !zero)
+        r.fail("tile " + std::to_string(h.index) + "'s origin box is not " + (h.has_box ? "finite, low <= high" : "zero"));
+    for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
+    return h;
+}
 
 // The tiles of `cube` holding a value, as file tile indices, increasing.
 template <class Texel>
@@ -349,14 +379,15 @@ CubeRecord read_cube_record(ByteReader& r) {
     if (c.tiles > tile_count)
         r.fail(std::to_string(c.tiles) + " tiles, more than the " + std::to_string(tile_count) + " of a cube of face size " +
                std::to_string(face_size));
-    const std::size_t tile_bytes = 4 + file_tile_texels * sizeof(Word);
+    const std::size_t tile_bytes = tile_header_bytes + file_tile_texels * sizeof(Word);
     if (r.remaining() / tile_bytes < c.tiles || r.remaining() != c.tiles * tile_bytes)
         r.fail(std::to_string(c.tiles) + " tiles need " + std::to_string(std::uint64_t{c.tiles} * tile_bytes) + " bytes, the chunk holds " +
                std::to_string(r.remaining()));
     c.tile_data = r.here();
     std::int64_t previous = -1;
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
-        const std::uint32_t index = r.u32("a tile index");
+        const TileHeader header = read_tile_header(r);
+        const std::uint32_t index = header.index;
         if (index >= tile_count)
             r.fail("tile index " + std::to_string(index) + " is outside the cube's " + std::to_string(tile_count) + " tiles");
         if (static_cast<std::int64_t>(index) <= previous)
@@ -365,6 +396,8 @@ CubeRecord read_cube_record(ByteReader& r) {
         const std::uint8_t* words = r.here();
         for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {
             const Word w = read_word<Word>(words + static_cast<std::size_t>(slot) * sizeof(Word));
+            if (w == Texel::invalid && header.is_doubtful(slot))
+                r.fail("texel " + std::to_string(slot) + " of tile " + std::to_string(index) + " is marked doubtful but holds no value");
             if (w == Texel::invalid) continue;
             if (!Texel::is_valid(w))
                 r.fail("texel " + std::to_string(slot) + " of tile " + std::to_string(index) + " is neither a valid " +
@@ -385,18 +418,21 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                                              const ByteReader& messages) {
     using Word = typename Texel::Word;
     auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget);
-    const std::uint8_t* p = c.tile_data;
+    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes + file_tile_texels * sizeof(Word)), "tiles"); // checked
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
-        const std::uint32_t index = read_word<std::uint32_t>(p);
-        p += 4;
-        for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot, p += sizeof(Word)) {
-            const Word w = read_word<Word>(p);
+        const TileHeader h = read_tile_header(tiles);
+        for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {
+            const Word w = read_word<Word>(tiles.here());
+            tiles.skip(sizeof(Word), "a texel");
             if (w == Texel::invalid) continue;
-            if (!cube->store_word_at(tile_texel(index, slot, c.face_size), w))
+            const TexelAddress t = tile_texel(h.index, slot, c.face_size);
+            if (!cube->store_word_at(t, w))
                 messages.fail("the memory budget (" + std::to_string(budget ? budget->limit() : 0) + " bytes, " +
                               std::to_string(budget ? budget->used() : 0) +
                               " in use) cannot hold the file's tiles as well as the cubes they replace");
+            if (h.is_doubtful(slot)) cube->set_doubtful(t);
         }
+        if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi); // slot 0 is on the face
     }
     return cube;
 }
@@ -450,6 +486,16 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
         w.u32(static_cast<std::uint32_t>(tiles.size()));
         for (std::uint32_t index : tiles) {
             w.u32(index);
+            const std::optional<std::pair<glm::vec3, glm::vec3>> box = c.cube->origin_box(detail::tile_texel(index, 0, n));
+            w.u32(box ? 1 : 0);
+            for (const glm::vec3& corner : {box ? box->first : glm::vec3(0.0f), box ? box->second : glm::vec3(0.0f)})
+                for (int k = 0; k < 3; ++k) w.f32(corner[k] + 0.0f);
+            std::uint64_t doubtful[4] = {0, 0, 0, 0};
+            for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
+                const TexelAddress t = detail::tile_texel(index, slot, n);
+                if (c.cube->contains(t) && c.cube->is_doubtful(t)) doubtful[slot / 64] |= std::uint64_t{1} << (slot % 64);
+            }
+            for (std::uint64_t bits : doubtful) w.u64(bits);
             for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
                 const TexelAddress t = detail::tile_texel(index, slot, n);
                 w.word(c.cube->contains(t) ? c.cube->load_word(t) : Texel::invalid);
@@ -613,7 +659,7 @@ void save_cube(const std::string& path, const CacheCube<Texel>& cube, const Cube
 }
 
 // Replaces `target` by the one cube saved in `path`, at the face size it was saved with, drawing on
-// target's budget; its texels are visible at once, none marked doubtful. The file must hold one cube, of
+// target's budget; its texels are visible at once, with their tiles' origin boxes and doubtful marks. The file must hold one cube, of
 // object `object` (part 0), placed at `bounds`, for `scene`. Otherwise throws CacheFileError and leaves
 // `target` as it was. Between frames.
 // A DepthPyramid of the cube must be rebuilt (DepthPyramid(target.face_size()).rebuild(target)).

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -29,8 +30,10 @@ struct CubeBounds {
 
 // How a CDCT lookup finds the ray's hit in the cube's depth image.
 enum class DepthSearch {
-    secant, // a few reads: jump to the sphere of the distance read, then false position (shared/depth_secant.h)
-    relief, // the thesis's walk in steps of `step` (over a DepthPyramid when one is given), then bisection
+    secant = RAYCACHE_DEPTH_SEARCH_SECANT, // a few reads: jump to the sphere of the distance read, then false
+                                           // position (shared/depth_secant.h)
+    relief = RAYCACHE_DEPTH_SEARCH_RELIEF, // the thesis's walk in steps of `step` (over a DepthPyramid when one
+                                           // is given), then bisection
 };
 
 // Tuning of the CDCT's search; step and epsilon default to one of the thesis's (delta, epsilon) pairs.
@@ -47,6 +50,12 @@ struct ReliefParameters {
     DepthSearch search = DepthSearch::secant; // what cdct_cached_trace uses (relief_search is always the walk)
     int max_reads = 8;                        // secant: reads before giving up (a miss), 1..RAYCACHE_SECANT_MAX_READS
 };
+// GLSL's raycache_relief_parameters (raycache/cdct.glsl) is this struct field for field: a std430 copy of
+// its bytes (a push constant, a buffer) reads as the same parameters in a shader.
+static_assert(sizeof(ReliefParameters) == 28 && offsetof(ReliefParameters, max_gap) == 16 &&
+                  offsetof(ReliefParameters, search) == 20 && offsetof(ReliefParameters, max_reads) == 24 &&
+                  sizeof(DepthSearch) == 4,
+              "ReliefParameters must keep the layout of GLSL's raycache_relief_parameters");
 
 // Throws std::invalid_argument, with the offending field, unless every parameter is finite and positive
 // and max_steps is 1..RAYCACHE_MAX_RELIEF_STEPS.
@@ -114,7 +123,8 @@ public:
     DepthSample sample; // the texel read last
     bool crossed = false; // whether the ray at the last read is at or beyond that texel's surface
 
-    glm::vec3 from_centre(float t) const { return origin_ + t * d_ - bounds_.centre; }
+    // (origin + t d) - centre, without FMA (shared/ray_box.h, as GLSL computes it).
+    glm::vec3 from_centre(float t) const { return shared::raycache_ray_from_centre(origin_, d_, t, bounds_.centre); }
 
     // Reads the texel in the direction of the ray's point at t; false when it is empty or not yet visible.
     bool read(float t) {
@@ -123,7 +133,7 @@ public:
         const std::optional<DepthSample> texel = cube_.peek(v);
         if (!texel) return false;
         sample = *texel;
-        crossed = sample.distance <= glm::length(v);
+        crossed = sample.distance <= shared::raycache_length(v);
         return true;
     }
 
@@ -141,7 +151,7 @@ public:
                 lo = mid;
             }
         }
-        if (glm::length(from_centre(hi)) - at_hi.distance > p_.max_gap) return miss();
+        if (shared::raycache_length(from_centre(hi)) - at_hi.distance > p_.max_gap) return miss();
         sample = at_hi;
         return hit(hi);
     }
@@ -149,7 +159,7 @@ public:
     ReliefResult hit(float t) {
         result.hit = true;
         result.distance = t;
-        result.point = origin_ + t * d_;
+        result.point = shared::raycache_ray_point(origin_, d_, t);
         result.color = sample.color;
         return result;
     }
@@ -181,7 +191,7 @@ public:
         int level = std::min(1, pyramid.levels());
         for (int visits = 0; visits < p_.max_steps; ++visits) {
             const glm::vec3 v = from_centre(t);
-            const float distance_to_centre = glm::length(v);
+            const float distance_to_centre = shared::raycache_length(v);
             const shared::raycache_texel_address a = shared::raycache_texel_of(v, n);
             if (a.face == RAYCACHE_NO_FACE) return miss();
             float nearest;
@@ -207,13 +217,9 @@ public:
     }
 
 private:
-    // Where |from_centre(t)| reaches `radius` going outwards (the far root; the ray is inside that sphere).
-    float reach(float radius) const {
-        const glm::vec3 v0 = origin_ - bounds_.centre;
-        const float b = glm::dot(v0, d_);
-        const float c = glm::dot(v0, v0) - radius * radius;
-        return -b + std::sqrt(std::max(b * b - c, 0.0f));
-    }
+    // Where |from_centre(t)| reaches `radius` going outwards (the far root; the ray is inside that sphere;
+    // 0 when it lies behind the origin, which the walk treats as any point behind t).
+    float reach(float radius) const { return shared::raycache_sphere_exit(origin_ - bounds_.centre, d_, radius); }
 
     // Where the ray, now at t inside block (a.column >> level, a.row >> level) of face a.face, leaves the
     // block's cone from the centre. The block spans face coordinates sc/m in [u0, u1] and tc/m in [v0, v1];
@@ -229,9 +235,10 @@ private:
         const glm::vec3 &m_axis = axes.m, &u_axis = axes.sc, &v_axis = axes.tc;
         float exit = std::numeric_limits<float>::infinity();
         auto leave = [&](const glm::vec3& normal) { // the ray stays where dot(normal, p) >= 0
-            const float rate = glm::dot(normal, d_);
-            if (rate < 0.0f) exit = std::min(exit, t + std::max(glm::dot(normal, p), 0.0f) / -rate);
+            const float rate = shared::raycache_dot_no_fma(normal, d_);
+            if (rate < 0.0f) exit = std::min(exit, t + std::max(shared::raycache_dot_no_fma(normal, p), 0.0f) / -rate);
         };
+        // (m_axis holds 0 and +-1: its products are exact, fused or not.)
         leave(u_axis - u0 * m_axis);
         leave(u1 * m_axis - u_axis);
         leave(v_axis - v0 * m_axis);
@@ -294,16 +301,9 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
 inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p) noexcept {
     ReliefResult result;
-    if (!is_direction(direction) || !shared::raycache_is_finite3(origin) || !detail::is_usable(bounds) ||
-        !(p.epsilon > 0.0f)) {
-        cube.record_lookup(false);
-        return result;
-    }
     const auto use = cube.in_frame();
-    const glm::vec3 d = shared::raycache_unit(direction);
-    const float start = shared::raycache_box_exit_distance(origin, d, bounds.centre, bounds.half_size);
-    shared::raycache_secant_search s =
-        shared::raycache_secant_begin(origin - bounds.centre, d, start, p.epsilon, p.max_gap, p.max_reads);
+    shared::raycache_secant_search s = shared::raycache_secant_start(origin, direction, bounds.centre, bounds.half_size,
+                                                                     p.epsilon, p.max_gap, p.max_reads);
     while (s.status == RAYCACHE_SECANT_READ) {
         const std::optional<DepthSample> texel = cube.peek(shared::raycache_secant_point(s, s.t));
         s = texel ? shared::raycache_secant_step(s, true, texel->distance, texel->color)
@@ -313,7 +313,7 @@ inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
     result.hit = s.status == RAYCACHE_SECANT_HIT;
     if (result.hit) {
         result.distance = s.t;
-        result.point = origin + s.t * d;
+        result.point = shared::raycache_ray_point(origin, s.d, s.t);
         result.color = s.color;
     }
     cube.record_lookup(result.hit);
@@ -335,7 +335,7 @@ inline bool store_hit(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, cons
                       const glm::vec3& color, const ReliefParameters& p) noexcept {
     if (!shared::raycache_is_finite3(hit_point) || !detail::is_usable(bounds)) return cube.store(glm::vec3(0.0f), DepthSample{});
     const glm::vec3 from_centre = hit_point - bounds.centre;
-    return cube.store(from_centre, DepthSample{color, std::min(glm::length(from_centre), p.max_depth)});
+    return cube.store(from_centre, DepthSample{color, std::min(shared::raycache_length(from_centre), p.max_depth)});
 }
 
 // Stores the colour of a ray that escaped to the environment in `direction`, as far away (p.max_depth).
@@ -369,7 +369,8 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     const TracedRay traced = std::forward<Trace>(trace)();
     if (!is_direction(direction) || traced.distance < 0.0f) return traced.color;
     if (std::isfinite(traced.distance))
-        store_hit(cube, bounds, origin + traced.distance * shared::raycache_unit(direction), traced.color, p);
+        store_hit(cube, bounds, shared::raycache_ray_point(origin, shared::raycache_unit(direction), traced.distance),
+                  traced.color, p);
     else
         store_escape(cube, direction, traced.color, p);
     return traced.color;

@@ -13,11 +13,13 @@
 #include <map>
 #include <random>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include <raycache/raycache.hpp>
 
 #include "vulkan_test.hpp"
+#include "../cdct_scenes.hpp"
 #include "../test_bits.hpp"
 
 using namespace raycache;
@@ -30,7 +32,8 @@ struct Query {
     glm::vec3 origin; // search: ray origin; store_hit: the hit point
     std::uint32_t cube;
     glm::vec3 direction; // search and store_escape: ray direction; store: key
-    std::uint32_t mode;  // 0: search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance)
+    std::uint32_t mode;  // 0: relief search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance),
+                         // 4: secant search, 5: depth_search (the parameters' search)
     glm::vec3 color;
     float distance;
 };
@@ -46,107 +49,32 @@ struct Result {
     float pad2;
 };
 static_assert(sizeof(Result) == 48, "Result must match cdct_cross.comp");
-// GLSL's raycache_relief_parameters: the relief walk's fields of ReliefParameters, in order.
-struct GpuRelief {
-    float step, epsilon;
-    std::int32_t max_steps;
-    float max_depth, max_gap;
-};
+// GLSL's raycache_relief_parameters is ReliefParameters field for field (cdct.hpp asserts the layout):
+// the push constants hold its bytes as they are.
 struct Push {
-    GpuRelief parameters;
+    ReliefParameters parameters;
     std::uint32_t count;
-    Push(const ReliefParameters& p, std::size_t n)
-        : parameters{p.step, p.epsilon, p.max_steps, p.max_depth, p.max_gap}, count(static_cast<std::uint32_t>(n)) {}
+    Push(const ReliefParameters& p, std::size_t n) : parameters(p), count(static_cast<std::uint32_t>(n)) {}
 };
-static_assert(sizeof(GpuRelief) == 20 && sizeof(Push) == 24, "raycache_relief_parameters is 5 4-byte fields");
+static_assert(sizeof(Push) == 32, "raycache_relief_parameters is 7 4-byte fields, then the count");
 
 
-struct Scene {
-    std::vector<CdctCube> cubes;
-    std::vector<CubeBounds> bounds;
-    std::vector<gpu::raycache_gpu_cube> descriptors;
-    std::size_t elements = 0;
+using Scene = rcx_test::CdctScene;
+using rcx_test::random_direction;
 
-    void add(int n, CubeBounds b) {
-        cubes.emplace_back(n);
-        bounds.push_back(b);
-        descriptors.push_back(gpu::raycache_make_gpu_cube(b.centre, b.half_size, static_cast<std::uint32_t>(elements), n));
-        elements += cubes.back().texel_count();
-    }
-    std::vector<std::uint64_t> words() const {
-        std::vector<std::uint64_t> all;
-        for (const CdctCube& cube : cubes) {
-            const std::vector<std::uint64_t> w = rcx_test::words_of(cube);
-            all.insert(all.end(), w.begin(), w.end());
-        }
-        return all;
-    }
-};
+Scene make_scene(std::mt19937& rng, bool fill) { return rcx_test::make_analytic_scene(rng, fill); }
 
-// Three cubes in one buffer: a sphere of radius 5 with an unfilled cap (rays through it miss); rolling
-// hills of depth 2..5 with parallax; and a small cube of random depths. Texel colours are random.
-Scene make_scene(std::mt19937& rng, bool fill) {
-    Scene s;
-    s.add(32, CubeBounds{glm::vec3(1.0f, 2.0f, 3.0f), 1.0f});
-    s.add(64, CubeBounds{glm::vec3(-4.0f, 0.5f, 2.0f), 0.75f});
-    s.add(7, CubeBounds{glm::vec3(0.0f), 2.0f});
-    if (!fill) return s;
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    for (std::size_t c = 0; c < s.cubes.size(); ++c) {
-        CdctCube& cube = s.cubes[c];
-        const int n = cube.face_size();
-        for (int face = 0; face < 6; ++face)
-            for (int row = 0; row < n; ++row)
-                for (int column = 0; column < n; ++column) {
-                    const TexelAddress t{face, column, row};
-                    const glm::vec3 d = glm::normalize(texel_direction(t, n));
-                    float depth;
-                    if (c == 0) {
-                        if (d.y > 0.8f) continue; // the hole
-                        depth = 5.0f;
-                    } else if (c == 1) {
-                        depth = 3.5f + 1.5f * std::sin(3.0f * d.x) * std::cos(2.0f * d.z);
-                    } else {
-                        depth = 2.5f + 5.0f * u(rng);
-                    }
-                    cube.store_at(t, DepthSample{glm::vec3(u(rng), u(rng), u(rng)), depth});
-                }
-        cube.begin_frame();
-    }
-    return s;
-}
-
-glm::vec3 random_direction(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    return glm::vec3(g(rng), g(rng), g(rng)) * std::exp2(std::uniform_real_distribution<float>(-10, 10)(rng));
-}
-
-// Rays from inside and around each cube's box, plus bad ones (NaN or infinite origins, zero, NaN and
-// infinite directions, ties and signed zeros).
-std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube) {
+// rcx_test::search_rays as search queries (mode 0: relief; 4: secant; 5: the parameters' search).
+std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cube, std::uint32_t mode = 0) {
     std::vector<Query> queries;
-    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    const float inf = std::numeric_limits<float>::infinity(), nan = std::nanf("");
-    for (std::uint32_t c = 0; c < s.cubes.size(); ++c)
-        for (int i = 0; i < per_cube; ++i) {
-            const float reach = i % 5 == 0 ? 3.0f : 0.95f; // every fifth origin may lie outside the box
-            Query q{};
-            q.origin = s.bounds[c].centre + s.bounds[c].half_size * reach * glm::vec3(u(rng), u(rng), u(rng));
-            q.direction = random_direction(rng);
-            q.cube = c;
-            switch (i % 97) {
-            case 1: q.origin.x = nan; break;
-            case 2: q.origin.y = inf; break;
-            case 3: q.direction = glm::vec3(0.0f); break;
-            case 4: q.direction = glm::vec3(nan, 1.0f, 0.0f); break;
-            case 5: q.direction = glm::vec3(-0.0f, 1.0f, 0.0f); break;
-            case 6: q.direction = glm::vec3(1.0f, -1.0f, 1.0f); break;
-            case 7: q.direction = glm::vec3(2.0f, 2.0f, -0.0f); break;
-            case 8: q.direction = glm::vec3(0.0f, 0.0f, -inf); break;
-            default: break;
-            }
-            queries.push_back(q);
-        }
+    for (const rcx_test::CdctRay& ray : rcx_test::search_rays(s, rng, per_cube)) {
+        Query q{};
+        q.origin = ray.origin;
+        q.cube = ray.cube;
+        q.direction = ray.direction;
+        q.mode = mode;
+        queries.push_back(q);
+    }
     return queries;
 }
 
@@ -155,14 +83,19 @@ struct Comparison {
     long long texels = 0;
 };
 
-// Compares GPU search results with relief_search on the C++ cubes; prints the first differences.
+// Compares GPU search results with the C++ search of each query's mode (0: relief_search, 4: secant_search,
+// 5: depth_search) on the C++ cubes; prints the first differences.
 Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const Result* r, const ReliefParameters& p) {
     Comparison c;
     int printed = 0;
     for (std::size_t i = 0; i < queries.size(); ++i) {
-        if (queries[i].mode != 0) continue;
+        if (queries[i].mode != 0 && queries[i].mode != 4 && queries[i].mode != 5) continue;
         const Query& q = queries[i];
-        const ReliefResult e = relief_search(s.cubes[q.cube], s.bounds[q.cube], q.origin, q.direction, p);
+        CdctCube& cube = s.cubes[q.cube];
+        const CubeBounds& b = s.bounds[q.cube];
+        const ReliefResult e = q.mode == 0   ? relief_search(cube, b, q.origin, q.direction, p)
+                               : q.mode == 4 ? secant_search(cube, b, q.origin, q.direction, p)
+                                             : depth_search(cube, b, q.origin, q.direction, p);
         const bool ok = (r[i].hit != 0) == e.hit && r[i].texels_read == e.texels_read &&
                         glm::floatBitsToUint(r[i].distance) == glm::floatBitsToUint(e.distance) && same_bits(r[i].point, e.point) &&
                         same_bits(r[i].color, e.color);
@@ -178,45 +111,57 @@ Comparison compare_searches(Scene& s, const std::vector<Query>& queries, const R
     return c;
 }
 
-// Runs the GLSL relief search (shaders/cdct_cross.comp) over `queries` with each parameter set and
-// compares every result with relief_search in C++; check(p, comparison) judges each set.
-template <class Check>
-void search_in_glsl_and_cpp(rcx::vk::Context& vk, Scene& s, const std::vector<Query>& queries,
-                            const std::vector<ReliefParameters>& sets, Check&& check) {
-    rcx::vk::ComputePipeline cross(vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
-    rcx::vk::Buffer texels = rcx_test::buffer_of(vk, s.words());
-    rcx::vk::Buffer pending(vk, s.elements * 8);
-    pending.fill(RAYCACHE_GPU_CLEAR_WORD);
-    rcx::vk::Buffer cubes = rcx_test::buffer_of(vk, s.descriptors);
-    rcx::vk::Buffer query_buffer = rcx_test::buffer_of(vk, queries);
-    rcx::vk::Buffer results(vk, queries.size() * sizeof(Result));
-    for (const ReliefParameters& p : sets) {
-        CAPTURE(p.step);
-        CAPTURE(p.epsilon);
-        CAPTURE(p.max_steps);
-        CAPTURE(p.max_gap);
+// shaders/cdct_cross.comp, on a device with the 64-bit atomics that the include's CDCT stores need.
+rcx::vk::ComputePipeline cross_pipeline(rcx::vk::Context& vk) {
+    REQUIRE_MESSAGE(vk.int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    return rcx::vk::ComputePipeline(vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+}
+
+// A scene's cubes and a batch of search queries in the buffers of the cross-check shader (nothing pending),
+// searched in GLSL with any parameters and compared with C++.
+struct GpuSearches {
+    rcx::vk::Context& vk;
+    const rcx::vk::ComputePipeline& cross;
+    Scene& s;
+    std::vector<Query> queries;
+    rcx::vk::Buffer texels, pending, cubes, query_buffer, results;
+
+    GpuSearches(rcx::vk::Context& context, const rcx::vk::ComputePipeline& pipeline, Scene& scene, std::vector<Query> q)
+        : vk(context), cross(pipeline), s(scene), queries(std::move(q)), texels(rcx_test::buffer_of(vk, s.words())),
+          pending(vk, s.elements * 8), cubes(rcx_test::buffer_of(vk, s.descriptors)),
+          query_buffer(rcx_test::buffer_of(vk, queries)), results(vk, queries.size() * sizeof(Result)) {
+        pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+    }
+    Comparison run(const ReliefParameters& p) {
         const Push push(p, queries.size());
         vk.dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
                     rcx::vk::group_count(queries.size(), 64));
-        check(p, compare_searches(s, queries, results.as<Result>(), p));
+        return compare_searches(s, queries, results.as<Result>(), p);
     }
-}
+};
 
 } // namespace
 
 TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as in C++, bit for bit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(21);
     Scene s = make_scene(rng, true);
-    const std::vector<Query> queries = search_queries(s, rng, 1500);
+    GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 1500));
+    const std::vector<Query>& queries = gpu.queries;
+
     const float inf = std::numeric_limits<float>::infinity();
-    const std::vector<ReliefParameters> sets = {
+    const ReliefParameters sets[] = {
         {2.0f, 0.2f, 1024, 100.0f, inf},  {0.4f, 0.05f, 1024, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, inf},
         {0.05f, 0.002f, 300, 100.0f, inf}, {0.2f, 0.02f, 1024, 100.0f, 0.3f}, {0.25f, 0.02f, 10, 100.0f, inf},
     };
-    search_in_glsl_and_cpp(*vk, s, queries, sets, [&](const ReliefParameters& p, const Comparison& c) {
+    for (const ReliefParameters& p : sets) {
+        CAPTURE(p.step);
+        CAPTURE(p.epsilon);
+        CAPTURE(p.max_steps);
+        CAPTURE(p.max_gap);
+        const Comparison c = gpu.run(p);
         std::printf("CDCT relief search (step %g, epsilon %g, %d steps, max_gap %g), C++ texels read in GLSL: %zu of "
                     "%zu equal to C++ (%zu hits, %.1f texels read per search)\n",
                     p.step, p.epsilon, p.max_steps, p.max_gap, c.same, queries.size(), c.hits,
@@ -224,13 +169,13 @@ TEST_CASE("CDCT texels written by C++ give the same relief searches in GLSL as i
         CHECK(c.same == queries.size());
         CHECK(c.hits > queries.size() / 5);
         CHECK(c.hits < queries.size());
-    });
+    }
 }
 
 TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot move the ray or max_steps is over the limit") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     std::mt19937 rng(23);
     Scene s = make_scene(rng, true);
     // Origins inside the boxes (and the bad ones): the walk starts at the box exit, t > 0.05, where
@@ -242,10 +187,15 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
                                      return std::max(local.x, std::max(local.y, local.z)) > 0.95f * s.bounds[q.cube].half_size;
                                  }),
                   queries.end());
+    GpuSearches gpu(*vk, cross, s, queries);
+
     const float inf = std::numeric_limits<float>::infinity();
-    const std::vector<ReliefParameters> sets = {{1e-30f, 0.02f, 100000, 100.0f, inf},
-                                                {0.2f, 0.02f, std::numeric_limits<int>::max(), 100.0f, inf}};
-    search_in_glsl_and_cpp(*vk, s, queries, sets, [&](const ReliefParameters& p, const Comparison& c) {
+    const ReliefParameters sets[] = {{1e-30f, 0.02f, 100000, 100.0f, inf},
+                                     {0.2f, 0.02f, std::numeric_limits<int>::max(), 100.0f, inf}};
+    for (const ReliefParameters& p : sets) {
+        CAPTURE(p.step);
+        CAPTURE(p.max_steps);
+        const Comparison c = gpu.run(p);
         CHECK(c.same == queries.size());
         if (p.max_steps > RAYCACHE_MAX_RELIEF_STEPS) { // parameters no search runs with: a miss, nothing read
             CHECK(c.hits == 0);
@@ -253,14 +203,13 @@ TEST_CASE("GLSL and C++ relief searches end at once alike when the step cannot m
         } else { // the box exit only (a hit where the cached surface lies inside the box)
             CHECK(c.texels <= static_cast<long long>(queries.size()));
         }
-    });
+    }
 }
 
 TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then smallest word wins, and C++ reads the result") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
-    REQUIRE_MESSAGE(vk->int64_atomics(), "RayCache's GLSL CDCT stores need shaderInt64 and shaderBufferInt64Atomics");
-    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cdct_cross"), rcx_test::cross_bindings, sizeof(Push));
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
     rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), rcx_test::end_frame_bindings, 0);
     std::mt19937 rng(22);
     // The scene filled, then 3 of every 4 texels emptied: stores into the rest are refused.
@@ -330,8 +279,12 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
     std::vector<Query> next_queries = search_queries(s, rng, 1500);
     rcx::vk::Buffer next_buffer = rcx_test::buffer_of(*vk, next_queries);
+    std::vector<Query> next_secant_queries = next_queries;
+    for (Query& q : next_secant_queries) q.mode = 4;
+    rcx::vk::Buffer next_secant_buffer = rcx_test::buffer_of(*vk, next_secant_queries);
     rcx::vk::Buffer frame_results(*vk, queries.size() * sizeof(Result));
     rcx::vk::Buffer next_results(*vk, next_queries.size() * sizeof(Result));
+    rcx::vk::Buffer next_secant_results(*vk, next_queries.size() * sizeof(Result));
     const Push push(p, queries.size());
     const Push next_push(p, next_queries.size());
     vk->submit([&](rcx::vk::Commands& c) {
@@ -342,6 +295,8 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
         c.barrier();
         c.dispatch(cross, {texels, pending, cubes, next_buffer, next_results}, &next_push, sizeof(next_push),
                    rcx::vk::group_count(next_queries.size(), 64));
+        c.dispatch(cross, {texels, pending, cubes, next_secant_buffer, next_secant_results}, &next_push,
+                   sizeof(next_push), rcx::vk::group_count(next_queries.size(), 64));
     });
 
     // The same stores in C++, in order; count the texels that several different words competed for.
@@ -423,4 +378,70 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
                 next_queries.size(), next.hits);
     CHECK(next.same == next_queries.size());
     CHECK(next.hits > 0);
+    const Comparison next_secant = compare_searches(s, next_secant_queries, next_secant_results.as<Result>(), p);
+    std::printf("CDCT secant search in the next frame: %zu of %zu equal to C++ (%zu hits)\n", next_secant.same,
+                next_queries.size(), next_secant.hits);
+    CHECK(next_secant.same == next_queries.size());
+    CHECK(next_secant.hits > 0);
+}
+
+TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on analytic cubes and on cubes filled by stores") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
+    std::mt19937 rng(24);
+    // Analytic cubes (every texel but the first cube's cap filled), and cubes filled by 7,500 traced rays
+    // through cdct_cached_trace over three frames (holes where no ray went).
+    std::vector<rcx_test::TracedSample> samples;
+    Scene scenes[2] = {rcx_test::make_analytic_scene(rng, true), rcx_test::make_stored_scene(rng, 2500, 3, samples)};
+    rcx_test::apply_samples(scenes[1], samples, ReliefParameters{});
+    const char* names[2] = {"analytic cubes", "cubes filled by stores"};
+
+    std::size_t compared = 0, all_same = 0;
+    for (int k = 0; k < 2; ++k) {
+        Scene& s = scenes[k];
+        CAPTURE(names[k]);
+        GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 1000, 4));
+        const std::vector<Query>& queries = gpu.queries;
+        std::size_t hits = 0;
+        for (const ReliefParameters& p : rcx_test::secant_parameter_sets()) {
+            CAPTURE(p.epsilon);
+            CAPTURE(p.max_gap);
+            CAPTURE(p.max_reads);
+            const Comparison c = gpu.run(p);
+            std::printf("CDCT secant search on %s (epsilon %g, max_gap %g, max_reads %d): %zu of %zu equal to C++ "
+                        "(%zu hits, %.2f texels read per search)\n",
+                        names[k], p.epsilon, p.max_gap, p.max_reads, c.same, queries.size(), c.hits,
+                        static_cast<double>(c.texels) / queries.size());
+            CHECK(c.same == queries.size());
+            CHECK(c.hits < queries.size());
+            CHECK(c.texels <= static_cast<long long>(queries.size()) * p.max_reads);
+            compared += queries.size();
+            all_same += c.same;
+            hits += c.hits;
+        }
+        CHECK(hits > queries.size()); // both kinds of cube answer many searches over the sets
+    }
+    std::printf("CDCT secant search: %zu of %zu GLSL searches equal to C++ bit for bit\n", all_same, compared);
+    CHECK(compared >= 20000);
+    CHECK(all_same == compared);
+}
+
+TEST_CASE("raycache_cdct_search makes the search the parameters name, as depth_search does") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
+    std::mt19937 rng(25);
+    Scene s = make_scene(rng, true);
+    GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 500, 5));
+    long long texels_read[2] = {0, 0};
+    for (const DepthSearch search : {DepthSearch::secant, DepthSearch::relief}) {
+        ReliefParameters p;
+        p.search = search;
+        const Comparison c = gpu.run(p);
+        CHECK(c.same == gpu.queries.size());
+        CHECK(c.hits > 0);
+        texels_read[search == DepthSearch::relief] = c.texels;
+    }
+    CHECK(texels_read[0] < texels_read[1]); // the secant search did read fewer texels: it was the one made
 }

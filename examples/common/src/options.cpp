@@ -127,6 +127,7 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--filtered") { flag(); o.filtered = true; }
         else if (arg == "--warm-up") o.warm_up = static_cast<int>(parse_int(arg, next(), 0, 64));
         else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
+        else if (arg == "--origin-drift") o.origin_drift = parse_float(arg, next(), false);
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -200,6 +201,9 @@ std::string help_text(const std::string& program) {
         "  --filtered          CCT: bilinear lookups instead of the nearest texel (Embree tracer)\n"
         "  --edge-threshold F  CCT: texels differing from a neighbour by more than F are\n"
         "                      traced, not answered; negative: off (Embree tracer)   [0.1]\n"
+        "  --origin-drift F    CCT: a tile met by a ray leaving further than F x the cube's\n"
+        "                      half-size from its stores' origins refills; negative:\n"
+        "                      off (Embree tracer)                                    [0.1]\n"
         "  --cdct-search S     secant (a few texel reads, then a consistency test) or\n"
         "                      relief (the thesis's walk, over a depth pyramid)       [secant]\n"
         "  --max-reads N       CDCT secant: texel reads before a miss, 1..64          [8]\n"

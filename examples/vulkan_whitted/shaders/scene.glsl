@@ -38,7 +38,7 @@ layout(std430, binding = 8) readonly buffer Params {
     vec4 environment;     // w: aspect
     ivec4 frame;          // width, height, mode, max depth
     vec4 relief;          // step, epsilon, max depth, max gap
-    ivec4 relief_i;       // max steps, -, -, -
+    ivec4 relief_i;       // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, -
 };
 
 // glm's order of operations, never fused.

@@ -171,8 +171,9 @@ vec3 leaving(uint object, vec3 o, vec3 d, int depth, inout uint lookups, inout u
     raycache_gpu_cube cube = cubes[object];
     ++lookups;
 #ifdef WHITTED_CDCT
-    raycache_relief_parameters rp = raycache_relief_parameters(relief.x, relief.y, relief_i.x, relief.z, relief.w);
-    raycache_relief_result f = raycache_relief_search(cube, o, d, rp);
+    raycache_relief_parameters rp = raycache_relief_parameters(relief.x, relief.y, relief_i.x, relief.z, relief.w,
+                                                               relief_i.y, relief_i.z);
+    raycache_relief_result f = raycache_cdct_search(cube, o, d, rp); // secant or relief walk, as rp.search says
     if (f.hit) { ++hits; return f.color; }
     vec4 r = trace_subtree(o, d, depth + 1);
     // Only a store that lowered the pending word flags its block: one that lost to a smaller word

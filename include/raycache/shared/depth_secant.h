@@ -12,14 +12,17 @@
  * most max_gap past its texel's surface. An empty texel, a step that cannot move on, or max_reads reads
  * without such an answer make the search a miss: a doubtful answer is traced, not guessed.
  *
- * The language supplies the texel read. Both drive the same state:
- *     s = raycache_secant_begin(start, d, t_box_exit, epsilon, max_gap, max_reads);
+ * The language supplies the texel read (visible texels only). Both drive the same state:
+ *     s = raycache_secant_start(origin, direction, centre, half_size, epsilon, max_gap, max_reads);
  *     while (s.status == RAYCACHE_SECANT_READ) {
  *         read the texel of direction raycache_secant_point(s, s.t) -> (valid, distance, colour);
  *         s = raycache_secant_step(s, valid, distance, colour);
  *     }
- *     s.status == RAYCACHE_SECANT_HIT: the ray meets the cached surface at s.t and sees s.color.
- * Products are rounded on their own (never fused into an FMA), so both languages give the same bits.
+ *     s.status == RAYCACHE_SECANT_HIT: the ray meets the cached surface at s.t, at the point
+ *     raycache_ray_point(origin, s.d, s.t), and sees s.color; s.reads texels were read, hit or miss.
+ * (raycache::secant_search in C++, raycache_cdct_secant_search in GLSL.) Products are rounded on their own
+ * (never fused into an FMA), so both languages, and C++ built with or without FMA contraction, give the
+ * same bits.
  */
 #ifndef RAYCACHE_SHARED_DEPTH_SECANT_H
 #define RAYCACHE_SHARED_DEPTH_SECANT_H
@@ -31,6 +34,9 @@
 #define RAYCACHE_SECANT_MISS 2
 /* The most reads one search may take: max_reads above it is clamped to it. */
 #define RAYCACHE_SECANT_MAX_READS 64
+/* Which search a CDCT lookup makes (raycache::DepthSearch, the search field of the parameters). */
+#define RAYCACHE_DEPTH_SEARCH_SECANT 0
+#define RAYCACHE_DEPTH_SEARCH_RELIEF 1
 
 #ifdef __cplusplus
 namespace raycache {
@@ -101,6 +107,21 @@ RAYCACHE_FN raycache_secant_search raycache_secant_begin(vec3 start, vec3 d, flo
     return s;
 }
 
+/* A search along origin + t unit(direction) through the cube of box centre +- half_size, starting where
+ * the ray leaves the box; already a miss, with no read, for a direction that is not one (zero, NaN,
+ * infinite), a non-finite origin, a box that cannot be searched or epsilon not > 0. */
+RAYCACHE_FN raycache_secant_search raycache_secant_start(vec3 origin, vec3 direction, vec3 centre, float half_size,
+                                                         float epsilon, float max_gap, int max_reads) {
+    bool usable = raycache_is_direction(direction) && raycache_is_finite3(origin) &&
+                  raycache_box_is_usable(centre, half_size) && epsilon > 0.0f;
+    vec3 d = usable ? raycache_unit(direction) : vec3(0.0f, 0.0f, 1.0f);
+    float t_start = usable ? raycache_box_exit_distance(origin, d, centre, half_size) : 0.0f;
+    RAYCACHE_PRECISE vec3 start = origin - centre;
+    raycache_secant_search s = raycache_secant_begin(start, d, t_start, epsilon, max_gap, max_reads);
+    if (!usable) s.status = RAYCACHE_SECANT_MISS;
+    return s;
+}
+
 /* Takes the texel read at raycache_secant_point(s, s.t): valid (false: empty, a miss), its stored
  * distance from the centre and its colour. Returns the next state: another read at s.t, or the outcome. */
 RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s, bool valid, float distance, vec3 color) {
@@ -117,12 +138,12 @@ RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s
         return s;
     }
     if (f < 0.0f) {
-        if (s.last_side < 0 && s.bracketed) s.hi_f = 0.5f * s.hi_f; /* Illinois: the same end again */
+        if (s.last_side < 0 && s.bracketed) s.hi_f = raycache_no_fma(0.5f * s.hi_f); /* Illinois: the same end again */
         s.lo_t = s.t;
         s.lo_f = f;
         s.last_side = -1;
     } else {
-        if (s.last_side > 0) s.lo_f = 0.5f * s.lo_f;
+        if (s.last_side > 0) s.lo_f = raycache_no_fma(0.5f * s.lo_f);
         s.hi_t = s.t;
         s.hi_f = f;
         s.hi_color = color;

@@ -1,7 +1,7 @@
-/* raycache/shared/ray_box.h: the small geometry of the CDCT's relief search that C++ and GLSL must
- * evaluate alike: a direction made unit length, a vector's length in glm's order, where a ray leaves
- * a cube's box, and which boxes can be searched. Products are rounded on their own (never fused into
- * an FMA), so both languages give the same bits.
+/* raycache/shared/ray_box.h: the small geometry of the CDCT's searches that C++ and GLSL must evaluate
+ * alike: a direction made unit length, a vector's length in glm's order, a ray's points, where a ray
+ * leaves a cube's box, and which boxes can be searched. Products are rounded on their own (never fused
+ * into an FMA), so both languages, and C++ built with or without FMA contraction, give the same bits.
  */
 #ifndef RAYCACHE_SHARED_RAY_BOX_H
 #define RAYCACHE_SHARED_RAY_BOX_H
@@ -28,6 +28,18 @@ RAYCACHE_FN float raycache_length(vec3 v) {
     RAYCACHE_PRECISE float squared = (raycache_no_fma(v.x * v.x) + raycache_no_fma(v.y * v.y)) + raycache_no_fma(v.z * v.z);
     RAYCACHE_PRECISE float length = sqrt(squared);
     return length;
+}
+
+/* The ray's point o + t d, each product rounded on its own (never fused into an FMA). */
+RAYCACHE_FN vec3 raycache_ray_point(vec3 o, vec3 d, float t) {
+    RAYCACHE_PRECISE vec3 p = o + vec3(raycache_no_fma(t * d.x), raycache_no_fma(t * d.y), raycache_no_fma(t * d.z));
+    return p;
+}
+
+/* The ray's point at t seen from a cube's centre: (o + t d) - centre, without FMA. */
+RAYCACHE_FN vec3 raycache_ray_from_centre(vec3 o, vec3 d, float t, vec3 centre) {
+    RAYCACHE_PRECISE vec3 v = raycache_ray_point(o, d, t) - centre;
+    return v;
 }
 
 /* Unit vector along a direction, divided by its major magnitude first, so its length cannot overflow.

@@ -1,5 +1,5 @@
 #version 450
-// CDCT relief searches and stores through RayCache's GLSL include, for the C++ cross-check
+// CDCT searches (relief, secant, and the one the parameters name) and stores through RayCache's GLSL include, for the C++ cross-check
 // (test_vulkan_cdct.cpp). Bindings moved from the defaults, to show that the macros work.
 #extension GL_GOOGLE_include_directive : require
 #define RAYCACHE_CDCT_BINDING 0
@@ -12,7 +12,8 @@ struct Query {
     vec3 origin; // search: ray origin; store_hit: the hit point
     uint cube;
     vec3 direction; // search and store_escape: ray direction; store: key
-    uint mode;      // 0: search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance)
+    uint mode;      // 0: relief search, 1: store_hit, 2: store_escape, 3: store(key, colour, distance),
+                    // 4: secant search, 5: raycache_cdct_search (parameters.search)
     vec3 color;
     float distance;
 };
@@ -48,8 +49,11 @@ void main() {
     result.pad1 = 0.0;
     result.point = vec3(0.0);
     result.pad2 = 0.0;
-    if (q.mode == 0u) {
-        raycache_relief_result r = raycache_relief_search(cube, q.origin, q.direction, parameters);
+    if (q.mode == 0u || q.mode >= 4u) {
+        raycache_relief_result r;
+        if (q.mode == 0u) r = raycache_relief_search(cube, q.origin, q.direction, parameters);
+        else if (q.mode == 4u) r = raycache_cdct_secant_search(cube, q.origin, q.direction, parameters);
+        else r = raycache_cdct_search(cube, q.origin, q.direction, parameters);
         result.hit = r.hit ? 1u : 0u;
         result.texels_read = r.texels_read;
         result.distance = r.distance;

@@ -25,6 +25,10 @@ void raycache_test_use_all() {
     sum += vec4(c.color, c.hit ? 1.0 : 0.0);
     raycache_relief_result f = raycache_relief_search(cube, vec3(0.1), vec3(0.0, 1.0, 0.0), raycache_default_relief_parameters());
     sum += vec4(f.color + f.point, f.distance + float(f.texels_read) + (f.hit ? 1.0 : 0.0));
+    f = raycache_cdct_secant_search(cube, vec3(0.1), vec3(0.0, 1.0, 0.0), raycache_default_relief_parameters());
+    sum += vec4(f.color + f.point, f.distance + float(f.texels_read) + (f.hit ? 1.0 : 0.0));
+    f = raycache_cdct_search(cube, vec3(0.1), vec3(0.0, 0.0, 1.0), raycache_default_relief_parameters());
+    sum += vec4(f.color + f.point, f.distance + float(f.texels_read) + (f.hit ? 1.0 : 0.0));
     sum.x += float(raycache_cube_texel(cube, vec3(0.0, 0.0, -1.0))) + float(raycache_gpu_cube_texel_count(16));
     raycache_test_cube = cube;
     raycache_filter_result b = raycache_filtered_value(vec3(1.0, 0.5, -0.25), cube.face_size, 0.0);

@@ -136,6 +136,11 @@ struct SceneCacheSettings {
     // neighbour's by more than this (linear radiance, any channel) are not answered; their rays are
     // traced. Negative: off.
     float edge_threshold = 0.1f;
+    // CCT: a texel answers a ray only while the ray leaves within this fraction of the cube's half-size of
+    // the origins its tile was stored from; a tile met from further away is dropped and refills (the CCT
+    // ignores where rays start, so a circling camera would otherwise read colours from the old viewpoint).
+    // Negative: off.
+    float origin_drift = 0.1f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -270,6 +275,7 @@ public:
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
+          origin_drift_(settings.origin_drift),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
@@ -376,6 +382,11 @@ public:
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
             auto colour = [&] { return trace().color; };
+            if (origin_drift_ >= 0.0f) {
+                const float drift = origin_drift_ * e.bounds.half_size;
+                return filtered_ ? filtered_cached_trace(*e.cct, direction, origin, drift, colour)
+                                 : cached_trace(*e.cct, direction, origin, drift, colour);
+            }
             return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
         }
         int read = 0;
@@ -459,10 +470,11 @@ public:
             save_cache_file(path, scene, cubes_to_save(&Entry::cdct));
     }
 
-    // Replaces every cube by the one saved for its object in `path`, texels visible from the next frame,
-    // depth pyramids rebuilt and doubtful edges marked with this cache's edge_threshold; adaptive cubes take the face size they were saved with. The file must hold this
-    // cache's technique, `scene`, one cube for each attached object and no other, each at the same placement
-    // and (for a cube of a fixed face size) of that face size. Otherwise, or when it is truncated, corrupted
+    // Replaces every cube by the one saved for its object in `path`: texels visible from the next frame,
+    // tiles' origin boxes and doubtful marks as saved, depth pyramids rebuilt; adaptive cubes take the face
+    // size they were saved with. The file must hold this cache's technique, `scene`, one cube for each
+    // attached object and no other, each at the same placement and (for a cube of a fixed face size) of that
+    // face size. Otherwise, or when it is truncated, corrupted
     // or of a newer format, throws CacheFileError saying what is wrong, and the cache is left as it was.
     // The file's tiles are allocated before the old cubes give theirs back: the budget must hold both.
     // Between frames.
@@ -688,13 +700,11 @@ private:
         if (!by_key.empty())
             fail("the file has a cube for " + key_text(by_key.begin()->first) + ", which has none here (" +
                  std::to_string(by_key.size()) + " such cubes)");
-        // What saved caches derive from their texels is derived again: edge marks (as at the end of a frame
-        // that stored every texel, which marks the same pairs), then the texels are made visible; pyramids,
-        // for the entries that keep one.
+        // The texels become visible (their tiles' origin boxes and doubtful marks came with them); depth
+        // pyramids, derived from the texels alone, are rebuilt for the entries that keep one.
         std::vector<std::unique_ptr<DepthPyramid>> pyramids(entries_.size());
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             CacheCube<Texel>& c = *loaded[source_of[i]].cube;
-            if constexpr (std::is_same_v<Texel, CctTexel>) mark_doubtful_edges(c, edge_threshold_);
             c.begin_frame();
             if constexpr (std::is_same_v<Texel, CdctTexel>) {
                 if (entries_[i].pyramid) {
@@ -727,6 +737,7 @@ private:
     AdaptiveResolution adaptive_;
     bool filtered_;
     float edge_threshold_;
+    float origin_drift_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).
