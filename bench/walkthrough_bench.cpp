@@ -6,14 +6,15 @@
 // earlier ones stored. Frame 0 is cold; the summaries are over the frames after it.
 //
 // A start-up section builds mirrors-1000 (1000 cached mirror spheres) and behind-32, and times the Tracer's
-// construction, attaching the caches and the first frame, with no caches, CCT and CDCT.
+// construction, attaching the caches and the first frame, with no caches, CCT and CDCT. A warm-start section
+// saves each caching mode's caches after an orbit, loads them into fresh ones, and compares the first frame.
 //
 // Writes into --out: walkthrough_frames.csv (a row per frame and mode), walkthrough_paths.csv (a row per
-// scene, path and mode), walkthrough_startup.csv and walkthrough.md (the tables, also printed on stdout);
-// bench/make_results.py plots the frames and puts walkthrough.md at the top of docs/RESULTS.md.
+// scene, path and mode), walkthrough_startup.csv, walkthrough_warm_start.csv and walkthrough.md (the tables,
+// also printed on stdout); bench/make_results.py plots the frames and puts walkthrough.md at the top of docs/RESULTS.md.
 //
 // Usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST]
-//        [--paths LIST] [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N]
+//        [--paths LIST] [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N] [--warm-start LIST]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -32,6 +33,7 @@
 
 #include "bench_common.hpp"
 #include "bench_embree.hpp"
+#include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
 
 namespace {
@@ -62,11 +64,12 @@ struct Options {
     int face_size = rcx::Options{}.face_size; // the example tracer's default
     std::vector<std::string> startup{"mirrors-1000", "behind-32"};
     double startup_budget_mib = 8192.0;
+    std::vector<std::string> warm_start{"behind-32"};
 };
 
 const char* const usage =
     "usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST] [--paths LIST]\n"
-    "       [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N]\n"
+    "       [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N] [--warm-start LIST]\n"
     "  --size N             N x N pixels                                                [1024]\n"
     "  --frames N           frames per path, 1 degree apart                             [30]\n"
     "  --scenes LIST        comma-separated scenes            [behind-32,grid-32,reflective-32]\n"
@@ -75,6 +78,7 @@ const char* const usage =
     "  --face-size N|auto   texels per cube face side; auto: adaptive (the tracer's default) [auto]\n"
     "  --startup LIST       scenes of the start-up section, or none    [mirrors-1000,behind-32]\n"
     "  --startup-budget-mib N  start-up rows whose cubes would need more are not allocated [8192]\n"
+    "  --warm-start LIST    scenes whose caches are saved after an orbit and loaded back, or none [behind-32]\n"
     "  --quick              64 x 64 pixels, 3 frames: a smoke test, not results\n"
     "  --out DIR            where the CSV and Markdown files go                [docs/results]\n";
 
@@ -353,6 +357,80 @@ std::string startup(const Options& o, const Report& report) {
     return md.str();
 }
 
+// Warm start: along an orbit of --frames frames each caching mode warms its caches, saves them after the last
+// frame (the "saved-from" frame) and a fresh SceneCache loads them; the loaded cache's first frame, at the
+// saved-from camera, against that warm frame (hit rate, PSNR) and against the warm cache rendering that
+// camera once more (which it should equal bit for bit), and the load's time per MiB of file (median of 3
+// loads, the file in the page cache: parsing, checking and filling, not the disk).
+std::string warm_start(const Options& o, const Report& report) {
+    std::ofstream csv = report.csv("walkthrough_warm_start.csv",
+                                   "scene,mode,frames,file_bytes,save_ms,load_ms,load_ms_per_mib,cold_hit_rate,warm_hit_rate,"
+                                   "warm_psnr,loaded_hit_rate,loaded_psnr,loaded_equals_warm_cache");
+    std::vector<std::vector<std::string>> rows;
+    const std::string file = o.out + "/walkthrough_warm_start.rcc";
+    auto ms_since = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
+    for (const std::string& name : o.warm_start) {
+        progress("warm start: " + name);
+        const rcx::embree::Tracer tracer(rcx::make_scene(name));
+        rcx::Scene scene = tracer.scene();
+        scene.path.kind = PathKind::orbit;
+        scene.path.step_degrees = o.step_degrees;
+        const raycache::SceneIdentity identity{rcx::scene_hash(scene), scene.name};
+        const rcx::Camera saved_from = scene.camera_at(o.frames - 1);
+        Variant off;
+        const rcx::Image reference = rcx::bench::render(tracer, off, saved_from, o.size, o.size);
+        for (CacheMode mode : o.modes) {
+            if (!rcx::uses_caches(mode)) continue;
+            Variant warm, loaded;
+            warm.mode = loaded.mode = mode;
+            warm.caches = make_scene_cache(tracer, mode, o);
+            double cold_hits = 0.0;
+            rcx::Image warm_image;
+            for (int f = 0; f < o.frames; ++f) {
+                warm_image = rcx::bench::render(tracer, warm, scene.camera_at(f), o.size, o.size);
+                if (f == 0) cold_hits = warm.last_stats.hit_rate();
+            }
+            const SceneCacheStatistics warm_stats = warm.last_stats;
+            auto t0 = Clock::now();
+            warm.caches->save(file, identity);
+            const double save_ms = ms_since(t0);
+            const std::uintmax_t file_bytes = std::filesystem::file_size(file);
+            const double file_mib = static_cast<double>(file_bytes) / mib;
+            std::vector<double> load_ms;
+            for (int k = 0; k < 3; ++k) {
+                loaded.caches = make_scene_cache(tracer, mode, o);
+                t0 = Clock::now();
+                loaded.caches->load(file, identity);
+                load_ms.push_back(ms_since(t0));
+            }
+            std::filesystem::remove(file);
+            const rcx::Image first = rcx::bench::render(tracer, loaded, saved_from, o.size, o.size);
+            const rcx::Image again = rcx::bench::render(tracer, warm, saved_from, o.size, o.size);
+            const double warm_psnr = rcx::compare(reference, warm_image).psnr_db, loaded_psnr = rcx::compare(reference, first).psnr_db;
+            const bool equal = !std::isfinite(rcx::compare(again, first).psnr_db) && loaded.last_stats.hits == warm.last_stats.hits;
+            const double per_mib = median(load_ms) / file_mib;
+            csv << name << "," << rcx::to_string(mode) << "," << o.frames << "," << file_bytes << "," << save_ms
+                << "," << median(load_ms) << "," << per_mib << "," << cold_hits << "," << warm_stats.hit_rate() << "," << warm_psnr << ","
+                << loaded.last_stats.hit_rate() << "," << loaded_psnr << "," << (equal ? 1 : 0) << "\n";
+            rows.push_back({name, rcx::to_string(mode), fmt(100.0 * cold_hits, 1) + "%", fmt(100.0 * warm_stats.hit_rate(), 1) + "%",
+                            fmt(warm_psnr, 1), fmt(100.0 * loaded.last_stats.hit_rate(), 1) + "%", fmt(loaded_psnr, 1),
+                            equal ? "yes" : "NO", fmt(file_mib, 2), fmt(save_ms, 1), fmt(median(load_ms), 1), fmt(per_mib, 1)});
+        }
+    }
+    std::ostringstream md;
+    md << "### Warm start: caches saved and loaded back\n\n"
+       << "Each caching mode renders an orbit of " << o.frames << " frames (" << o.size << "x" << o.size
+       << "), saves its caches after the last one (`SceneCache::save`) and a fresh SceneCache loads them "
+       << "(`SceneCache::load`). *Loaded first frame*: the loaded cache's first frame, at the camera of the last warm "
+       << "frame; *same as warm cache*: it equals, in every pixel and hit, what the warm cache itself renders there next. "
+       << "PSNR against the uncached frame. Load time: median of 3 loads, the file in the page cache.\n\n"
+       << rcx::bench::markdown_table({"scene", "mode", "cold frame hits", "last warm frame hits", "its PSNR dB",
+                                      "loaded first frame hits", "its PSNR dB", "same as warm cache", "file MiB", "save ms",
+                                      "load ms", "load ms/MiB"},
+                                     rows);
+    return md.str();
+}
+
 // Each item of a comma-separated list through `parse`; an item it rejects is a UsageError naming the option.
 template <class T, class Parse>
 std::vector<T> parse_each(const std::string& option, const std::string& text, Parse parse, const char* valid) {
@@ -399,6 +477,10 @@ Options parse_options(int argc, char** argv) {
             const std::string list = value();
             o.startup = list == "none" ? std::vector<std::string>{} : rcx::bench::split_list(list);
         } else if (a == "--startup-budget-mib") o.startup_budget_mib = positive(a, value());
+        else if (a == "--warm-start") {
+            const std::string list = value();
+            o.warm_start = list == "none" ? std::vector<std::string>{} : rcx::bench::split_list(list);
+        }
         else throw rcx::UsageError("unknown option '" + a + "'");
     }
     o.size = size.value_or(o.quick ? 64 : o.size);
@@ -412,6 +494,7 @@ Options parse_options(int argc, char** argv) {
     if (o.scenes.empty() || o.paths.empty()) throw rcx::UsageError("--scenes and --paths need at least one entry");
     for (const std::string& name : o.scenes) rcx::make_scene(name); // unknown names fail here, before any work
     for (const std::string& name : o.startup) rcx::make_scene(name);
+    for (const std::string& name : o.warm_start) rcx::make_scene(name);
     return o;
 }
 
@@ -449,6 +532,7 @@ int main(int argc, char** argv) {
         }
         const std::string startup_md = o.startup.empty() ? "" : startup(o, out.report);
         const std::string single_md = single_image(o, out.report);
+        const std::string warm_start_md = o.warm_start.empty() ? "" : warm_start(o, out.report);
         const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
 
         std::ostringstream md;
@@ -473,7 +557,7 @@ int main(int argc, char** argv) {
                                           "PSNR mean dB", "PSNR min dB", "hit rate", "texels/lookup", "cube MiB"},
                                          out.path_rows)
            << "\n"
-           << startup_md << "\n" << single_md;
+           << startup_md << "\n" << single_md << (warm_start_md.empty() ? "" : "\n") << warm_start_md;
         std::ofstream file(o.out + "/walkthrough.md");
         file << md.str();
         if (!file) throw std::runtime_error("cannot write " + o.out + "/walkthrough.md");

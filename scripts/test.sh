@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# test.sh: build and test RayCache three ways, then print one line "N passed, M failed".
+# test.sh: build and test RayCache four ways, then print one line "N passed, M failed".
 #   1. build/       RelWithDebInfo (asserts kept on), all tests including packaging
 #   2. build-asan/  Debug, AddressSanitizer + UndefinedBehaviorSanitizer, all but packaging
 #   3. build-tsan/  clang++, ThreadSanitizer, tests labelled concurrency
+#   4. build-fuzz/  clang++ libFuzzer targets (fuzz/), each run RAYCACHE_FUZZ_SECONDS (20) from its seeds;
+#                   each target counts as one test: passed, or failed on a crash, sanitizer report, an input
+#                   slower than 5 s, or any other non-zero exit
 # Exits non-zero when any test fails or any stage fails to configure or build.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -57,7 +60,7 @@ stage_broken() {
 }
 
 # --- 1. Normal build ----------------------------------------------------------------------------
-header "Stage 1/3: RelWithDebInfo build in build/ (all tests)"
+header "Stage 1/4: RelWithDebInfo build in build/ (all tests)"
 # RelWithDebInfo without -DNDEBUG, so RAYCACHE_ASSERT stays active in the optimised tests.
 if configure build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g" \
      -DRAYCACHE_BUILD_TESTS=ON -DRAYCACHE_BUILD_EXAMPLES=ON -DRAYCACHE_SANITIZE= &&
@@ -68,7 +71,7 @@ else
 fi
 
 # --- 2. AddressSanitizer + UndefinedBehaviorSanitizer ---------------------------------------------
-header "Stage 2/3: ASan+UBSan Debug build in build-asan/ (all tests but packaging)"
+header "Stage 2/4: ASan+UBSan Debug build in build-asan/ (all tests but packaging)"
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 export ASAN_OPTIONS=${ASAN_OPTIONS:-strict_string_checks=1:detect_stack_use_after_return=1}
 if configure build-asan -DCMAKE_BUILD_TYPE=Debug -DRAYCACHE_SANITIZE=address,undefined \
@@ -80,7 +83,7 @@ else
 fi
 
 # --- 3. ThreadSanitizer -----------------------------------------------------------------------------
-header "Stage 3/3: TSan build with clang++ in build-tsan/ (tests labelled concurrency)"
+header "Stage 3/4: TSan build with clang++ in build-tsan/ (tests labelled concurrency)"
 export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
 # TSan in LLVM < 18 cannot map its shadow memory when the kernel randomises mmap with more than
 # 28 bits; run such hosts without address randomisation.
@@ -97,6 +100,34 @@ if configure build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithD
   run_ctest build-tsan -L concurrency --no-tests=error
 else
   stage_broken "build-tsan/"
+fi
+
+# --- 4. Fuzzing ------------------------------------------------------------------------------------
+fuzz_seconds=${RAYCACHE_FUZZ_SECONDS:-20}
+header "Stage 4/4: libFuzzer targets with clang++ in build-fuzz/ (${fuzz_seconds} s each)"
+if configure build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DRAYCACHE_BUILD_FUZZERS=ON -DRAYCACHE_BUILD_TESTS=OFF \
+     -DRAYCACHE_BUILD_EXAMPLES=OFF -DRAYCACHE_INSTALL=OFF -DRAYCACHE_SANITIZE= &&
+   cmake --build build-fuzz -j"$jobs" --target raycache_fuzzers; then
+  mkdir -p build-fuzz/artifacts
+  for source in fuzz/*.cpp; do
+    target=$(basename "$source" .cpp)
+    [[ $target == make_seeds ]] && continue # the seed writer, not a target
+    exe=build-fuzz/fuzz/raycache_fuzz_$target log=build-fuzz/fuzz-$target.log
+    # New inputs go to a scratch corpus in build-fuzz/, the checked-in seeds are only read.
+    mkdir -p "build-fuzz/corpus/$target"
+    if [[ -x $exe ]] && "$exe" -max_total_time="$fuzz_seconds" -timeout=5 -rss_limit_mb=2048 \
+         -artifact_prefix="build-fuzz/artifacts/$target-" "build-fuzz/corpus/$target" "fuzz/corpus/$target" >"$log" 2>&1; then
+      echo "fuzz $target: passed, $(grep -Eo 'Done [0-9]+ runs in [0-9]+ second' "$log" | tail -n 1 | cut -d' ' -f2) inputs in ${fuzz_seconds} s"
+      passed=$((passed + 1))
+    else
+      echo "fuzz $target: FAILED (log $log, input in build-fuzz/artifacts/); the end of the log:"
+      tail -n 30 "$log" 2>/dev/null || echo "(no $exe)"
+      failed=$((failed + 1))
+    fi
+  done
+else
+  stage_broken "build-fuzz/"
 fi
 
 header "Summary"

@@ -92,6 +92,21 @@ TEST_CASE("an output folder is created, and one that cannot be written throws wi
                          std::runtime_error);
 }
 
+TEST_CASE("--load-cache and --save-cache take a file name and need a caching mode") {
+    const rcx::Options o = parse({"--cache", "cdct", "--load-cache", "in.rcc", "--save-cache=out.rcc"});
+    CHECK(o.load_cache == "in.rcc");
+    CHECK(o.save_cache == "out.rcc");
+    CHECK(parse({}).load_cache.empty());
+    CHECK(parse({}).save_cache.empty());
+    CHECK_THROWS_WITH_AS(parse({"--load-cache", ""}), doctest::Contains("--load-cache: the file name is empty"), rcx::UsageError);
+    CHECK_THROWS_WITH_AS(parse({"--save-cache"}), doctest::Contains("--save-cache needs a value"), rcx::UsageError);
+    CHECK_THROWS_WITH_AS(parse({"--cache", "off", "--save-cache", "x.rcc"}),
+                         doctest::Contains("--save-cache needs --cache cct or cdct, not off"), rcx::UsageError);
+    CHECK_THROWS_WITH_AS(parse({"--cache", "ceiling", "--load-cache", "x.rcc"}),
+                         doctest::Contains("--load-cache needs --cache cct or cdct, not ceiling"), rcx::UsageError);
+    CHECK(rcx::help_text("tracer").find("--save-cache FILE") != std::string::npos);
+}
+
 TEST_CASE("numbers too small or too large for a float are called that, not 'not a finite number'") {
     auto message = [](std::vector<const char*> args) -> std::string {
         try {

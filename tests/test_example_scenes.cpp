@@ -3,12 +3,14 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
 #include "rcx/meshes.hpp"
 #include "rcx/scene.hpp"
+#include "rcx/scene_hash.hpp"
 
 namespace {
 
@@ -264,4 +266,30 @@ TEST_CASE("load_mesh says a folder is a directory, not that there is no such fil
     CHECK_THROWS_WITH_AS(rcx::load_mesh(folder), doctest::Contains("is a directory"), std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::load_mesh("/dev/null"), doctest::Contains("not a regular file"), std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::load_mesh("/no/such/mesh.ply"), doctest::Contains("no such file"), std::runtime_error);
+}
+
+TEST_CASE("a scene's hash for cache files follows what cached colours depend on, not the camera") {
+    const rcx::Scene scene = rcx::make_scene("behind-4");
+    const std::uint64_t hash = rcx::scene_hash(scene);
+    CHECK(rcx::scene_hash(rcx::make_scene("behind-4")) == hash);
+    CHECK(rcx::scene_hash(rcx::make_scene("behind-8")) != hash);
+    rcx::Scene changed = scene;
+    changed.camera.eye.x += 1.0f;
+    changed.path.frames += 5;
+    CHECK(rcx::scene_hash(changed) == hash);
+    changed = scene;
+    changed.spheres.back().centre.y = std::nextafter(changed.spheres.back().centre.y, 100.0f);
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.spheres.front().material.reflectivity *= 0.5f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.meshes.front().positions.front().x += 1.0f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.light.intensity *= 2.0f;
+    CHECK(rcx::scene_hash(changed) != hash);
+    changed = scene;
+    changed.max_depth = 2;
+    CHECK(rcx::scene_hash(changed) != hash);
 }

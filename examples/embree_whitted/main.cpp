@@ -5,6 +5,8 @@
 //
 //   raycache_embree_whitted --scene behind-32 --size 512x512 --cache cct --frames 10 --compare
 //
+// --save-cache FILE keeps the warm cubes after the last frame; --load-cache FILE starts the next run with them.
+//
 // This file is only the command line; the tracer is tracer.hpp/.cpp.
 #include <chrono>
 #include <cmath>
@@ -21,6 +23,7 @@
 #include "rcx/options.hpp"
 #include "rcx/progress.hpp"
 #include "rcx/scene.hpp"
+#include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
 
 
@@ -44,6 +47,13 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const ch
     char name[256];
     std::snprintf(name, sizeof name, "%s-%s-%04d.png", scene.c_str(), what, frame);
     return (std::filesystem::path(o.out) / name).string();
+}
+
+// What a cache file is saved for and checked against: the scene's fingerprint and name.
+raycache::SceneIdentity cache_identity(const rcx::Scene& scene) { return raycache::SceneIdentity{rcx::scene_hash(scene), scene.name}; }
+
+double milliseconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 std::string percent(double fraction) {
@@ -98,6 +108,25 @@ int run(const rcx::Options& o) {
             throw InputError(e.what());
         }
         settings.caches = caches.get();
+        if (!o.save_cache.empty()) { // a folder that cannot take the file fails now, not after the last frame
+            try {
+                const std::filesystem::path folder = std::filesystem::path(o.save_cache).parent_path();
+                rcx::ensure_writable_directory(folder.empty() ? "." : folder.string());
+            } catch (const std::exception& e) {
+                throw InputError(std::string("--save-cache: ") + e.what());
+            }
+        }
+        if (!o.load_cache.empty()) {
+            const auto started = std::chrono::steady_clock::now();
+            try {
+                caches->load(o.load_cache, cache_identity(scene));
+            } catch (const raycache::CacheFileError& e) {
+                throw InputError(e.what());
+            }
+            if (!o.quiet)
+                std::printf("loaded cache %s: %zu texels in %.0f ms\n", o.load_cache.c_str(), caches->statistics().valid_texels,
+                            milliseconds_since(started));
+        }
         if (o.prefill) {
             double ms = 0.0;
             const std::size_t stored = tracer.prefill(*caches, o.threads, &ms);
@@ -188,6 +217,13 @@ int run(const rcx::Options& o) {
         }
     }
     bar.finish();
+    if (!o.save_cache.empty()) {
+        const auto started = std::chrono::steady_clock::now();
+        caches->save(o.save_cache, cache_identity(scene));
+        if (!o.quiet)
+            std::printf("saved cache %s: %zu texels, %.1f MiB in %.0f ms\n", o.save_cache.c_str(), caches->statistics().valid_texels,
+                        static_cast<double>(std::filesystem::file_size(o.save_cache)) / (1024.0 * 1024.0), milliseconds_since(started));
+    }
 
     // Summary: means over all frames and over the frames after the first (warm caches).
     double cached_all = 0, cached_warm = 0, plain_all = 0, plain_warm = 0, psnr_min = std::numeric_limits<double>::infinity();

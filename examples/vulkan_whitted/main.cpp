@@ -5,9 +5,10 @@
 //
 //   raycache_vulkan_whitted --scene behind-32 --size 256x256 --cache cct --frames 10 --compare
 //
-// Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill is
-// refused, --cdct-search relief is the linear walk (no depth pyramid in GLSL), and a ray leaving a cached
-// object inside the subtree of a missed leaving ray is traced without a lookup (no recursion in GLSL).
+// Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill,
+// --load-cache and --save-cache are refused, --cdct-search relief is the linear walk (no depth pyramid in
+// GLSL), and a ray leaving a cached object inside the subtree of a missed leaving ray is traced without a
+// lookup (no recursion in GLSL).
 // --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
 // rays in compute, as in the thesis's Table 5.1.
 // Exit status 2: bad options, more memory needed than is available, no Vulkan device, a shader that does
@@ -55,6 +56,9 @@ int run(const rcx::Options& o, bool hybrid) {
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
+    if (!o.load_cache.empty() || !o.save_cache.empty())
+        throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
+                         " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     rcx::Scene scene;
     try {
         scene = rcx::scene_from_options(o);
@@ -216,7 +220,7 @@ int main(int argc, char** argv) {
         std::fputs(rcx::help_text(program).c_str(), stdout);
         std::fputs("\nVulkan tracer: --hybrid   primary visibility by a raster pass into a G-buffer, secondary rays in compute\n"
                    "(thesis Table 5.1); with --compare the uncached reference is rendered the same way.\n"
-                   "--threads is ignored, --prefill is refused, the CDCT search is the linear walk.\n"
+                   "--threads is ignored, --prefill, --load-cache and --save-cache are refused, the CDCT search is the linear walk.\n"
                    "Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv files are looked for.\n",
                    stdout);
         return 0;

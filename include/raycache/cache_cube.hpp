@@ -237,6 +237,23 @@ public:
         return Texel::decode(word);
     }
 
+    // The packed word in `texel`, visible or written this frame; Texel::invalid when empty. No counting.
+    // For saving a cube (raycache/cache_file.hpp). `texel` must lie on the cube (asserted).
+    Word load_word(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        if (!contains(texel)) return Texel::invalid;
+        const Tile* tile = tile_of(texel);
+        return tile ? tile->texels[slot_of(texel)].load(std::memory_order_acquire) : Texel::invalid;
+    }
+
+    // store_at() of an already packed word, bit for bit (for loading a saved cube); refused as store_at()
+    // refuses, and for a word that is not valid. `texel` must lie on the cube (asserted).
+    bool store_word_at(const TexelAddress& texel, Word word) noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        if (!contains(texel)) return refuse();
+        return store_word(texel, word);
+    }
+
     // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
     // reads it) until clear() or invalidate(). False when the texel holds no value. Between frames only.
     bool set_doubtful(const TexelAddress& texel) noexcept {

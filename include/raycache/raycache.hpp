@@ -17,3 +17,4 @@
 #include "raycache/depth_pyramid.hpp"
 #include "raycache/cdct.hpp"
 #include "raycache/prefill.hpp"
+#include "raycache/cache_file.hpp"

@@ -143,6 +143,11 @@ Options parse_options(int argc, const char* const argv[]) {
         }
         else if (arg == "--max-reads") o.max_reads = static_cast<int>(parse_int(arg, next(), 1, 64));
         else if (arg == "--prefill") { flag(); o.prefill = true; }
+        else if (arg == "--load-cache" || arg == "--save-cache") {
+            std::string& file = arg == "--load-cache" ? o.load_cache : o.save_cache;
+            file = next();
+            if (file.empty()) throw UsageError(arg + ": the file name is empty");
+        }
         else if (arg == "--frames") o.frames = static_cast<int>(parse_int(arg, next(), 1, 1000000));
         else if (arg == "--step") o.step_degrees = parse_float(arg, next(), false);
         else if (arg == "--path") {
@@ -164,6 +169,9 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--progress") { flag(); o.progress = true; }
         else throw UsageError("unknown option '" + std::string(argv[i]) + "' (see --help)");
     }
+    if ((!o.load_cache.empty() || !o.save_cache.empty()) && !uses_caches(o.cache))
+        throw UsageError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") + " needs --cache cct or cdct, not " +
+                         to_string(o.cache));
     return o;
 }
 
@@ -205,6 +213,9 @@ std::string help_text(const std::string& program) {
         "  --no-pyramid        CDCT relief: the thesis's fixed-step walk, no min-depth pyramid\n"
         "  --max-gap F         CDCT: a crossing F behind the cached surface is a miss  [0.5; 0 = off]\n"
         "  --prefill           trace every cube texel once before the first frame\n"
+        "  --load-cache FILE   start warm: load the cubes saved in FILE before the first frame (the\n"
+        "                      scene, objects and technique must match; Embree tracer)\n"
+        "  --save-cache FILE   save the cubes to FILE after the last frame (Embree tracer)\n"
         "  --warm-up S         first frame: a pass over every S-th pixel in x and y first,\n"
         "                      whose stores the full pass reads (for single images;\n"
         "                      Embree tracer); 0: off                                 [0]\n"

@@ -50,6 +50,8 @@ struct Options {
     bool pyramid = true;              // CDCT searches over a min-depth pyramid (false: the thesis's linear walk)
     float max_gap = 0.5f;             // CDCT: a crossing this far behind the cached surface is a miss (0 = off)
     bool prefill = false;             // trace every cube texel once before the first frame
+    std::string load_cache;           // cache file to load before the first frame (empty: none)
+    std::string save_cache;           // cache file to save after the last frame (empty: none)
     std::optional<int> frames;        // unset: the scene's camera path decides
     std::optional<float> step_degrees;
     std::optional<CameraPath::Kind> path;

@@ -21,6 +21,9 @@
 // leaving rays its object received in the last frame (raycache/adaptive_resolution.hpp), and all cubes
 // draw their texel tiles from one MemoryBudget (SceneCacheSettings::budget_bytes); a tile that does not fit
 // is not cached, its rays are traced. An explicit face size keeps a cube at that size.
+//
+// Warm starts. save() writes every cube to one file and load() reads it back into a SceneCache with the
+// same objects attached (raycache/cache_file.hpp: format, checks, atomic writes).
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -456,6 +459,32 @@ public:
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
 
+    // Writes every cube (its texels, face size and placement, keyed by its object id) and `scene`, the
+    // caller's identity of the scene, to `path` (raycache/cache_file.hpp): atomically, so a process killed
+    // during the save leaves the old file or the new one. Between frames. Throws CacheFileError naming the
+    // file and the system's reason when it cannot be written.
+    void save(const std::string& path, const SceneIdentity& scene) const {
+        if (technique_ == Technique::cct)
+            save_cache_file(path, scene, cubes_to_save(&Entry::cct));
+        else
+            save_cache_file(path, scene, cubes_to_save(&Entry::cdct));
+    }
+
+    // Replaces every cube by the one saved for its object in `path`, texels visible from the next frame,
+    // depth pyramids rebuilt and doubtful edges marked with this cache's edge_threshold; adaptive cubes take the face size they were saved with. The file must hold this
+    // cache's technique, `scene`, one cube for each attached object and no other, each at the same placement
+    // and (for a cube of a fixed face size) of that face size. Otherwise, or when it is truncated, corrupted
+    // or of a newer format, throws CacheFileError saying what is wrong, and the cache is left as it was.
+    // The file's tiles are allocated before the old cubes give theirs back: the budget must hold both.
+    // Between frames.
+    void load(const std::string& path, const SceneIdentity& scene) {
+        const std::vector<std::uint8_t> bytes = read_whole_file(path);
+        if (technique_ == Technique::cct)
+            load_cubes(bytes, path, scene, &Entry::cct);
+        else
+            load_cubes(bytes, path, scene, &Entry::cdct);
+    }
+
     // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
     std::size_t texel_bytes() const noexcept {
         std::size_t bytes = 0;
@@ -605,6 +634,93 @@ private:
             if (e.pyramid) e.pyramid->rebuild(*e.cdct);
         }
         return true;
+    }
+
+    // An entry's key in a cache file: object = instance id << 32 | geometry id; part = 0 for a whole
+    // geometry or instance, first primitive << 32 | primitive count for a range (attach_primitives).
+    using FileKey = std::pair<std::uint64_t, std::uint64_t>;
+    FileKey file_key(const Entry& e) const {
+        std::uint64_t part = 0;
+        if (e.id.prim_id != RTC_INVALID_GEOMETRY_ID) {
+            const std::vector<PrimitiveRange>& ranges = split(slot_of(e.id)).ranges;
+            const PrimitiveRange& r = ranges[first_after(ranges, e.id.prim_id) - 1];
+            part = std::uint64_t{r.first} << 32 | (r.end - r.first);
+        }
+        return {std::uint64_t{e.id.inst_id} << 32 | e.id.geom_id, part};
+    }
+    // "geometry 3", "geometry 1 of instance 5", "primitives 10..19 of geometry 2".
+    static std::string key_text(const FileKey& key) {
+        const auto geometry = static_cast<unsigned>(key.first & 0xFFFFFFFFu), instance = static_cast<unsigned>(key.first >> 32);
+        std::string text = "geometry " + std::to_string(geometry);
+        if (instance != RTC_INVALID_GEOMETRY_ID) text += " of instance " + std::to_string(instance);
+        if (key.second)
+            text = "primitives " + detail::range_text(static_cast<unsigned>(key.second >> 32), static_cast<unsigned>(key.second)) +
+                   " of " + text;
+        return text;
+    }
+
+    template <class Texel>
+    std::vector<CubeToSave<Texel>> cubes_to_save(std::unique_ptr<CacheCube<Texel>> Entry::*cube) const {
+        std::vector<CubeToSave<Texel>> cubes;
+        for (const Entry& e : entries_) {
+            const FileKey key = file_key(e);
+            cubes.push_back(CubeToSave<Texel>{key.first, e.bounds, (e.*cube).get(), key.second});
+        }
+        return cubes;
+    }
+
+    // load(): the file's cubes, matched to the entries and checked, then swapped in all at once.
+    template <class Texel>
+    void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene,
+                    std::unique_ptr<CacheCube<Texel>> Entry::*cube) {
+        const std::string source = "cache file '" + path + "'";
+        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source);
+        auto fail = [&](const std::string& what) {
+            throw CacheFileError("RayCache: " + source + ": " + what + "; nothing was loaded");
+        };
+        std::map<FileKey, std::size_t> by_key;
+        for (std::size_t i = 0; i < loaded.size(); ++i) by_key[{loaded[i].object, loaded[i].part}] = i;
+        std::vector<std::size_t> source_of(entries_.size());
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            const Entry& e = entries_[i];
+            const std::string object = key_text(file_key(e));
+            const auto it = by_key.find(file_key(e));
+            if (it == by_key.end()) fail(object + " has a cube here but none in the file");
+            const LoadedCube<Texel>& c = loaded[it->second];
+            if (!same_placement(c.bounds, e.bounds))
+                fail(object + "'s cube sits at " + raycache::describe(e.bounds) + ", in the file at " + raycache::describe(c.bounds));
+            const int here = (e.*cube)->face_size();
+            if (!e.coverage && c.cube->face_size() != here)
+                fail(object + "'s cube has " + std::to_string(here) + "-texel faces (fixed), in the file " +
+                     std::to_string(c.cube->face_size()));
+            source_of[i] = it->second;
+            by_key.erase(it);
+        }
+        if (!by_key.empty())
+            fail("the file has a cube for " + key_text(by_key.begin()->first) + ", which has none here (" +
+                 std::to_string(by_key.size()) + " such cubes)");
+        // What saved caches derive from their texels is derived again: edge marks (as at the end of a frame
+        // that stored every texel, which marks the same pairs), then the texels are made visible; pyramids,
+        // for the entries that keep one.
+        std::vector<std::unique_ptr<DepthPyramid>> pyramids(entries_.size());
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            CacheCube<Texel>& c = *loaded[source_of[i]].cube;
+            if constexpr (std::is_same_v<Texel, CctTexel>) mark_doubtful_edges(c, edge_threshold_);
+            c.begin_frame();
+            if constexpr (std::is_same_v<Texel, CdctTexel>) {
+                if (entries_[i].pyramid) {
+                    pyramids[i] = std::make_unique<DepthPyramid>(c.face_size());
+                    pyramids[i]->rebuild(c);
+                }
+            }
+        }
+        // Nothing below throws: every entry takes its new cube, or none does.
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            Entry& e = entries_[i];
+            e.*cube = std::move(loaded[source_of[i]].cube);
+            e.pyramid = std::move(pyramids[i]);
+            if (e.coverage) e.coverage->reset();
+        }
     }
 
     static void add(SceneCacheStatistics& total, const CubeStatistics& s) {

@@ -1,0 +1,637 @@
+// raycache/cache_file.hpp: saving warm caching cubes to a file and loading them back, so that a walkthrough
+// starts warm (as engines bake their light probes) instead of losing its caches at exit.
+//
+// The file, format version 1. Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
+// below, no library needed), so a truncated or corrupted file is refused, never half loaded.
+//
+//   prelude  "RAYCACHE" (8 bytes), u32 format version, u32 low half of fnv1a64 of those 12 bytes
+//   chunk    u32 tag, u64 payload bytes, payload, u64 fnv1a64 of tag + size + payload
+//   "HEAD"   u32 technique (1 CCT, 2 CDCT), u32 texel encoding (1: RGB9E5 in a u32; 2: RGB9E5 in the low u32
+//            and the float32 distance in the high u32 of a u64), u32 word bytes (4 or 8), u32 tile edge (16),
+//            u64 scene hash, u32 name bytes (at most 4096) and the name, u32 cube count (at most 65536)
+//   "CUBE"   one per cube: u64 object id and u64 part (the caller's key of what the cube caches, unique in
+//            the file), u32 face size N (1..4096), f32 x 3 centre, f32 half-size,
+//            u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
+//            T = ceil(N / 16), strictly increasing, and its 16 x 16 words row by row (texels past the face's
+//            edge, and empty texels, hold the technique's empty word; any other word must be valid)
+//   "END "   u32 cube count; nothing may follow
+//
+// Only tiles holding a value are written (sparse, as cubes allocate them). The scene identity is the
+// caller's: a 64-bit hash of whatever makes the cached colours right (geometry, materials, lights) and a
+// name for messages; a file saved for another scene is refused.
+//
+// Saving writes a temporary file in the target's folder, fsyncs it, rename()s it over the target and fsyncs
+// the folder: a process killed during a save leaves the old file or the new one, and at worst a stray
+// ".NAME.tmp-..." file beside them (POSIX only). Loading reads the whole file, checks every size against
+// the bytes that remain before reading, every checksum, the scene, the technique and the version, then
+// fills fresh cubes; a CacheFileError names the file and what is wrong, and the caller's cubes are left as
+// they were. Loaded texels are visible at once, as a frame's stores are after begin_frame(): the next frame
+// rendered sees them. What is derived from the texels is not saved but made again: a CDCT cube's
+// DepthPyramid must be rebuilt and a CCT cube's doubtful edges marked (SceneCache::load does both).
+//
+// Threads: saving reads cubes, loading replaces them: both between frames.
+#pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#include <atomic>
+#include <cerrno>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cache_cube.hpp"
+#include "raycache/cdct.hpp"
+
+namespace raycache {
+
+// A cache file that cannot be written, read, or used for the cache at hand; what() names the file and why.
+class CacheFileError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// What the caller says the cached scene is: a hash of what the cached colours depend on, and a name.
+struct SceneIdentity {
+    std::uint64_t hash = 0;
+    std::string name;
+};
+
+inline constexpr std::uint32_t cache_file_version = 1;
+
+inline constexpr std::uint64_t fnv1a64_basis = 14695981039346656037ull;
+
+// FNV-1a, 64 bits, of `size` bytes, continuing from `hash`. Any one changed byte changes it.
+inline std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t hash = fnv1a64_basis) noexcept {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+    return hash;
+}
+
+// How a texel type is written: its technique and encoding numbers and names (CCT and CDCT only).
+template <class Texel>
+struct CacheFileTexel;
+template <>
+struct CacheFileTexel<CctTexel> {
+    static constexpr std::uint32_t technique = 1, encoding = 1;
+    static constexpr const char* name = "CCT";
+};
+template <>
+struct CacheFileTexel<CdctTexel> {
+    static constexpr std::uint32_t technique = 2, encoding = 2;
+    static constexpr const char* name = "CDCT";
+};
+
+// One cube to save: the caller's key of what it caches, (object, part), unique in the file (part: for callers
+// whose objects have parts, e.g. primitive ranges of one geometry; 0 otherwise), where it sits, the cube.
+template <class Texel>
+struct CubeToSave {
+    std::uint64_t object = 0;
+    CubeBounds bounds;
+    const CacheCube<Texel>* cube = nullptr;
+    std::uint64_t part = 0;
+};
+
+// One cube read back. Its texels are held as the current frame's stores: structures derived from the texels
+// (edge marks, raycache/edge_confidence.hpp) are made as after a frame, then begin_frame() makes them visible.
+template <class Texel>
+struct LoadedCube {
+    std::uint64_t object = 0;
+    CubeBounds bounds;
+    std::unique_ptr<CacheCube<Texel>> cube;
+    std::uint64_t part = 0;
+};
+
+// True when two placements are the same, float for float.
+inline bool same_placement(const CubeBounds& a, const CubeBounds& b) noexcept {
+    return a.centre == b.centre && a.half_size == b.half_size;
+}
+
+// "centre (x, y, z), half-size h", every float to the last bit.
+inline std::string describe(const CubeBounds& b) {
+    char text[160];
+    std::snprintf(text, sizeof text, "centre (%.9g, %.9g, %.9g), half-size %.9g", static_cast<double>(b.centre.x),
+                  static_cast<double>(b.centre.y), static_cast<double>(b.centre.z), static_cast<double>(b.half_size));
+    return text;
+}
+
+namespace detail {
+
+inline constexpr char cache_file_magic[8] = {'R', 'A', 'Y', 'C', 'A', 'C', 'H', 'E'};
+inline constexpr std::size_t cache_file_prelude_bytes = 16;
+inline constexpr std::size_t chunk_frame_bytes = 4 + 8 + 8; // tag, size, checksum
+inline constexpr std::uint32_t max_scene_name_bytes = 4096;
+inline constexpr std::uint32_t max_cubes_in_file = 65536;
+inline constexpr int file_tile_edge = 16;
+inline constexpr std::size_t file_tile_texels = file_tile_edge * file_tile_edge;
+// Smallest CUBE chunk: frame, object and part, face size, bounds, tile count.
+inline constexpr std::size_t min_cube_chunk_bytes = chunk_frame_bytes + 16 + 4 + 16 + 4;
+
+inline constexpr std::uint32_t tag(const char (&t)[5]) noexcept {
+    return static_cast<std::uint32_t>(static_cast<unsigned char>(t[0])) |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(t[1])) << 8 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(t[2])) << 16 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(t[3])) << 24;
+}
+inline constexpr std::uint32_t head_tag = tag("HEAD"), cube_tag = tag("CUBE"), end_tag = tag("END ");
+
+inline std::string tag_text(std::uint32_t t) {
+    std::string s;
+    for (int i = 0; i < 4; ++i) {
+        const char c = static_cast<char>(t >> (8 * i) & 0xFFu);
+        s += c >= 32 && c < 127 ? std::string(1, c) : "\\x" + std::to_string(static_cast<unsigned char>(c));
+    }
+    return s;
+}
+
+// "object 7", "object 7 part 9".
+inline std::string key_text(std::uint64_t object, std::uint64_t part) {
+    return "object " + std::to_string(object) + (part ? " part " + std::to_string(part) : std::string());
+}
+
+inline std::string hex(std::uint64_t v) {
+    char text[24];
+    std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(v));
+    return text;
+}
+
+inline std::string technique_name(std::uint32_t technique) {
+    if (technique == CacheFileTexel<CctTexel>::technique) return CacheFileTexel<CctTexel>::name;
+    if (technique == CacheFileTexel<CdctTexel>::technique) return CacheFileTexel<CdctTexel>::name;
+    return "unknown technique " + std::to_string(technique);
+}
+
+// Tiles along a face's edge in the file (and in CacheCube).
+inline std::uint32_t file_tiles_per_edge(int face_size) noexcept {
+    return static_cast<std::uint32_t>((face_size + file_tile_edge - 1) / file_tile_edge);
+}
+
+// The little-endian unsigned integer (a texel word, a size) at p.
+template <class Word>
+Word read_word(const std::uint8_t* p) noexcept {
+    Word v = 0;
+    for (std::size_t i = 0; i < sizeof(Word); ++i) v |= static_cast<Word>(p[i]) << (8 * i);
+    return v;
+}
+
+// Little-endian output.
+class ByteWriter {
+public:
+    std::vector<std::uint8_t> bytes;
+
+    void u32(std::uint32_t v) {
+        for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    }
+    void u64(std::uint64_t v) {
+        for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    }
+    void f32(float v) { u32(glm::floatBitsToUint(v)); }
+    void word(std::uint32_t v) { u32(v); }
+    void word(std::uint64_t v) { u64(v); }
+    void text(const std::string& s) { bytes.insert(bytes.end(), s.begin(), s.end()); }
+
+    // Starts a chunk; returns where it starts, for end_chunk.
+    std::size_t begin_chunk(std::uint32_t chunk_tag) {
+        const std::size_t start = bytes.size();
+        u32(chunk_tag);
+        u64(0); // the payload size, patched by end_chunk
+        return start;
+    }
+    void end_chunk(std::size_t start) {
+        const std::uint64_t payload = bytes.size() - start - 12;
+        for (int i = 0; i < 8; ++i) bytes[start + 4 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(payload >> (8 * i));
+        u64(fnv1a64(bytes.data() + start, bytes.size() - start));
+    }
+};
+
+// Little-endian input over [data, data + size) that checks every read against what remains; a read past
+// the end throws CacheFileError naming `what` (the part being read) as truncated.
+class ByteReader {
+public:
+    ByteReader(const std::uint8_t* data, std::size_t size, std::string source)
+        : data_(data), size_(size), source_(std::move(source)) {}
+
+    std::size_t position() const noexcept { return position_; }
+    std::size_t remaining() const noexcept { return size_ - position_; }
+    const std::uint8_t* here() const noexcept { return data_ + position_; }
+
+    [[noreturn]] void fail(const std::string& what) const {
+        throw CacheFileError("RayCache: " + source_ + ": " + what + "; nothing was loaded");
+    }
+    void need(std::size_t bytes, const std::string& what) const {
+        if (bytes > remaining())
+            fail("truncated: " + what + " needs " + std::to_string(bytes) + " bytes at byte " + std::to_string(position_) +
+                 ", only " + std::to_string(remaining()) + " remain");
+    }
+    template <class Unsigned>
+    Unsigned little_endian(const std::string& what) {
+        need(sizeof(Unsigned), what);
+        const Unsigned v = read_word<Unsigned>(here());
+        position_ += sizeof(Unsigned);
+        return v;
+    }
+    std::uint32_t u32(const std::string& what) { return little_endian<std::uint32_t>(what); }
+    std::uint64_t u64(const std::string& what) { return little_endian<std::uint64_t>(what); }
+    float f32(const std::string& what) { return glm::uintBitsToFloat(u32(what)); }
+    std::string text(std::size_t bytes, const std::string& what) {
+        need(bytes, what);
+        std::string s(reinterpret_cast<const char*>(here()), bytes);
+        position_ += bytes;
+        return s;
+    }
+    void skip(std::size_t bytes, const std::string& what) {
+        need(bytes, what);
+        position_ += bytes;
+    }
+
+    // Reads a chunk's frame and checks its tag and checksum; returns a reader over its payload (which names
+    // `what` in its messages) and moves past the chunk.
+    ByteReader chunk(std::uint32_t expected_tag, const std::string& what) {
+        const std::size_t start = position_;
+        const std::uint32_t found = u32(what + " (its tag)");
+        if (found != expected_tag)
+            fail("expected " + what + " at byte " + std::to_string(start) + ", found a chunk tagged '" + tag_text(found) +
+                 "' (a truncated, corrupted or reordered file)");
+        const std::uint64_t payload = u64(what + " (its size)");
+        if (payload > remaining() || remaining() - payload < 8)
+            fail("truncated: " + what + " at byte " + std::to_string(start) + " claims " + std::to_string(payload) +
+                 " bytes and its checksum, only " + std::to_string(remaining()) + " remain");
+        const std::size_t payload_at = position_;
+        position_ += static_cast<std::size_t>(payload);
+        const std::uint64_t expected = fnv1a64(data_ + start, position_ - start);
+        const std::uint64_t stored = u64(what + " (its checksum)");
+        if (stored != expected)
+            fail("corrupted: the checksum of " + what + " at byte " + std::to_string(start) + " does not match its contents");
+        return ByteReader(data_ + payload_at, static_cast<std::size_t>(payload), source_ + ", " + what);
+    }
+
+    // Every byte of a chunk's payload must have been read.
+    void expect_end(const std::string& what) const {
+        if (remaining() != 0) fail(what + " has " + std::to_string(remaining()) + " bytes more than its fields");
+    }
+
+private:
+    const std::uint8_t* data_;
+    std::size_t size_;
+    std::size_t position_ = 0;
+    std::string source_;
+};
+
+// A cube as the file describes it, checked, its tiles not yet copied.
+struct CubeRecord {
+    std::uint64_t object = 0, part = 0;
+    int face_size = 0;
+    CubeBounds bounds;
+    std::uint32_t tiles = 0;
+    const std::uint8_t* tile_data = nullptr; // `tiles` times (u32 index, 256 words)
+};
+
+// The tiles of `cube` holding a value, as file tile indices, increasing.
+template <class Texel>
+std::vector<std::uint32_t> tiles_holding_values(const CacheCube<Texel>& cube) {
+    const std::uint32_t per_edge = file_tiles_per_edge(cube.face_size());
+    std::vector<bool> used(std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge, false);
+    cube.for_each_valid_texel([&](const TexelAddress& t) {
+        used[(static_cast<std::size_t>(t.face) * per_edge + static_cast<std::uint32_t>(t.row / file_tile_edge)) * per_edge +
+             static_cast<std::uint32_t>(t.column / file_tile_edge)] = true;
+    });
+    std::vector<std::uint32_t> tiles;
+    for (std::size_t i = 0; i < used.size(); ++i)
+        if (used[i]) tiles.push_back(static_cast<std::uint32_t>(i));
+    return tiles;
+}
+
+// The texel of slot (row, column) of file tile `index` on a face of `face_size`; off the face when the tile
+// sticks out past the face's edge.
+inline TexelAddress tile_texel(std::uint32_t index, int slot, int face_size) noexcept {
+    const std::uint32_t per_edge = file_tiles_per_edge(face_size);
+    const int face = static_cast<int>(index / (per_edge * per_edge));
+    const int tile_row = static_cast<int>(index / per_edge % per_edge), tile_column = static_cast<int>(index % per_edge);
+    return TexelAddress{face, tile_column * file_tile_edge + slot % file_tile_edge, tile_row * file_tile_edge + slot / file_tile_edge};
+}
+
+// Reads and checks one CUBE chunk's payload (every word valid or empty, empty past the face's edge).
+template <class Texel>
+CubeRecord read_cube_record(ByteReader& r) {
+    using Word = typename Texel::Word;
+    CubeRecord c;
+    c.object = r.u64("the object id");
+    c.part = r.u64("the object part");
+    const std::uint32_t face_size = r.u32("the face size");
+    if (face_size < std::uint32_t{RAYCACHE_MIN_FACE_SIZE} || face_size > std::uint32_t{RAYCACHE_MAX_FACE_SIZE})
+        r.fail("face size " + std::to_string(face_size) + " is outside 1..4096");
+    c.face_size = static_cast<int>(face_size);
+    c.bounds.centre.x = r.f32("the centre");
+    c.bounds.centre.y = r.f32("the centre");
+    c.bounds.centre.z = r.f32("the centre");
+    c.bounds.half_size = r.f32("the half-size");
+    if (!is_usable(c.bounds)) r.fail("the placement (" + describe(c.bounds) + ") is not a finite centre with a half-size > 0");
+    c.tiles = r.u32("the tile count");
+    const std::uint32_t per_edge = file_tiles_per_edge(c.face_size);
+    const std::uint64_t tile_count = std::uint64_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
+    if (c.tiles > tile_count)
+        r.fail(std::to_string(c.tiles) + " tiles, more than the " + std::to_string(tile_count) + " of a cube of face size " +
+               std::to_string(face_size));
+    const std::size_t tile_bytes = 4 + file_tile_texels * sizeof(Word);
+    if (r.remaining() / tile_bytes < c.tiles || r.remaining() != c.tiles * tile_bytes)
+        r.fail(std::to_string(c.tiles) + " tiles need " + std::to_string(std::uint64_t{c.tiles} * tile_bytes) + " bytes, the chunk holds " +
+               std::to_string(r.remaining()));
+    c.tile_data = r.here();
+    std::int64_t previous = -1;
+    for (std::uint32_t i = 0; i < c.tiles; ++i) {
+        const std::uint32_t index = r.u32("a tile index");
+        if (index >= tile_count)
+            r.fail("tile index " + std::to_string(index) + " is outside the cube's " + std::to_string(tile_count) + " tiles");
+        if (static_cast<std::int64_t>(index) <= previous)
+            r.fail("tile index " + std::to_string(index) + " follows " + std::to_string(previous) + " (tiles must be in increasing order, each once)");
+        previous = index;
+        const std::uint8_t* words = r.here();
+        for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {
+            const Word w = read_word<Word>(words + static_cast<std::size_t>(slot) * sizeof(Word));
+            if (w == Texel::invalid) continue;
+            if (!Texel::is_valid(w))
+                r.fail("texel " + std::to_string(slot) + " of tile " + std::to_string(index) + " is neither a valid " +
+                       CacheFileTexel<Texel>::name + " texel nor the empty word");
+            if (!is_on_cube(tile_texel(index, slot, c.face_size), c.face_size))
+                r.fail("texel " + std::to_string(slot) + " of tile " + std::to_string(index) + " lies past the face's edge but holds a value");
+        }
+        r.skip(file_tile_texels * sizeof(Word), "a tile's texels");
+    }
+    r.expect_end("the CUBE chunk");
+    return c;
+}
+
+// A fresh cube holding the record's texels as this frame's stores. Throws CacheFileError when the budget
+// refuses a tile.
+template <class Texel>
+std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::shared_ptr<MemoryBudget>& budget,
+                                             const ByteReader& messages) {
+    using Word = typename Texel::Word;
+    auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget);
+    const std::uint8_t* p = c.tile_data;
+    for (std::uint32_t i = 0; i < c.tiles; ++i) {
+        const std::uint32_t index = read_word<std::uint32_t>(p);
+        p += 4;
+        for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot, p += sizeof(Word)) {
+            const Word w = read_word<Word>(p);
+            if (w == Texel::invalid) continue;
+            if (!cube->store_word_at(tile_texel(index, slot, c.face_size), w))
+                messages.fail("the memory budget (" + std::to_string(budget ? budget->limit() : 0) + " bytes, " +
+                              std::to_string(budget ? budget->used() : 0) +
+                              " in use) cannot hold the file's tiles as well as the cubes they replace");
+        }
+    }
+    return cube;
+}
+
+} // namespace detail
+
+// The bytes of a cache file holding `cubes` (CCT or CDCT) for `scene`: every tile of each cube that holds
+// a value (visible or written this frame). Object ids must be unique; every cube non-null.
+// Throws std::invalid_argument otherwise, or for a scene name longer than 4096 bytes or more than 65536 cubes.
+template <class Texel>
+std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::vector<CubeToSave<Texel>>& cubes) {
+    using Word = typename Texel::Word;
+    using File = CacheFileTexel<Texel>;
+    if (scene.name.size() > detail::max_scene_name_bytes)
+        throw std::invalid_argument("RayCache: a cache file's scene name must be at most 4096 bytes");
+    if (cubes.size() > detail::max_cubes_in_file)
+        throw std::invalid_argument("RayCache: a cache file holds at most 65536 cubes, got " + std::to_string(cubes.size()));
+    std::set<std::pair<std::uint64_t, std::uint64_t>> keys;
+    for (const CubeToSave<Texel>& c : cubes) {
+        if (!c.cube) throw std::invalid_argument("RayCache: encode_cache: a null cube");
+        if (!keys.insert({c.object, c.part}).second)
+            throw std::invalid_argument("RayCache: encode_cache: " + detail::key_text(c.object, c.part) + " appears twice");
+    }
+    detail::ByteWriter w;
+    w.text(std::string(detail::cache_file_magic, 8));
+    w.u32(cache_file_version);
+    w.u32(static_cast<std::uint32_t>(fnv1a64(w.bytes.data(), 12)));
+
+    std::size_t start = w.begin_chunk(detail::head_tag);
+    w.u32(File::technique);
+    w.u32(File::encoding);
+    w.u32(sizeof(Word));
+    w.u32(detail::file_tile_edge);
+    w.u64(scene.hash);
+    w.u32(static_cast<std::uint32_t>(scene.name.size()));
+    w.text(scene.name);
+    w.u32(static_cast<std::uint32_t>(cubes.size()));
+    w.end_chunk(start);
+
+    for (const CubeToSave<Texel>& c : cubes) {
+        const int n = c.cube->face_size();
+        const std::vector<std::uint32_t> tiles = detail::tiles_holding_values(*c.cube);
+        start = w.begin_chunk(detail::cube_tag);
+        w.u64(c.object);
+        w.u64(c.part);
+        w.u32(static_cast<std::uint32_t>(n));
+        w.f32(c.bounds.centre.x);
+        w.f32(c.bounds.centre.y);
+        w.f32(c.bounds.centre.z);
+        w.f32(c.bounds.half_size);
+        w.u32(static_cast<std::uint32_t>(tiles.size()));
+        for (std::uint32_t index : tiles) {
+            w.u32(index);
+            for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
+                const TexelAddress t = detail::tile_texel(index, slot, n);
+                w.word(c.cube->contains(t) ? c.cube->load_word(t) : Texel::invalid);
+            }
+        }
+        w.end_chunk(start);
+    }
+
+    start = w.begin_chunk(detail::end_tag);
+    w.u32(static_cast<std::uint32_t>(cubes.size()));
+    w.end_chunk(start);
+    return std::move(w.bytes);
+}
+
+// The cubes of a cache file's bytes (see LoadedCube), checked whole before any cube is made: the prelude, every chunk's
+// size and checksum, the format version (newer: refused), the technique (Texel's), the scene (`expected`,
+// hash and name), every face size, placement, tile index and texel word. `source` names the bytes in
+// messages (a file name). The cubes draw their tiles from `budget` (may be null).
+// Throws CacheFileError saying what is wrong; then nothing was made.
+template <class Texel>
+std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_t size, const SceneIdentity& expected,
+                                            const std::shared_ptr<MemoryBudget>& budget = nullptr,
+                                            const std::string& source = "cache data") {
+    using Word = typename Texel::Word;
+    using File = CacheFileTexel<Texel>;
+    detail::ByteReader r(data, size, source);
+    if (size == 0) r.fail("the file is empty");
+    r.need(detail::cache_file_prelude_bytes, "the 16-byte prelude");
+    if (std::memcmp(data, detail::cache_file_magic, 8) != 0) r.fail("not a RayCache cache file (it does not start with 'RAYCACHE')");
+    r.skip(8, "the magic");
+    const std::uint32_t version = r.u32("the format version");
+    const std::uint32_t check = r.u32("the prelude's checksum");
+    if (check != static_cast<std::uint32_t>(fnv1a64(data, 12))) r.fail("corrupted: the prelude's checksum does not match");
+    if (version > cache_file_version)
+        r.fail("format version " + std::to_string(version) + " is newer than this RayCache reads (" +
+               std::to_string(cache_file_version) + "); load it with a newer RayCache or save the cache again");
+    if (version != cache_file_version) r.fail("unknown format version " + std::to_string(version));
+
+    detail::ByteReader head = r.chunk(detail::head_tag, "the HEAD chunk");
+    const std::uint32_t technique = head.u32("the technique");
+    const std::uint32_t encoding = head.u32("the texel encoding");
+    const std::uint32_t word_bytes = head.u32("the word size");
+    const std::uint32_t tile_edge = head.u32("the tile edge");
+    const std::uint64_t hash = head.u64("the scene hash");
+    const std::uint32_t name_bytes = head.u32("the scene name's length");
+    if (name_bytes > detail::max_scene_name_bytes) head.fail("a scene name of " + std::to_string(name_bytes) + " bytes (at most 4096)");
+    const std::string name = head.text(name_bytes, "the scene name");
+    const std::uint32_t cube_count = head.u32("the cube count");
+    head.expect_end("the HEAD chunk");
+    if (technique != File::technique)
+        r.fail("it holds " + detail::technique_name(technique) + " cubes, this cache is " + File::name);
+    if (encoding != File::encoding || word_bytes != sizeof(Word))
+        r.fail("texel encoding " + std::to_string(encoding) + " in " + std::to_string(word_bytes) + "-byte words is not " +
+               File::name + "'s (encoding " + std::to_string(File::encoding) + ", " + std::to_string(sizeof(Word)) + " bytes)");
+    if (tile_edge != detail::file_tile_edge) r.fail("tiles of " + std::to_string(tile_edge) + " texels a side (format 1 has 16)");
+    if (hash != expected.hash || name != expected.name)
+        r.fail("it was saved for scene '" + name + "' (hash " + detail::hex(hash) + "), this is scene '" + expected.name +
+               "' (hash " + detail::hex(expected.hash) + ")");
+    if (cube_count > detail::max_cubes_in_file) r.fail(std::to_string(cube_count) + " cubes (at most 65536)");
+    if (r.remaining() / detail::min_cube_chunk_bytes < cube_count)
+        r.fail("truncated: " + std::to_string(cube_count) + " cubes cannot fit in the " + std::to_string(r.remaining()) +
+               " bytes after the HEAD chunk");
+
+    std::vector<detail::CubeRecord> records;
+    records.reserve(cube_count);
+    std::set<std::pair<std::uint64_t, std::uint64_t>> keys;
+    for (std::uint32_t i = 0; i < cube_count; ++i) {
+        const std::string what = "CUBE chunk " + std::to_string(i + 1) + " of " + std::to_string(cube_count);
+        detail::ByteReader cube = r.chunk(detail::cube_tag, what);
+        records.push_back(detail::read_cube_record<Texel>(cube));
+        if (!keys.insert({records.back().object, records.back().part}).second)
+            r.fail(detail::key_text(records.back().object, records.back().part) + " has two cubes");
+    }
+    detail::ByteReader end = r.chunk(detail::end_tag, "the END chunk");
+    if (end.u32("the END chunk's cube count") != cube_count) r.fail("the END chunk's cube count is not the HEAD chunk's");
+    end.expect_end("the END chunk");
+    if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " bytes follow the END chunk");
+
+    std::vector<LoadedCube<Texel>> cubes;
+    cubes.reserve(records.size());
+    for (const detail::CubeRecord& c : records)
+        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r), c.part});
+    return cubes;
+}
+
+// Writes `bytes` to `path` so that `path` holds either its old contents or all of `bytes`, whenever the
+// process dies: a new file beside it (same folder), written, fsync'd, rename()d over `path`, and the
+// folder fsync'd. Throws CacheFileError naming the file and the system's reason; the temporary file is
+// removed then.
+inline void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+    namespace fs = std::filesystem;
+    const fs::path target(path);
+    const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    auto fail = [&](const std::string& what, int error) {
+        throw CacheFileError("RayCache: cannot save cache file '" + path + "': " + what + ": " + std::strerror(error));
+    };
+    if (target.filename().empty()) fail("no file name", EISDIR);
+    static std::atomic<unsigned> counter{0};
+    std::string temporary;
+    int fd = -1;
+    for (int attempt = 0; fd < 0; ++attempt) {
+        temporary = (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+                               std::to_string(counter.fetch_add(1)))).string();
+        fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd < 0 && (errno != EEXIST || attempt > 100)) fail("creating a temporary file in '" + folder.string() + "'", errno);
+    }
+    auto abandon = [&](const std::string& what) {
+        const int error = errno;
+        if (fd >= 0) ::close(fd);
+        ::unlink(temporary.c_str());
+        fail(what, error);
+    };
+    for (std::size_t done = 0; done < bytes.size();) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) abandon("writing " + temporary);
+        done += static_cast<std::size_t>(n);
+    }
+    if (::fsync(fd) != 0) abandon("fsync of " + temporary);
+    const int closed = ::close(fd);
+    fd = -1;
+    if (closed != 0) abandon("closing " + temporary);
+    if (::rename(temporary.c_str(), path.c_str()) != 0) abandon("renaming " + temporary + " over it");
+    const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir < 0) fail("opening its folder to fsync it", errno);
+    const int synced = ::fsync(dir), error = errno;
+    ::close(dir);
+    if (synced != 0 && error != EINVAL) fail("fsync of its folder", error); // EINVAL: folders cannot be synced there
+}
+
+// The whole file. Throws CacheFileError naming the file and the system's reason.
+inline std::vector<std::uint8_t> read_whole_file(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw CacheFileError("RayCache: cache file '" + path + "' is a folder");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CacheFileError("RayCache: cannot open cache file '" + path + "': " + std::strerror(errno));
+    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw CacheFileError("RayCache: cannot read cache file '" + path + "': " + std::strerror(errno));
+    return bytes;
+}
+
+// encode_cache, written atomically to `path` (write_file_atomically). Between frames.
+template <class Texel>
+void save_cache_file(const std::string& path, const SceneIdentity& scene, const std::vector<CubeToSave<Texel>>& cubes) {
+    write_file_atomically(path, encode_cache(scene, cubes));
+}
+
+// decode_cache of the file at `path`. Throws CacheFileError naming the file and what is wrong.
+template <class Texel>
+std::vector<LoadedCube<Texel>> load_cache_file(const std::string& path, const SceneIdentity& expected,
+                                               const std::shared_ptr<MemoryBudget>& budget = nullptr) {
+    const std::vector<std::uint8_t> bytes = read_whole_file(path);
+    return decode_cache<Texel>(bytes.data(), bytes.size(), expected, budget, "cache file '" + path + "'");
+}
+
+// One cube alone: saves `cube`, placed at `bounds`, as object `object` of `scene`. Between frames.
+template <class Texel>
+void save_cube(const std::string& path, const CacheCube<Texel>& cube, const CubeBounds& bounds, const SceneIdentity& scene,
+               std::uint64_t object = 0) {
+    save_cache_file<Texel>(path, scene, {CubeToSave<Texel>{object, bounds, &cube}});
+}
+
+// Replaces `target` by the one cube saved in `path`, at the face size it was saved with, drawing on
+// target's budget; its texels are visible at once, none marked doubtful. The file must hold one cube, of
+// object `object` (part 0), placed at `bounds`, for `scene`. Otherwise throws CacheFileError and leaves
+// `target` as it was. Between frames.
+// A DepthPyramid of the cube must be rebuilt (DepthPyramid(target.face_size()).rebuild(target)).
+template <class Texel>
+void load_cube(const std::string& path, CacheCube<Texel>& target, const CubeBounds& bounds, const SceneIdentity& scene,
+               std::uint64_t object = 0) {
+    std::vector<LoadedCube<Texel>> cubes = load_cache_file<Texel>(path, scene, target.budget());
+    const std::string source = "RayCache: cache file '" + path + "': ";
+    if (cubes.size() != 1)
+        throw CacheFileError(source + "it holds " + std::to_string(cubes.size()) + " cubes, not one; nothing was loaded");
+    if (cubes[0].object != object || cubes[0].part != 0)
+        throw CacheFileError(source + "its cube is " + detail::key_text(cubes[0].object, cubes[0].part) + ", not object " +
+                             std::to_string(object) + "; nothing was loaded");
+    if (!same_placement(cubes[0].bounds, bounds))
+        throw CacheFileError(source + "its cube sits at " + describe(cubes[0].bounds) + ", this one at " + describe(bounds) +
+                             "; nothing was loaded");
+    cubes[0].cube->begin_frame(); // visible to the next lookup
+    target = std::move(*cubes[0].cube);
+}
+
+} // namespace raycache

@@ -1,0 +1,312 @@
+// Cache files (raycache/cache_file.hpp): a saved cube comes back bit for bit; a file for another scene,
+// object, placement, technique or a newer format is refused with a message and loads nothing; so is every
+// truncation and every corruption tried; a save killed at any moment leaves the old file or the new one.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "raycache/raycache.hpp"
+#include "test_cache_files.hpp"
+#include "test_random.hpp"
+
+namespace {
+
+using raycache::CacheCube;
+using raycache::CacheFileError;
+using raycache::CctCube;
+using raycache::CctTexel;
+using raycache::CdctCube;
+using raycache::CdctTexel;
+using raycache::CubeBounds;
+using raycache::CubeToSave;
+using raycache::SceneIdentity;
+using raycache::TexelAddress;
+
+const SceneIdentity scene{0x0123456789abcdefull, "test scene"};
+const CubeBounds bounds{glm::vec3(1.0f, 2.0f, -3.5f), 0.75f};
+
+template <class Texel>
+std::vector<std::uint8_t> encode_one(const CacheCube<Texel>& cube, std::uint64_t object = 7) {
+    return raycache::encode_cache<Texel>(scene, {CubeToSave<Texel>{object, bounds, &cube}});
+}
+
+template <class Texel>
+std::vector<raycache::LoadedCube<Texel>> decode(const std::vector<std::uint8_t>& bytes, const SceneIdentity& expected = scene) {
+    return raycache::decode_cache<Texel>(bytes.data(), bytes.size(), expected);
+}
+
+// A small CDCT file: a 20-texel cube (partial tiles at the edges) with a few dozen texels.
+std::vector<std::uint8_t> small_file() {
+    CdctCube cube(20);
+    Lcg rng{5};
+    fill_randomly(cube, rng, 15);
+    return encode_one(cube);
+}
+
+template <class Texel>
+void check_round_trip(int face_size, unsigned per_mille, std::uint64_t seed) {
+    CAPTURE(face_size);
+    ScratchFolder folder("round-trip");
+    CacheCube<Texel> cube(face_size);
+    Lcg rng{seed};
+    const std::size_t visible = fill_randomly(cube, rng, per_mille);
+    cube.begin_frame();
+    const std::size_t this_frame = fill_randomly(cube, rng, per_mille / 2 + 1); // not visible yet: saved too
+    REQUIRE(visible + this_frame > 0);
+    raycache::save_cube(folder.file("cube.rcc"), cube, bounds, scene, 7);
+
+    CacheCube<Texel> loaded(1);
+    raycache::load_cube(folder.file("cube.rcc"), loaded, bounds, scene, 7);
+    CHECK(loaded.face_size() == face_size);
+    CHECK(same_texels(cube, loaded));
+    CHECK(loaded.valid_texels() == cube.valid_texels());
+    CHECK(loaded.allocated_tiles() <= cube.allocated_tiles());
+    // Every loaded texel answers lookups at once, and the counters start at zero.
+    std::size_t visible_now = 0;
+    loaded.for_each_valid_texel([&](const TexelAddress& t) { visible_now += loaded.peek_at(t).has_value(); });
+    CHECK(visible_now == cube.valid_texels());
+    CHECK(loaded.statistics().lookups == 0u);
+    CHECK(loaded.statistics().stores == 0u);
+}
+
+} // namespace
+
+TEST_CASE("a CCT cube saved and loaded back holds every texel bit for bit, visible at once") {
+    for (int n : {1, 2, 15, 16, 17, 37, 64}) check_round_trip<CctTexel>(n, 300, 11 + static_cast<unsigned>(n));
+}
+
+TEST_CASE("a CDCT cube saved and loaded back holds every texel bit for bit, visible at once") {
+    for (int n : {1, 3, 16, 20, 33, 48}) check_round_trip<CdctTexel>(n, 300, 97 + static_cast<unsigned>(n));
+}
+
+TEST_CASE("a full cube and an empty cube round trip") {
+    CctCube full(18), empty(18);
+    Lcg rng{3};
+    CHECK(fill_randomly(full, rng, 1000) == full.texel_count());
+    for (const CctCube* cube : {&full, &empty}) {
+        std::vector<raycache::LoadedCube<CctTexel>> back = decode<CctTexel>(encode_one(*cube));
+        REQUIRE(back.size() == 1u);
+        CHECK(same_texels(*cube, *back[0].cube));
+        CHECK(back[0].object == 7u);
+        CHECK(raycache::same_placement(back[0].bounds, bounds));
+    }
+}
+
+TEST_CASE("a cache file is sparse: a 4096-texel cube holding one texel takes one tile of bytes") {
+    CdctCube cube(4096);
+    CHECK(cube.store(glm::vec3(0.3f, -1.0f, 0.2f), raycache::DepthSample{glm::vec3(0.5f), 2.0f}));
+    const std::vector<std::uint8_t> bytes = encode_one(cube);
+    CHECK(bytes.size() < 16 * 16 * 8 + 200);
+    std::vector<raycache::LoadedCube<CdctTexel>> back = decode<CdctTexel>(bytes);
+    REQUIRE(back.size() == 1u);
+    CHECK(back[0].cube->face_size() == 4096);
+    CHECK(back[0].cube->allocated_tiles() == 1u);
+    CHECK(back[0].cube->valid_texels() == 1u);
+}
+
+TEST_CASE("several cubes in one file come back with their own object ids, parts and placements") {
+    CctCube a(8), b(30), c(3);
+    Lcg rng{17};
+    fill_randomly(a, rng, 500);
+    fill_randomly(b, rng, 100);
+    fill_randomly(c, rng, 500);
+    const CubeBounds other{glm::vec3(-4.0f, 0.0f, 9.0f), 2.0f};
+    // b and c are two parts of one object (as primitive ranges of one geometry are).
+    const std::vector<std::uint8_t> bytes = raycache::encode_cache<CctTexel>(
+        scene, {CubeToSave<CctTexel>{1, bounds, &a}, CubeToSave<CctTexel>{1ull << 40, other, &b, 3}, CubeToSave<CctTexel>{1ull << 40, bounds, &c, 4}});
+    std::vector<raycache::LoadedCube<CctTexel>> back = decode<CctTexel>(bytes);
+    REQUIRE(back.size() == 3u);
+    CHECK(back[0].object == 1u);
+    CHECK(back[0].part == 0u);
+    CHECK(back[1].object == 1ull << 40);
+    CHECK(back[1].part == 3u);
+    CHECK(back[2].part == 4u);
+    CHECK(raycache::same_placement(back[1].bounds, other));
+    CHECK(same_texels(a, *back[0].cube));
+    CHECK(same_texels(b, *back[1].cube));
+    CHECK(same_texels(c, *back[2].cube));
+    CHECK_THROWS_AS(raycache::encode_cache<CctTexel>(scene, {CubeToSave<CctTexel>{5, bounds, &a, 1}, CubeToSave<CctTexel>{5, other, &b, 1}}),
+                    std::invalid_argument);
+}
+
+TEST_CASE("a file saved for another scene, object, placement or technique is refused by name and loads nothing") {
+    ScratchFolder folder("refused");
+    CdctCube saved(12);
+    Lcg rng{23};
+    fill_randomly(saved, rng, 400);
+    const std::string path = folder.file("cube.rcc");
+    raycache::save_cube(path, saved, bounds, scene, 7);
+
+    CdctCube target(5);
+    fill_randomly(target, rng, 500);
+    target.begin_frame();
+    CdctCube before(5);
+    target.for_each_valid_texel([&](const TexelAddress& t) { before.store_word_at(t, target.load_word(t)); });
+
+    const std::string other_hash = cache_file_error([&] {
+        raycache::load_cube(path, target, bounds, SceneIdentity{scene.hash + 1, scene.name}, 7);
+    });
+    CHECK(contains(other_hash, "saved for scene 'test scene' (hash 0x0123456789abcdef)"));
+    CHECK(contains(other_hash, path));
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, bounds, SceneIdentity{scene.hash, "other"}, 7); }),
+                   "this is scene 'other'"));
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, bounds, scene, 8); }), "its cube is object 7, not object 8"));
+    CubeBounds moved = bounds;
+    moved.centre.x = std::nextafter(moved.centre.x, 10.0f); // one ulp away is another placement
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, target, moved, scene, 7); }), "sits at centre"));
+    CctCube cct(5);
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(path, cct, bounds, scene, 7); }), "holds CDCT cubes, this cache is CCT"));
+    CHECK(cct.valid_texels() == 0u);
+
+    // The target kept its face size and every texel, visible as before.
+    CHECK(target.face_size() == 5);
+    CHECK(same_texels(before, target));
+    std::size_t visible = 0;
+    target.for_each_valid_texel([&](const TexelAddress& t) { visible += target.peek_at(t).has_value(); });
+    CHECK(visible == before.valid_texels());
+}
+
+TEST_CASE("a file of a newer or unknown format version is refused, saying which") {
+    std::vector<std::uint8_t> bytes = small_file();
+    auto with_version = [&](std::uint32_t version) {
+        std::vector<std::uint8_t> b = bytes;
+        for (int i = 0; i < 4; ++i) b[8 + i] = static_cast<std::uint8_t>(version >> (8 * i));
+        const auto check = static_cast<std::uint32_t>(raycache::fnv1a64(b.data(), 12));
+        for (int i = 0; i < 4; ++i) b[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
+        return b;
+    };
+    CHECK(decode<CdctTexel>(with_version(1)).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(2)); }), "format version 2 is newer than this RayCache reads (1)"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(0)); }), "unknown format version 0"));
+    std::vector<std::uint8_t> not_ours = bytes;
+    not_ours[0] = 'X';
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(not_ours); }), "not a RayCache cache file"));
+}
+
+TEST_CASE("every truncation of a small cache file is refused") {
+    const std::vector<std::uint8_t> bytes = small_file();
+    REQUIRE(decode<CdctTexel>(bytes).size() == 1u);
+    for (std::size_t length = 0; length < bytes.size(); ++length) {
+        CAPTURE(length);
+        const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(length));
+        CHECK(!cache_file_error([&] { decode<CdctTexel>(cut); }).empty());
+    }
+    std::vector<std::uint8_t> longer = bytes;
+    longer.push_back(0);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(longer); }), "1 bytes follow the END chunk"));
+}
+
+TEST_CASE("random byte flips in a cache file are refused by its checksums, never loaded") {
+    const std::vector<std::uint8_t> bytes = small_file();
+    Lcg rng{2024};
+    int refused = 0, checksum_messages = 0;
+    const int trials = 3000;
+    for (int trial = 0; trial < trials; ++trial) {
+        std::vector<std::uint8_t> flipped = bytes;
+        const int flips = 1 + static_cast<int>(rng.next() % 4);
+        for (int k = 0; k < flips; ++k) flipped[rng.next() % flipped.size()] ^= static_cast<std::uint8_t>(1 + rng.next() % 255);
+        if (flipped == bytes) continue; // two flips of one byte cancelled out
+        const std::string message = cache_file_error([&] { decode<CdctTexel>(flipped); });
+        refused += !message.empty();
+        checksum_messages += contains(message, "checksum");
+    }
+    CHECK(refused >= trials - 10); // the few unchanged files skipped above
+    CHECK(checksum_messages > trials / 2);
+}
+
+TEST_CASE("a load that the memory budget cannot hold is refused and leaves the cube as it was") {
+    CctCube saved(64);
+    Lcg rng{8};
+    fill_randomly(saved, rng, 200); // every one of its 96 tiles
+    ScratchFolder folder("budget");
+    raycache::save_cube(folder.file("cube.rcc"), saved, bounds, scene);
+    auto budget = std::make_shared<raycache::MemoryBudget>(CctCube::tile_bytes() * 10 + 6 * 4 * 4 * 8 * 2);
+    CctCube target(64, budget);
+    CHECK(target.store(glm::vec3(1, 0, 0), glm::vec3(0.25f)));
+    target.begin_frame();
+    const std::size_t used = budget->used();
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(folder.file("cube.rcc"), target, bounds, scene); }), "memory budget"));
+    CHECK(target.valid_texels() == 1u);
+    CHECK(target.lookup(glm::vec3(1, 0, 0)).has_value());
+    CHECK(budget->used() == used); // the refused load gave every tile back
+}
+
+TEST_CASE("saving into a folder that does not exist, or loading a file that is missing or a folder, throws naming the file") {
+    CctCube cube(4);
+    ScratchFolder folder("missing");
+    const std::string path = folder.file("no/such/folder/cube.rcc");
+    CHECK(contains(cache_file_error([&] { raycache::save_cube(path, cube, bounds, scene); }), "cannot save cache file '" + path));
+    CHECK(contains(cache_file_error([&] {
+                       CctCube target(4);
+                       raycache::load_cube(folder.file("absent.rcc"), target, bounds, scene);
+                   }),
+                   "cannot open cache file"));
+    CHECK(contains(cache_file_error([&] {
+                       CctCube target(4);
+                       raycache::load_cube(folder.path.string(), target, bounds, scene);
+                   }),
+                   "is a folder"));
+}
+
+TEST_CASE("a save killed at random moments leaves the old file or the new one, never one that loads partly") {
+    ScratchFolder folder("killed");
+    const std::string path = folder.file("cube.rcc");
+    // Two cubes big enough that a save takes a while (about 390 KiB each), differing in every texel.
+    CdctCube old_cube(64), new_cube(64);
+    Lcg rng{99};
+    fill_randomly(old_cube, rng, 1000);
+    fill_randomly(new_cube, rng, 1000);
+    raycache::save_cube(path, old_cube, bounds, scene);
+    // The child writes the files save_cube writes, encoded once beforehand, so that its time goes to the
+    // writing that must be atomic (encoding alone takes longer than the delays below in a Debug+ASan build).
+    const std::vector<std::uint8_t> files[2] = {raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{0, bounds, &new_cube}}),
+                                                raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{0, bounds, &old_cube}})};
+
+    int old_seen = 0, new_seen = 0, mid_save = 0;
+    const int kills = 40;
+    for (int k = 0; k < kills; ++k) {
+        const pid_t child = ::fork();
+        REQUIRE(child >= 0);
+        if (child == 0) { // saves new, old, new, ... until killed
+            try {
+                for (int i = 0;; ++i) raycache::write_file_atomically(path, files[i % 2]);
+            } catch (...) {
+                ::_exit(3);
+            }
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(rng.next() % 20000));
+        REQUIRE(::kill(child, SIGKILL) == 0);
+        int status = 0;
+        REQUIRE(::waitpid(child, &status, 0) == child);
+        CHECK(WIFSIGNALED(status));
+
+        // A kill between creating the temporary file and renaming it leaves the temporary file behind.
+        for (const auto& entry : std::filesystem::directory_iterator(folder.path))
+            if (entry.path().filename() != "cube.rcc") {
+                ++mid_save;
+                std::filesystem::remove(entry.path());
+            }
+        CdctCube loaded(1);
+        const std::string error = cache_file_error([&] { raycache::load_cube(path, loaded, bounds, scene); });
+        CHECK(error == "");
+        const bool is_old = same_texels(old_cube, loaded), is_new = same_texels(new_cube, loaded);
+        CHECK((is_old || is_new));
+        old_seen += is_old;
+        new_seen += is_new;
+    }
+    MESSAGE(kills << " kills: " << mid_save << " during a save, then the old file " << old_seen << " times, the new " << new_seen);
+    CHECK(mid_save > 0); // the kills did land inside saves
+}
