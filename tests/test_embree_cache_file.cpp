@@ -83,6 +83,9 @@ SceneCacheSettings settings_with_first_size(int first_face_size) {
 std::unique_ptr<SceneCache> make_cache(Technique technique, int face_size, bool relief = false) {
     SceneCacheSettings settings = settings_with_first_size(64);
     if (relief) settings.relief.search = raycache::DepthSearch::relief;
+    // Without the CCT's origin test: these rays leave from random points of each box (the test would refuse
+    // most of them), and cache files do not keep the tiles' origin boxes.
+    settings.origin_drift = -1.0f;
     auto caches = std::make_unique<SceneCache>(technique, settings);
     for (int k = 0; k < 3; ++k) caches->attach(objects[k], face_size, placements[k]);
     return caches;
