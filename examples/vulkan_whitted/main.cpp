@@ -7,8 +7,8 @@
 //
 // Differences from the Embree example: --threads is ignored (the Vulkan driver decides), --prefill,
 // --load-cache and --save-cache are refused, --cdct-search relief is the linear walk (no depth pyramid in
-// GLSL), and a ray leaving a cached object inside the subtree of a missed leaving ray is traced without
-// a lookup (no recursion in GLSL).
+// GLSL), and a ray leaving a cached object inside the subtree of a missed leaving ray is traced without a
+// lookup (no recursion in GLSL).
 // --hybrid (this tracer's own option): primary visibility by a raster pass into a G-buffer, secondary
 // rays in compute, as in the thesis's Table 5.1.
 // Exit status 2: bad options, more memory needed than is available, no Vulkan device, a shader that does
