@@ -2,6 +2,8 @@
 // checked, behind-N has its spheres where the thesis puts them, and camera paths move as specified.
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -194,9 +196,18 @@ TEST_CASE("procedural meshes have outward windings, unit normals and their analy
     CHECK_THROWS_AS(rcx::make_torus(0.5f, 1.0f), std::invalid_argument);
 }
 
+namespace {
+// A path in the temporary folder for `name`, unique to this process, so that test runs in parallel (ctest
+// -j, other checkouts on the machine) never write each other's files.
+std::string scratch_path(const std::string& name) {
+    return (std::filesystem::temp_directory_path() / (std::to_string(::getpid()) + "-" + name)).string();
+}
+
+} // namespace
+
 TEST_CASE("load_mesh reads the Wuson smooth and names the path when it cannot read a file") {
     CHECK_THROWS_WITH_AS(rcx::load_mesh("/no/such/mesh.ply"), doctest::Contains("/no/such/mesh.ply"), std::runtime_error);
-    const std::string not_a_mesh = (std::filesystem::temp_directory_path() / "raycache-not-a-mesh.ply").string();
+    const std::string not_a_mesh = scratch_path("raycache-not-a-mesh.ply");
     {
         std::FILE* f = std::fopen(not_a_mesh.c_str(), "w");
         REQUIRE(f);
@@ -226,7 +237,7 @@ std::string truncated_copy(const std::string& source, double fraction, const std
     char buffer[65536];
     for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, in)) > 0;) bytes.append(buffer, n);
     std::fclose(in);
-    const std::string path = (std::filesystem::temp_directory_path() / name).string();
+    const std::string path = scratch_path(name);
     std::FILE* out = std::fopen(path.c_str(), "wb");
     REQUIRE(out);
     std::fwrite(bytes.data(), 1, static_cast<std::size_t>(fraction * static_cast<double>(bytes.size())), out);
