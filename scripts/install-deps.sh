@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  cmake g++ clang ninja-build git pkg-config
+  cmake g++ clang libclang-rt-dev ninja-build git pkg-config
   libglm-dev doctest-dev libembree-dev libtbb-dev
   libvulkan-dev mesa-vulkan-drivers glslang-tools vulkan-validationlayers
   libstb-dev libassimp-dev assimp-testmodels libbenchmark-dev
