@@ -355,3 +355,19 @@ TEST_CASE("CDCT words order like their distances, whatever the colours") {
     // Same distance: the colour word decides (dark, the smaller word, first).
     CHECK(CdctTexel::encode(DepthSample{dark, 5.0f}) < CdctTexel::encode(DepthSample{bright, 5.0f}));
 }
+
+TEST_CASE("a channel just under half a mantissa step rounds down, one at half a step rounds up") {
+    // Below 2^-16 the step is 2^-24. 2^-25 - 2^-49 (the float just under half a step) must give mantissa 0;
+    // floor(x / step + 0.5) in float gave 1 (found by the texel_encoding fuzz target). 2^-25 itself gives 1.
+    const float under_half = std::nextafter(std::ldexp(1.0f, -25), 0.0f);
+    CHECK(under_half == std::ldexp(1.0f, -25) - std::ldexp(1.0f, -49));
+    CHECK(raycache::CctTexel::encode(glm::vec3(0.0f, 0.0f, under_half)) == 0x00000000u);
+    CHECK(raycache::CctTexel::encode(glm::vec3(0.0f, 0.0f, std::ldexp(1.0f, -25))) == 0x00040000u);
+    // At exponent 0 (channels in [2^-16, 2^-15)) the step is 2^-24 too: 2^-16 + 1.5 steps is 0x1.0001800p-16.
+    const float one_and_half = std::ldexp(1.0f, -16) + 1.5f * std::ldexp(1.0f, -24);
+    const float just_under = std::nextafter(one_and_half, 0.0f);
+    const std::uint32_t at = raycache::CctTexel::encode(glm::vec3(one_and_half, 0.0f, 0.0f));
+    const std::uint32_t under = raycache::CctTexel::encode(glm::vec3(just_under, 0.0f, 0.0f));
+    CHECK((at & 0x1FFu) == 258u);    // 256 + 1.5 rounds up to 258
+    CHECK((under & 0x1FFu) == 257u); // just under rounds down to 257
+}

@@ -44,6 +44,14 @@ RAYCACHE_FN float raycache_storable_channel(float x) {
 
 /* RGB -> RGB9E5 word, rounding each mantissa to nearest (EXT_texture_shared_exponent's algorithm,
  * with floor(log2(max)) read from the float's exponent bits instead of computed with log2). */
+/* q rounded to the nearest whole number, halves up, for 0 <= q < 2^23. Not floor(q + 0.5): that sum rounds
+ * to 1.0 in float for q = 0.5 - 2^-25, so values just under half a step would round up. q - floor(q) is
+ * exact (Sterbenz), so comparing it with 0.5 is too. */
+RAYCACHE_FN uint raycache_round_half_up(float q) {
+    float whole = floor(q);
+    return uint(whole) + ((q - whole >= 0.5f) ? 1u : 0u);
+}
+
 RAYCACHE_FN uint raycache_pack_rgb9e5(vec3 color) {
     float r = raycache_storable_channel(color.x);
     float g = raycache_storable_channel(color.y);
@@ -52,13 +60,13 @@ RAYCACHE_FN uint raycache_pack_rgb9e5(vec3 color) {
     int floor_log2 = int((floatBitsToUint(brightest) >> 23) & 0xFFu) - 127; /* -127 for 0 and subnormals */
     int shared_exponent = max(-16, floor_log2) + 16;                     /* biased, in [0, 31] */
     float step = raycache_exp2i(shared_exponent - 24);                   /* one mantissa unit */
-    if (int(floor(brightest / step + 0.5f)) == 512) {
+    if (raycache_round_half_up(brightest / step) == 512u) {
         shared_exponent += 1;
         step *= 2.0f;
     }
-    uint rm = uint(floor(r / step + 0.5f));
-    uint gm = uint(floor(g / step + 0.5f));
-    uint bm = uint(floor(b / step + 0.5f));
+    uint rm = raycache_round_half_up(r / step);
+    uint gm = raycache_round_half_up(g / step);
+    uint bm = raycache_round_half_up(b / step);
     return rm | (gm << 9) | (bm << 18) | (uint(shared_exponent) << 27);
 }
 
