@@ -148,11 +148,11 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
         const glm::vec3 d = texel_direction(t, fine_n);
         const shared::raycache_texel_address a = shared::raycache_texel_of(d, n);
         if (a.face == RAYCACHE_NO_FACE) return;
-        // Where d falls on the coarse face, in coarse texels: (sc / |m| + 1) / 2 * N.
+        // Where d falls on the coarse face, in coarse texels, as the texel choice computes it.
         const glm::vec2 st = shared::raycache_face_coordinates(d, a.face);
-        const float m = shared::raycache_major_magnitude(d, a.face);
-        const float u = (st.x / m + 1.0f) * 0.5f * static_cast<float>(n) - (static_cast<float>(a.column) + 0.5f);
-        const float v = (st.y / m + 1.0f) * 0.5f * static_cast<float>(n) - (static_cast<float>(a.row) + 0.5f);
+        const float scale = 0.5f / shared::raycache_major_magnitude(d, a.face);
+        const float u = shared::raycache_texel_position(st.x, scale, n) - (static_cast<float>(a.column) + 0.5f);
+        const float v = shared::raycache_texel_position(st.y, scale, n) - (static_cast<float>(a.row) + 0.5f);
         Best& b = best[shared::raycache_texel_linear_index(a, n)];
         const float distance2 = u * u + v * v;
         if (distance2 < b.distance2) b = Best{distance2, t};

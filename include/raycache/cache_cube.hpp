@@ -209,13 +209,7 @@ public:
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin)) return refuse();
-        const TexelAddress t{a.face, a.column, a.row};
-        const Word word = Texel::encode(value);
-        if (!Texel::is_valid(word)) return refuse();
-        Tile* tile = tile_for_store(t);
-        if (!tile) return refuse();
-        tile->widen_pending(origin);
-        return store_word(t, word);
+        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &origin);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -596,10 +590,12 @@ private:
         return false;
     }
 
-    bool store_word(const TexelAddress& t, Word word) noexcept {
+    // Writes `word` into texel t under the frame rule; with `origin`, first widens the tile's pending box.
+    bool store_word(const TexelAddress& t, Word word, const glm::vec3* origin = nullptr) noexcept {
         if (!Texel::is_valid(word)) return refuse();
         Tile* tile = tile_for_store(t);
         if (!tile) return refuse(); // over the budget
+        if (origin) tile->widen_pending(*origin);
         const int slot = slot_of(t);
         std::atomic<Word>& texel = tile->texels[slot];
         Word old = texel.load(std::memory_order_acquire);
