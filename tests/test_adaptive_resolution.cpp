@@ -123,3 +123,29 @@ TEST_CASE("resampling takes, for each coarse texel, the fine texel whose centre 
     CHECK(b->z == doctest::Approx(1.0f).epsilon(0.005));
     CHECK(coarse.valid_texels() == 2u);
 }
+
+TEST_CASE("resampling carries the origin boxes and nearest hit distances of the fine tiles into the coarse ones") {
+    // 64 -> 32: fine tiles (0, 0) and (1, 0) of +X (columns 0..15 and 16..31, rows 0..15) both fall into
+    // coarse tile (0, 0) (columns 0..15 at half the resolution).
+    CctCube fine(64), coarse(32);
+    const glm::vec3 grey(0.5f);
+    fine.store(texel_direction(TexelAddress{0, 5, 5}, 64), grey, glm::vec3(0.0f, 0.0f, 0.0f), 3.0f);
+    fine.store(texel_direction(TexelAddress{0, 20, 5}, 64), grey, glm::vec3(0.2f, 0.1f, 0.0f), 2.0f);
+    // Another face's tile, stored without an origin, gives no box.
+    fine.store(texel_direction(TexelAddress{1, 5, 5}, 64), grey);
+    fine.begin_frame();
+    CHECK(raycache::resample_into(fine, coarse) == 3u);
+    coarse.begin_frame();
+    const auto box = coarse.origin_box(TexelAddress{0, 0, 0});
+    REQUIRE(box);
+    CHECK(box->first == glm::vec3(0.0f, 0.0f, 0.0f));
+    CHECK(box->second == glm::vec3(0.2f, 0.1f, 0.0f));
+    CHECK(coarse.nearest_hit(TexelAddress{0, 0, 0}) == 2.0f);
+    CHECK_FALSE(coarse.origin_box(TexelAddress{1, 0, 0}));
+    // So a ray from either fine tile's origins is answered (a resampled tile without its box would answer
+    // any origin, then take the first frame's stores as its whole box).
+    const raycache::OriginTolerance tight{0.01f};
+    CHECK(coarse.lookup(texel_direction(TexelAddress{0, 2, 2}, 32), glm::vec3(0.0f), tight));
+    CHECK(coarse.lookup(texel_direction(TexelAddress{0, 10, 2}, 32), glm::vec3(0.2f, 0.1f, 0.0f), tight));
+    CHECK_FALSE(coarse.lookup(texel_direction(TexelAddress{0, 2, 2}, 32), glm::vec3(0.5f, 0.0f, 0.0f), tight));
+}
