@@ -62,11 +62,12 @@ struct raycache_rsh_primitive {
     vec4 c;          /* triangle: third vertex; w: kind */
 };
 
-/* The closest hit of a ray: t as float bits (positive floats order as their bits, so atomicMin finds the
- * closest) and the primitive; RAYCACHE_RSH_NO_HIT in both when the ray hit nothing. */
+/* The closest hit of a ray: the primitive, and t as float bits. Read as one little-endian 64-bit word,
+ * t_bits is the high half: positive floats order as their bits, so a 64-bit atomicMin keeps the closest
+ * hit, and of equally close ones the smallest primitive index. RAYCACHE_RSH_NO_HIT in both: no hit. */
 struct raycache_rsh_hit {
-    uint t_bits;
     uint primitive;
+    uint t_bits;
 };
 
 #define RAYCACHE_RSH_NO_HIT 0xFFFFFFFFu
