@@ -9,6 +9,8 @@
 
 #include <raycache/shared/rsh_layout.h>
 
+#include "rcx/rsh_reference.hpp" // for_batches
+
 namespace rcx::gpu {
 
 namespace {
@@ -241,28 +243,16 @@ RshStats RshEngine::trace(const vk::Buffer& rays, std::uint32_t ray_count, const
         return true;
     };
 
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo;
-    for (std::uint32_t end = primitive_count; end > 0;) {
-        const std::uint32_t count = std::min(e.batch, end);
-        end -= count;
-        todo.push_back({end, count});
+    std::size_t batch = e.batch; // lowered by an overflow, for this call and the next (paper 3.4)
+    try {
+        rsh::for_batches(primitive_count, batch, [&](std::size_t first, std::size_t count) {
+            return run_batch(static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(count));
+        }, stats.batches, stats.overflows);
+    } catch (const std::length_error&) {
+        throw std::runtime_error("ray-space hierarchy: one primitive meets more leaves than the pair capacity (" +
+                                 std::to_string(e.settings.pair_capacity) + "); raise it");
     }
-    while (!todo.empty()) {
-        const auto [first, count] = todo.back();
-        todo.pop_back();
-        if (run_batch(first, count)) {
-            ++stats.batches;
-            continue;
-        }
-        ++stats.overflows;
-        if (count == 1)
-            throw std::runtime_error("ray-space hierarchy: one primitive meets more leaves than the pair capacity (" +
-                                     std::to_string(e.settings.pair_capacity) + "); raise it");
-        // Halve this batch now, and start the next call with batches of at most this half (paper 3.4).
-        e.batch = std::min(e.batch, count / 2);
-        todo.push_back({first + count / 2, count - count / 2});
-        todo.push_back({first, count / 2});
-    }
+    e.batch = static_cast<std::uint32_t>(batch);
     stats.wall_ms = ms_since(start);
     return stats;
 }

@@ -14,19 +14,13 @@
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
+#include "test_support.hpp"
 #include "rcx/image.hpp"
 #include "rcx/scene.hpp"
 
 int main() {
-    std::unique_ptr<rcx::vk::Context> context;
-    try {
-        rcx::vk::ContextOptions options;
-        options.require_int64_atomics = true;
-        context = std::make_unique<rcx::vk::Context>(options);
-    } catch (const rcx::vk::NoDeviceError& e) {
-        std::printf("skipped: %s\n", e.what());
-        return 77;
-    }
+    std::unique_ptr<rcx::vk::Context> context = rcx::gpu::test::context_or_skip(true);
+    if (!context) return 77;
     int failures = 0;
     const int size = 48;
     const std::string spirv = rcx::gpu::default_spirv_dir();
@@ -71,10 +65,6 @@ int main() {
         }
     }
     context.reset();
-    const std::uint64_t errors = rcx::vk::validation_errors_in_process();
-    if (errors > 0) {
-        std::printf("FAIL: the validation layer reported %llu error(s)\n", static_cast<unsigned long long>(errors));
-        ++failures;
-    }
+    failures += rcx::gpu::test::validation_failures();
     return failures == 0 ? 0 : 1;
 }

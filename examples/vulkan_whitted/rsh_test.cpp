@@ -14,6 +14,7 @@
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
+#include "test_support.hpp"
 #include "rcx/rsh_reference.hpp"
 #include "rcx/scene.hpp"
 #include "rsh_engine.hpp"
@@ -87,17 +88,9 @@ void compare(const std::string& name, const GpuRun& gpu, const std::vector<Hit>&
 } // namespace
 
 int main() {
-    std::unique_ptr<rcx::vk::Context> context;
-    try {
-        rcx::vk::ContextOptions options;
-        options.require_int64_atomics = true;
-        context = std::make_unique<rcx::vk::Context>(options);
-    } catch (const rcx::vk::NoDeviceError& e) {
-        std::printf("skipped: %s\n", e.what());
-        return 77;
-    }
+    std::unique_ptr<rcx::vk::Context> context = rcx::gpu::test::context_or_skip(true);
+    if (!context) return 77;
     rcx::vk::Context& vk = *context;
-    std::printf("device %s, validation %s\n", vk.device_name().c_str(), vk.validation_enabled() ? "on" : "off");
     const std::string spirv = rcx::gpu::default_spirv_dir();
     {
         rcx::gpu::RshEngine engine(vk, spirv);
@@ -166,8 +159,7 @@ int main() {
             if (h.primitive != RAYCACHE_RSH_NO_HIT) { fail("no primitives: a ray hit something"); break; }
     }
     context.reset();
-    const std::uint64_t errors = rcx::vk::validation_errors_in_process();
-    if (errors > 0) fail("the validation layer reported " + std::to_string(errors) + " error(s)");
+    failures += rcx::gpu::test::validation_failures();
     std::printf("%s\n", failures ? "FAILED" : "all passed");
     return failures ? 1 : 0;
 }

@@ -138,6 +138,33 @@ struct TraceStats {
     std::size_t leaf_pairs = 0;          // (ray, primitive) pairs intersected at the leaves
 };
 
+// Section 3.4's batches: runs run(first, count) over primitives [0, total) in batches of at most `batch`,
+// in order; a run that returns false (its stream overflowed) is split in two halves, run in turn, and
+// `batch` lowered to the half, so a caller that keeps it starts its next trace with batches that fit.
+// Counts completed and overflowed runs; a single primitive that overflows throws std::length_error.
+template <class Run, class Count>
+void for_batches(std::size_t total, std::size_t& batch, Run&& run, Count& batches, Count& overflows) {
+    std::vector<std::pair<std::size_t, std::size_t>> todo;
+    for (std::size_t end = total; end > 0;) {
+        const std::size_t count = std::min(batch, end);
+        end -= count;
+        todo.push_back({end, count});
+    }
+    while (!todo.empty()) {
+        const auto [first, count] = todo.back();
+        todo.pop_back();
+        if (run(first, count)) {
+            ++batches;
+            continue;
+        }
+        ++overflows;
+        if (count == 1) throw std::length_error("ray-space hierarchy: one primitive meets more leaves than the pair capacity");
+        batch = std::min(batch, count / 2);
+        todo.push_back({first + count / 2, count - count / 2});
+        todo.push_back({first, count / 2});
+    }
+}
+
 // Traces `rays` (the hierarchy `h` was built from them) against `primitives` with a pair stream of at
 // most `capacity` pairs (>= 1). A batch of primitives whose stream would exceed the capacity at some
 // level is split in two and each half traced on its own; a single primitive that overflows alone throws
@@ -190,26 +217,8 @@ inline std::vector<Hit> trace(const std::vector<Ray>& rays, const Hierarchy& h, 
         return true;
     };
 
-    // Batches of at most `capacity` primitives (the root level holds one pair per primitive), halved on
-    // overflow, processed in order.
-    std::vector<std::pair<std::size_t, std::size_t>> todo;
-    for (std::size_t first = primitives.size(); first > 0;) {
-        const std::size_t count = std::min(capacity, first);
-        first -= count;
-        todo.push_back({first, count});
-    }
-    while (!todo.empty()) {
-        const auto [first, count] = todo.back();
-        todo.pop_back();
-        if (run(first, count)) {
-            ++s.batches;
-            continue;
-        }
-        ++s.overflows;
-        if (count == 1) throw std::length_error("rsh::trace: one primitive meets more leaves than the pair capacity");
-        todo.push_back({first + count / 2, count - count / 2});
-        todo.push_back({first, count / 2});
-    }
+    std::size_t batch = capacity; // the root level holds one pair per primitive
+    for_batches(primitives.size(), batch, run, s.batches, s.overflows);
     return hits;
 }
 
