@@ -20,13 +20,14 @@ using raycache::TexelAddress;
 const glm::vec3 grey(0.5f);
 
 // 16 x 16 words, four 64-bit written masks, four 64-bit doubtful masks, the pending and visible origin
-// boxes (6 + 6 four-byte values), a has-box flag (1 byte, padded to 4) and the stale mark (4 bytes).
-constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8 + 12 * 4 + 4 + 4;
-constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8 + 12 * 4 + 4 + 4;
+// boxes (6 + 6 four-byte values), a has-box flag (1 byte, padded to 4), the pending and visible nearest hit
+// distances (4 + 4 bytes) and the stale mark (4 bytes).
+constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8 + 12 * 4 + 4 + 8 + 4;
+constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8 + 12 * 4 + 4 + 8 + 4;
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits and an origin box: 1144 bytes for the CCT, 2168 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits and an origin box and a nearest distance: 1152 bytes for the CCT, 2176 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }
