@@ -89,16 +89,26 @@ const raycache::CubeBounds box{glm::vec3(0.0f), 1.0f};
 
 // Fills a cube as a mirror ball of radius 1 at the origin would: rays from points of its surface into the
 // half-space of their normal, traced in `w` with their path records. `stores` rays.
-void fill(CctCube& cube, const World& w, int stores, unsigned seed) {
+struct StoredRay {
+    TexelAddress texel;
+    glm::vec3 origin, direction;
+};
+
+// Only directions with d.y <= max_up are stored; `rays`, when given, gets every ray stored.
+void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up = 1.0f, std::vector<StoredRay>* rays = nullptr) {
     std::mt19937 rng(seed);
     std::normal_distribution<float> g;
     for (int k = 0; k < stores; ++k) {
         const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
         glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
         if (glm::dot(d, n) < 0.0f) d = -d;
+        if (d.y > max_up) continue;
         PathRecord path;
         const glm::vec3 c = w.trace(n, d, &path);
-        cube.store(d, c, n, path);
+        if (cube.store(d, c, n, path) && rays) {
+            const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
+            rays->push_back({{a.face, a.column, a.row}, n, d});
+        }
     }
     cube.begin_frame();
 }
@@ -261,4 +271,32 @@ TEST_CASE("texels stored without a path record are dropped by any move; recorded
     CHECK(counts.dropped == 1);
     CHECK(cube.peek(up).has_value());
     CHECK(!cube.peek(down).has_value());
+}
+
+TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the light over the paths' hit points catches its shadow") {
+    // The cube stores only rays within 11 degrees of horizontal, so no texel's cone reaches the caster high
+    // above ball 0; only its shadow on ball 0 changes when it moves.
+    World before = make_world();
+    before.balls.pop_back();
+    const glm::vec3 b0 = before.balls[0].centre;
+    before.balls.push_back({b0 + 0.55f * (before.light - b0), 0.4f, glm::vec3(1.0f)});
+    const std::size_t caster = before.balls.size() - 1;
+    World after = before;
+    after.balls[caster].centre += glm::vec3(0.0f, 0.0f, 0.5f);
+    // Here the oracle retraces the stored rays themselves: the path records describe the stored paths, and a
+    // ray from another origin hits ball 0 elsewhere, where the CCT answers it with the stored colour anyway.
+    CctCube cube(64);
+    std::vector<StoredRay> rays;
+    fill(cube, before, 60000, 9, 0.2f, &rays);
+    auto stale = [&] {
+        std::size_t n = 0;
+        for (const StoredRay& r : rays)
+            n += cube.load(r.texel).has_value() && before.trace(r.origin, r.direction) != after.trace(r.origin, r.direction);
+        return n;
+    };
+    CHECK(stale() > 0);
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, move_of(before, after, caster));
+    CHECK(counts.tiles_by_texel == 0); // no cone of stored rays reaches the caster
+    CHECK(counts.dropped > 0);
+    CHECK(stale() == 0);
 }
