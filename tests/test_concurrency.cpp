@@ -414,8 +414,8 @@ TEST_CASE("cubes sharing a budget never exceed it under random concurrent stores
 }
 
 TEST_CASE("stores with path records from 4 threads, then exact invalidation between frames: the same texels survive as with 1 thread") {
-    // Each store's path hit one of 8 objects (by the store's index) at a point along its direction; object 3
-    // then moves. Concurrent record merging (atomic or, min, max) must give tiles the same records, so the
+    // Each store's path hit the object numbered by its direction's face at a point along its direction;
+    // object 3 then moves. Concurrent record merging (atomic or, min, max) must give tiles the same records, so the
     // pass, which reads only those and the texels, empties the same texels.
     const std::vector<StoreItem> items = make_store_list(40000);
     auto build = [&](int threads) {
@@ -423,7 +423,8 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
         run_threads(threads, [&](int t) {
             for (std::size_t i = static_cast<std::size_t>(t); i < items.size(); i += static_cast<std::size_t>(threads)) {
                 raycache::PathRecord path;
-                path.hit(i % 8, 4.0f * glm::normalize(items[i].direction));
+                path.hit(static_cast<std::uint64_t>(raycache::shared::raycache_face_of(items[i].direction)),
+                         4.0f * glm::normalize(items[i].direction));
                 path.lit = i % 3 == 0;
                 cube->store(items[i].direction, items[i].colour, glm::vec3(0.0f), path);
             }

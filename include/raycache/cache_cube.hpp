@@ -249,6 +249,7 @@ public:
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
         bool has_origins;
         glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
+        int unrecorded_texels;           // texels holding a value whose store brought no path record
     };
 
     // f(const TileState&) for every allocated tile, in index order. Between frames only.
@@ -263,7 +264,10 @@ public:
             TileState t{i, face, tile_column * tile_edge, tile_row * tile_edge,
                         std::min(face_size_, (tile_column + 1) * tile_edge), std::min(face_size_, (tile_row + 1) * tile_edge),
                         tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
-                        tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f)};
+                        tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
+            for (int slot = 0; slot < tile_texels; ++slot)
+                t.unrecorded_texels += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) &&
+                                       !((tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u);
             // record_path() widens all three axes at once, so one axis tells whether the box is empty.
             if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
                 for (int k = 0; k < 3; ++k) {
@@ -313,6 +317,18 @@ public:
                 ++dropped;
             }
         return dropped;
+    }
+
+    // Marks every valid texel of tile `index` (TileState::index) as recorded and adds `path` to the tile's
+    // record: for texels copied from another cube whose records are known (carry_path_records). Between frames.
+    void record_texels_of_tile(std::size_t index, const PathRecord& path) noexcept {
+        assert_between_frames();
+        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return;
+        for (int slot = 0; slot < tile_texels; ++slot)
+            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
+                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -711,6 +727,10 @@ private:
         Tile* tile = tile_of(t);
         const int slot = slot_of(t);
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
+    }
+    static void merge_path(Tile& tile_ref, const PathRecord& path) noexcept {
+        Tile* tile = &tile_ref;
         if ((tile->path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
             tile->path_objects.fetch_or(path.objects, std::memory_order_relaxed);
         const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |

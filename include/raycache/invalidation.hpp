@@ -151,11 +151,14 @@ InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& ra
             counts.dropped += cube.invalidate_in_tile(t.index, [](const TexelAddress&, bool) { return true; });
             continue;
         }
+        // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
+        if (changes.moved.empty() && !changes.light_moved) continue;
         const detail::OriginBall ball = detail::origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi);
         const bool cone_meets =
             face_meets[t.face] &&
             detail::any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved);
         if (cone_meets) ++counts.tiles_by_texel;
+        else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
         counts.dropped += cube.invalidate_in_tile(t.index, [&](const TexelAddress& a, bool recorded) {
             if (!recorded) return true; // nothing known about the rest of its path
             return cone_meets && detail::any_sphere_in_cone(
@@ -164,6 +167,39 @@ InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& ra
         });
     }
     return counts;
+}
+
+// After a cube was resampled into another (raycache/adaptive_resolution.hpp, resample_into: each texel of
+// `to` took a texel of `from` within its own rectangle of the face), gives every valid texel of `to` the
+// union of the path records of the tiles of `from` whose rectangles overlap its tile's, so the resampled
+// texels stay known to exact invalidation. Between frames.
+template <class Texel>
+void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
+    using Tile = typename CacheCube<Texel>::TileState;
+    std::vector<Tile> old;
+    from.for_each_tile_state([&](const Tile& t) { old.push_back(t); });
+    const float fn = static_cast<float>(from.face_size()), tn = static_cast<float>(to.face_size());
+    to.for_each_tile_state([&](const Tile& t) {
+        PathRecord union_of;
+        bool any = false, unknown = false; // unknown: an overlapping old tile held unrecorded texels
+        for (const Tile& o : old) {
+            if (o.face != t.face) continue;
+            const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(t.column1) / tn &&
+                                 static_cast<float>(t.column0) / tn < static_cast<float>(o.column1) / fn &&
+                                 static_cast<float>(o.row0) / fn < static_cast<float>(t.row1) / tn &&
+                                 static_cast<float>(t.row0) / tn < static_cast<float>(o.row1) / fn;
+            if (!overlap) continue;
+            any = true;
+            unknown = unknown || o.unrecorded_texels > 0;
+            union_of.objects |= o.objects;
+            if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
+                                                union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
+            union_of.lit |= (o.path_flags & 1u) != 0;
+            union_of.chained |= (o.path_flags & 2u) != 0;
+            union_of.unbounded |= (o.path_flags & 4u) != 0;
+        }
+        if (any && !unknown) to.record_texels_of_tile(t.index, union_of);
+    });
 }
 
 } // namespace raycache

@@ -764,6 +764,7 @@ private:
         if (next < current) {
             if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
+                carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
                 mark_doubtful_edges(*e.cct, edge_threshold_);
             } else
                 resample_into(*old.cdct, *e.cdct);
