@@ -55,6 +55,20 @@ TEST_CASE("the next face size moves to the nearest step only when the ideal is f
     CHECK(raycache::next_face_size(256, 60000000000ull, 1.0, capped) == 512);
 }
 
+TEST_CASE("the first sizing, after the first counted frame, goes straight to the nearest step") {
+    AdaptiveResolution a; // first size 256, hysteresis 2 half octaves
+    // 6 * 362^2 = 786,264 rays over every direction: ideal 362, one half octave above 256. A later frame
+    // stays at 256 (hysteresis); the first sizing moves, since the cube holds only one cold frame's texels.
+    CHECK(raycache::next_face_size(256, 786264, 1.0, a) == 256);
+    CHECK(raycache::first_face_size(256, 786264, 1.0, a) == 362);
+    // Half the directions covered, 2 rays a texel: 6 N^2 * 0.5 * 2 = 6 N^2, so 1536 rays give N = 16.
+    AdaptiveResolution two = a;
+    two.rays_per_texel = 2.0f;
+    CHECK(raycache::first_face_size(256, 1536, 0.5, two) == 16);
+    // No rays: keep the size.
+    CHECK(raycache::first_face_size(256, 0, 0.0, a) == 256);
+}
+
 TEST_CASE("adaptive settings are validated with a message naming the field") {
     AdaptiveResolution a;
     a.rays_per_texel = 0.0f;

@@ -426,7 +426,7 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
                 path.hit(static_cast<std::uint64_t>(raycache::shared::raycache_face_of(items[i].direction)),
                          4.0f * glm::normalize(items[i].direction));
                 path.lit = i % 3 == 0;
-                cube->store(items[i].direction, items[i].colour, glm::vec3(0.0f), path);
+                cube->store(items[i].direction, items[i].colour, path);
             }
         });
         cube->begin_frame();

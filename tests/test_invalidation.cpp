@@ -105,7 +105,7 @@ void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up
         if (d.y > max_up) continue;
         PathRecord path;
         const glm::vec3 c = w.trace(n, d, &path);
-        if (cube.store(d, c, n, path) && rays) {
+        if (cube.store(d, c, path) && rays) {
             const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
             rays->push_back({{a.face, a.column, a.row}, n, d});
         }

@@ -111,6 +111,7 @@ int run(const rcx::Options& o) {
             cache_settings.filtered = o.filtered;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
+            cache_settings.origin_parallax = o.origin_parallax;
             caches = std::make_unique<raycache::embree::SceneCache>(
                 o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct,
                 cache_settings);

@@ -54,6 +54,8 @@ int run(const rcx::Options& o, bool hybrid) {
         throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
     if (o.origin_drift != defaults.origin_drift)
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
+    if (o.origin_parallax != defaults.origin_parallax)
+        throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     if (!o.load_cache.empty() || !o.save_cache.empty())

@@ -130,6 +130,14 @@ inline int next_face_size(int current, std::uint64_t rays, double covered_fracti
     return nearest_face_size_step(ideal, a);
 }
 
+// The face size for a cube after the first frame its rays were counted in: the nearest step to the ideal,
+// without hysteresis (the cube holds only that cold frame's texels, so moving costs nearly nothing and
+// waiting would keep a first guess for the whole walkthrough). A frame without rays keeps `current`.
+inline int first_face_size(int current, std::uint64_t rays, double covered_fraction, const AdaptiveResolution& a) noexcept {
+    const double ideal = ideal_face_size(rays, covered_fraction, a.rays_per_texel);
+    return ideal > 0.0 ? nearest_face_size_step(ideal, a) : current;
+}
+
 // Fills the empty texels of `coarse` from `fine` (a cube of a larger face size): each coarse texel takes
 // the value of the valid fine texel whose centre direction falls in it nearest to its centre (ties: the
 // first in linear order), so the value stands for the coarse texel's centre as well as the fine cube

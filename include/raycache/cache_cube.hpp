@@ -19,7 +19,11 @@
 // store(direction, value, origin) widens its tile's box of origins (pending until the next begin_frame()),
 // and lookup(direction, origin, drift) misses, marking the tile stale, when the origin lies more than
 // `drift` outside the tile's visible box. begin_frame() drops stale tiles, which refill from the current
-// rays. Boxes and marks are order-independent (min, max, or), read only from frame-constant state.
+// rays. A fixed drift suits far surroundings only: a surface at distance d seen from an origin moved by s
+// shifts by about s / d radians, so near surfaces (a floor under a mirror ball) go wrong long before far
+// ones. Stores given the hit distance keep, per tile, the nearest surface its rays met, and a lookup with
+// an OriginTolerance allows at most `parallax` x that distance of drift. Boxes, distances and marks are
+// order-independent (min, max, or), read only from frame-constant state.
 //
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
 // locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
@@ -58,6 +62,14 @@
 #include "raycache/texel.hpp"
 
 namespace raycache {
+
+// How far a ray's origin may lie outside the origins its tile was stored from and still be answered:
+// `drift` world units, and no more than `parallax` times the distance to the nearest surface the tile's
+// stored rays hit (the angle, in radians, by which that surface may appear to move; infinity: no bound).
+struct OriginTolerance {
+    float drift = 0.0f;
+    float parallax = std::numeric_limits<float>::infinity();
+};
 
 template <class Texel>
 class CacheCube {
@@ -156,6 +168,13 @@ public:
     // box of the origins its tile's visible texels were stored from; the tile is then marked stale and
     // dropped at the next begin_frame(). Thread-safe, wait-free (a marking is one relaxed store).
     std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, float drift) noexcept {
+        return lookup(direction, origin, OriginTolerance{drift});
+    }
+
+    // lookup(direction, origin, drift) with the drift also bounded by parallax (OriginTolerance): a tile whose
+    // rays met a surface at distance d answers origins within min(drift, parallax * d) of its box (drift
+    // alone while none of its stores gave a finite distance).
+    std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         std::optional<Value> value;
@@ -164,7 +183,7 @@ public:
             value = visible_value(t);
             if (value) {
                 Tile* tile = tile_of(t);
-                if (!tile->origins_cover(origin, drift)) {
+                if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
                     tile->stale.store(1u, std::memory_order_relaxed);
                     value.reset();
                 }
@@ -205,24 +224,44 @@ public:
         return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
     }
 
-    // store() for a ray that left from `origin`: also widens its tile's pending box of origins (whether or
-    // not the word is written), which lookup(direction, origin, drift) reads from the next frame on.
+    // store() for a ray that left from `origin`: also widens its tile's pending box of origins (unless the
+    // texel already holds a visible value), which lookup(direction, origin, drift) reads from the next frame on.
     bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin) noexcept {
+        return store(direction, value, origin, std::numeric_limits<float>::infinity());
+    }
+
+    // store(direction, value, origin) for a ray whose hit lay `hit_distance` along the unit direction
+    // (infinity: it escaped): the tile also keeps the nearest such distance, which bounds the drift of
+    // lookups given a parallax (OriginTolerance). A NaN or negative distance is refused.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance) noexcept {
+        return store(direction, value, origin, hit_distance, OriginTolerance{std::numeric_limits<float>::infinity()});
+    }
+
+    // store(direction, value, origin, hit_distance) that keeps the tile's origins tight: refused when the tile
+    // already has a visible origin box and adding `origin` would make it wider, on any axis, than the
+    // drift `tolerance` allows for the tile (its nearest hit distance, or this one when nearer). Otherwise a
+    // tile filled a little more each frame along a moving camera would stretch its box along the path, and
+    // its first values would answer rays from ever further away. Only frame-constant state decides.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
+               const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin)) return refuse();
-        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &origin);
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &from);
     }
 
     // store() of a traced ray with what its path saw (raycache/path_record.hpp): when the word is written, its
     // tile adds `path` to the union of its stores' records and marks the texel as recorded, for
     // raycache/invalidation.hpp. Texels stored without a record count as having seen anything.
-    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, const PathRecord& path) noexcept {
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
+               const OriginTolerance& tolerance, const PathRecord& path) noexcept {
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin)) return refuse();
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
         const TexelAddress t{a.face, a.column, a.row};
-        if (!store_word(t, Texel::encode(value), &origin)) return false;
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        if (!store_word(t, Texel::encode(value), &from)) return false;
         record_path(t, path);
         return true;
     }
@@ -380,13 +419,23 @@ public:
 
     // Makes [lo, hi] the visible origin box of `texel`'s tile, for loading a saved cube; false (nothing set)
     // when the tile holds no texel yet. Between frames.
-    bool set_origin_box(const TexelAddress& texel, const glm::vec3& lo, const glm::vec3& hi) noexcept {
+    bool set_origin_box(const TexelAddress& texel, const glm::vec3& lo, const glm::vec3& hi,
+                        float nearest = std::numeric_limits<float>::infinity()) noexcept {
         RAYCACHE_ASSERT(contains(texel));
         Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
         if (!tile) return false;
         for (int k = 0; k < 3; ++k) tile->box_min[k] = lo[k], tile->box_max[k] = hi[k];
         tile->has_box = true;
+        tile->nearest = nearest >= 0.0f ? nearest : std::numeric_limits<float>::infinity();
         return true;
+    }
+
+    // The nearest hit distance of the stores (given distances) into `texel`'s tile up to the last
+    // begin_frame(); infinity when none. For saving a cube. Between frames.
+    float nearest_hit(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        const Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
+        return tile ? tile->nearest : std::numeric_limits<float>::infinity();
     }
 
     // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
@@ -437,8 +486,6 @@ public:
         state_->counters.reset();
     }
 
-    // Ends a frame: this frame's stores become visible; returns the frame's counters and resets them.
-    // Between frames only.
     // Ends a frame: this frame's stores become visible, tiles marked stale are dropped (their texels empty,
     // their memory given back), pending origin boxes become visible; returns the frame's counters and
     // resets them. Between frames only.
@@ -523,6 +570,13 @@ private:
                 vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 vertex_max[k].store(0u, std::memory_order_relaxed);
             }
+            pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
+        }
+        // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
+        void near_pending(float d) noexcept {
+            const std::uint32_t key = ordered(d);
+            std::uint32_t now = pending_nearest.load(std::memory_order_relaxed);
+            while (key < now && !pending_nearest.compare_exchange_weak(now, key, std::memory_order_relaxed)) {}
         }
         // Widens the pending origin box by `o` (atomic min and max on ordered float bits).
         void widen_pending(const glm::vec3& o) noexcept {
@@ -542,6 +596,20 @@ private:
                 if (!(o[k] >= box_min[k] - drift && o[k] <= box_max[k] + drift)) return false;
             return true;
         }
+        // Whether the visible box grown by `o` stays within `drift` wide on every axis (true without a box).
+        bool box_stays_within(const glm::vec3& o, float drift) const noexcept {
+            if (!has_box) return true;
+            for (int k = 0; k < 3; ++k)
+                if (!(std::max(box_max[k], o[k]) - std::min(box_min[k], o[k]) <= drift)) return false;
+            return true;
+        }
+        // The drift a tolerance allows a tile whose nearest hit lies at `nearest`: min(drift, parallax x
+        // nearest); drift alone when either factor of the product is infinite.
+        static float allowed_drift(const OriginTolerance& t, float nearest) noexcept {
+            if (!(t.parallax < std::numeric_limits<float>::infinity()) || !(nearest < std::numeric_limits<float>::infinity()))
+                return t.drift;
+            return std::min(t.drift, t.parallax * nearest);
+        }
         std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet).
         std::atomic<std::uint64_t> written_bits[bit_words];
@@ -552,6 +620,9 @@ private:
         std::atomic<std::uint32_t> pending_min[3], pending_max[3];
         float box_min[3] = {0, 0, 0}, box_max[3] = {0, 0, 0};
         bool has_box = false;
+        // The nearest hit distance of the stores with distances: this frame's, and the visible one.
+        std::atomic<std::uint32_t> pending_nearest;
+        float nearest = std::numeric_limits<float>::infinity();
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
         // What the paths stored into this tile saw (store() with a PathRecord): their union, kept until the
         // tile is dropped; read between frames only (raycache/invalidation.hpp).
@@ -692,6 +763,7 @@ private:
             }
             if (tile->pending_min[0].load(std::memory_order_relaxed) <= tile->pending_max[0].load(std::memory_order_relaxed))
                 tile->has_box = true;
+            tile->nearest = std::min(tile->nearest, unordered(tile->pending_nearest.load(std::memory_order_relaxed)));
         }
     }
 
@@ -747,16 +819,32 @@ private:
         }
     }
 
-    // Writes `word` into texel t under the frame rule; with `origin`, first widens the tile's pending box.
-    bool store_word(const TexelAddress& t, Word word, const glm::vec3* origin = nullptr) noexcept {
+    // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and
+    // nearest distance, or refuses a store that would stretch the box beyond what the tolerance allows.
+    // Where a store's ray left from, how far it went, and how much drift its tile allows.
+    struct StoreOrigin {
+        glm::vec3 origin;
+        float hit_distance;
+        OriginTolerance tolerance;
+    };
+
+    bool store_word(const TexelAddress& t, Word word, const StoreOrigin* from = nullptr) noexcept {
         if (!Texel::is_valid(word)) return refuse();
         Tile* tile = tile_for_store(t);
         if (!tile) return refuse(); // over the budget
-        if (origin) tile->widen_pending(*origin);
         const int slot = slot_of(t);
         std::atomic<Word>& texel = tile->texels[slot];
         Word old = texel.load(std::memory_order_acquire);
         if (Texel::is_valid(old) && !written(*tile, slot)) return refuse(); // visible: kept
+        // Only a word that may be kept widens the box (a same-frame rival may win either way): the box must
+        // bound the origins of the values the tile holds, or a doubtful texel retraced every frame from a
+        // moving camera would stretch it until no lookup ever missed on drift.
+        if (from) {
+            const float drift = Tile::allowed_drift(from->tolerance, std::min(tile->nearest, from->hit_distance));
+            if (!tile->box_stays_within(from->origin, drift)) return refuse();
+            tile->widen_pending(from->origin);
+            tile->near_pending(from->hit_distance);
+        }
         // Mark the texel as this frame's before writing it, so no reader can see the new word as visible.
         tile->written_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         if (!state_->written_this_frame.load(std::memory_order_relaxed))

@@ -17,31 +17,28 @@
 
 namespace raycache {
 
-// cached_trace(cube, direction, origin, drift, trace) (raycache/cached_trace.hpp) with a trace callable as
-// `Value trace(PathRecord& path)`: on a miss it traces, filling `path` with what the path hit after leaving
-// (PathRecord::hit, and the lit / chained / unbounded flags), and the value is stored with that record.
-// drift < 0: no origin test. filtered: a hit answers with the bilinear mean of the visible texels around
-// `direction` (as filtered_cached_trace). Thread-safe as CacheCube::lookup/store.
-template <class Texel, class Trace>
-typename Texel::Value cached_trace_recorded(CacheCube<Texel>& cube, const glm::vec3& direction, const glm::vec3& origin,
-                                           float drift, bool filtered, Trace&& trace) {
-    using Value = typename Texel::Value;
-    static_assert(std::is_invocable_r_v<Value, Trace&, PathRecord&>,
-                  "RayCache cached_trace_recorded: trace must be callable as `Value trace(raycache::PathRecord&)`");
+// cct_cached_trace() (raycache/cached_trace.hpp) for a trace callable as `R trace(PathRecord& path)`, R with
+// members `color` and `distance` (as raycache::TracedRay): on a miss it traces, filling `path` with what the
+// path hit after leaving (PathRecord::hit, and the lit / chained / unbounded flags), and the colour is
+// stored with that record. tolerance: the origin test (null: none, the ray's direction alone keys it).
+// filtered: a hit answers with the bilinear mean of the visible texels around `direction`.
+// Thread-safe as CacheCube::lookup/store.
+template <class Trace>
+glm::vec3 cct_cached_trace_recorded(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin,
+                                    const OriginTolerance* tolerance, bool filtered, Trace&& trace) {
+    static_assert(std::is_invocable_v<Trace&, PathRecord&>,
+                  "RayCache cct_cached_trace_recorded: trace must be callable as `TracedRay trace(raycache::PathRecord&)`");
     const auto use = cube.in_frame();
-    const std::optional<Value> cached = drift >= 0.0f ? cube.lookup(direction, origin, drift) : cube.lookup(direction);
-    if (cached) {
-        if constexpr (std::is_same_v<Texel, CctTexel>) {
-            if (filtered)
-                return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });
-        }
-        return *cached;
-    }
+    const std::optional<glm::vec3> cached = tolerance ? cube.lookup(direction, origin, *tolerance) : cube.lookup(direction);
+    if (cached)
+        return filtered ? *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); })
+                        : *cached;
     PathRecord path;
-    Value traced = trace(path);
-    if (drift >= 0.0f) cube.store(direction, traced, origin, path);
-    else cube.store(direction, traced, path);
-    return traced;
+    const auto traced = trace(path);
+    const glm::vec3 colour = traced.color;
+    if (tolerance) cube.store(direction, colour, origin, traced.distance, *tolerance, path);
+    else cube.store(direction, colour, path);
+    return colour;
 }
 
 } // namespace raycache

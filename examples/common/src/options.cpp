@@ -144,6 +144,10 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--warm-up") o.warm_up = static_cast<int>(parse_int(arg, next(), 0, 64));
         else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--origin-drift") o.origin_drift = parse_float(arg, next(), false);
+        else if (arg == "--origin-parallax") {
+            const std::string text = next();
+            o.origin_parallax = text == "inf" ? std::numeric_limits<float>::infinity() : parse_float(arg, text, true);
+        }
         else if (arg == "--invalidate") o.invalidate = parse_invalidation(next());
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
@@ -222,6 +226,8 @@ std::string help_text(const std::string& program) {
         "  --origin-drift F    CCT: a tile met by a ray leaving further than F x the cube's\n"
         "                      half-size from its stores' origins refills; negative:\n"
         "                      off (Embree tracer)                                    [0.1]\n"
+        "  --origin-parallax F CCT: ... or further than F x the distance to the nearest\n"
+        "                      surface its rays hit (radians); inf: off (Embree)    [0.01]\n"
         "  --invalidate P      dynamic scenes (dynamic-N), when objects move: none (keep\n"
         "                      every texel), all (empty every cube) or exact (only the\n"
         "                      texels the moves can have changed; Embree tracer, CCT) [exact]\n"

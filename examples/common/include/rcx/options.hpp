@@ -49,6 +49,7 @@ struct Options {
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
     InvalidationPolicy invalidate = InvalidationPolicy::exact; // dynamic scenes: texels dropped when objects move
     float origin_drift = 0.1f;        // CCT: tiles met from origins further than this x half-size away refill; < 0 off
+    float origin_parallax = 0.01f;    // CCT: ... or further than this x the distance to the tile's nearest hit; inf off
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss

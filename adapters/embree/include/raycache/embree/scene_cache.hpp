@@ -144,6 +144,10 @@ struct SceneCacheSettings {
     // ignores where rays start, so a circling camera would otherwise read colours from the old viewpoint).
     // Negative: off.
     float origin_drift = 0.1f;
+    // CCT: and at most this many radians of parallax: a tile whose rays hit a surface at distance d answers
+    // only rays leaving within origin_parallax x d of its origins (a near floor under a mirror ball moves in
+    // the reflection long before the far walls do). Applies with origin_drift; infinity: off.
+    float origin_parallax = 0.01f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -283,6 +287,7 @@ class SceneCache {
         std::unique_ptr<CdctCube> cdct;
         std::unique_ptr<DepthPyramid> pyramid;       // CDCT with depth_pyramid only
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
+        bool sized = false; // adaptive: sized once from counted rays (later moves need the hysteresis)
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -316,10 +321,15 @@ public:
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
-          origin_drift_(settings.origin_drift),
+          origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
+        if (!(origin_parallax_ > 0.0f))
+            throw std::invalid_argument("RayCache SceneCacheSettings::origin_parallax must be > 0 (infinity: off), got " +
+                                        std::to_string(origin_parallax_));
+        if (std::isnan(origin_drift_))
+            throw std::invalid_argument("RayCache SceneCacheSettings::origin_drift must be a number (negative: off)");
     }
 
     Technique technique() const noexcept { return technique_; }
@@ -411,7 +421,7 @@ public:
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
     // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
     // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
-    // infinity when it escaped; the CCT uses only the colour). It runs on a miss; its colour is returned
+    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax). It runs on a miss; its colour is returned
     // unchanged. Objects without a cube: returns trace().color. Thread-safe.
     template <class Trace>
     glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
@@ -427,9 +437,9 @@ public:
             Entry& e = entries_[static_cast<std::size_t>(index)];
             if (technique_ == Technique::cct) {
                 if (e.coverage) e.coverage->mark(direction);
-                const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
-                return cached_trace_recorded(*e.cct, direction, origin, drift, filtered_,
-                                             [&](PathRecord& path) { return trace(path).color; });
+                const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
+                return cct_cached_trace_recorded(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr,
+                                                 filtered_, trace);
             }
             return leaving_ray(id, origin, direction, [&] { return trace(unused); }); // the CDCT keeps no records
         } else {
@@ -439,11 +449,10 @@ public:
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
             auto colour = [&] { return trace().color; };
-            if (origin_drift_ >= 0.0f) {
-                const float drift = origin_drift_ * e.bounds.half_size;
-                return filtered_ ? filtered_cached_trace(*e.cct, direction, origin, drift, colour)
-                                 : cached_trace(*e.cct, direction, origin, drift, colour);
-            }
+            if (origin_drift_ >= 0.0f)
+                return cct_cached_trace(*e.cct, direction, origin,
+                                        OriginTolerance{origin_drift_ * e.bounds.half_size, origin_parallax_}, filtered_,
+                                        trace);
             return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
         }
         int read = 0;
@@ -756,7 +765,9 @@ private:
     // Returns whether the size changed. Between frames.
     bool adapt(Entry& e, std::uint64_t rays) {
         const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-        const int next = next_face_size(current, rays, e.coverage->fraction(), adaptive_);
+        const int next = e.sized ? next_face_size(current, rays, e.coverage->fraction(), adaptive_)
+                                 : first_face_size(current, rays, e.coverage->fraction(), adaptive_);
+        e.sized = e.sized || rays > 0;
         e.coverage->reset();
         if (next == current) return false;
         Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), std::move(e.pyramid), nullptr};
@@ -875,6 +886,7 @@ private:
     bool filtered_;
     float edge_threshold_;
     float origin_drift_;
+    float origin_parallax_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).
