@@ -56,6 +56,7 @@
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/memory_budget.hpp"
+#include "raycache/path_record.hpp"
 #include "raycache/shared/ray_box.h"
 #include "raycache/statistics.hpp"
 #include "raycache/texel.hpp"
@@ -250,6 +251,125 @@ public:
         return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &from);
     }
 
+    // store() of a traced ray with what its path saw (raycache/path_record.hpp): when the word is written, its
+    // tile adds `path` to the union of its stores' records and marks the texel as recorded, for
+    // raycache/invalidation.hpp. Texels stored without a record count as having seen anything.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
+               const OriginTolerance& tolerance, const PathRecord& path) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
+        const TexelAddress t{a.face, a.column, a.row};
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        if (!store_word(t, Texel::encode(value), &from)) return false;
+        record_path(t, path);
+        return true;
+    }
+    bool store(const glm::vec3& direction, const Value& value, const PathRecord& path) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        if (a.face == RAYCACHE_NO_FACE) return refuse();
+        const TexelAddress t{a.face, a.column, a.row};
+        if (!store_word(t, Texel::encode(value))) return false;
+        record_path(t, path);
+        return true;
+    }
+
+    // Bits of TileState::path_flags: what a tile's recorded paths did (raycache/path_record.hpp).
+    static constexpr std::uint32_t path_lit = 1u, path_chained = 2u, path_unbounded = 4u;
+
+    // One allocated tile, for invalidation (raycache/invalidation.hpp): its texels, the union of the path
+    // records stored into it, and the box of the origins its texels were stored from (visible and pending).
+    struct TileState {
+        std::size_t index;               // for invalidate_in_tile()
+        int face, column0, row0, column1, row1; // texels [column0, column1) x [row0, row1) of the face
+        std::uint64_t objects;           // Bloom mask of the objects the recorded paths hit
+        glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
+        std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
+        bool has_origins;
+        glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
+        int unrecorded_texels;           // texels holding a value whose store brought no path record
+    };
+
+    // f(const TileState&) for every allocated tile, in index order. Between frames only.
+    template <class F>
+    void for_each_tile_state(F&& f) const {
+        for (std::size_t i = 0; i < tile_count(); ++i) {
+            const Tile* tile = state_->tiles[i].load(std::memory_order_acquire);
+            if (!tile) continue;
+            const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+            const int face = static_cast<int>(i / (per_edge * per_edge));
+            const int tile_row = static_cast<int>((i / per_edge) % per_edge), tile_column = static_cast<int>(i % per_edge);
+            TileState t{i, face, tile_column * tile_edge, tile_row * tile_edge,
+                        std::min(face_size_, (tile_column + 1) * tile_edge), std::min(face_size_, (tile_row + 1) * tile_edge),
+                        tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
+                        tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
+            for (int slot = 0; slot < tile_texels; ++slot)
+                t.unrecorded_texels += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) &&
+                                       !((tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u);
+            // record_path() widens all three axes at once, so one axis tells whether the box is empty.
+            if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
+                for (int k = 0; k < 3; ++k) {
+                    t.vertex_lo[k] = unordered(tile->vertex_min[k].load(std::memory_order_relaxed));
+                    t.vertex_hi[k] = unordered(tile->vertex_max[k].load(std::memory_order_relaxed));
+                }
+            } else {
+                t.vertex_lo = glm::vec3(1.0f), t.vertex_hi = glm::vec3(-1.0f);
+            }
+            t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
+                                                 tile->pending_max[0].load(std::memory_order_relaxed);
+            if (t.has_origins) {
+                for (int k = 0; k < 3; ++k) {
+                    const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
+                    const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
+                    float a = tile->has_box ? tile->box_min[k] : std::numeric_limits<float>::infinity();
+                    float b = tile->has_box ? tile->box_max[k] : -std::numeric_limits<float>::infinity();
+                    if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
+                    t.origin_lo[k] = a, t.origin_hi[k] = b;
+                }
+            }
+            f(static_cast<const TileState&>(t));
+        }
+    }
+
+    // Empties the texels of tile `index` (TileState::index) holding a value for which
+    // drop(TexelAddress, bool recorded) returns true; `recorded`: the texel's store brought a path record.
+    // Returns how many were emptied. Between frames only.
+    template <class Drop>
+    std::size_t invalidate_in_tile(std::size_t index, Drop&& drop) {
+        assert_between_frames();
+        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return 0;
+        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+        const int face = static_cast<int>(index / (per_edge * per_edge));
+        const int row0 = static_cast<int>((index / per_edge) % per_edge) * tile_edge;
+        const int column0 = static_cast<int>(index % per_edge) * tile_edge;
+        std::size_t dropped = 0;
+        for (int row = row0; row < std::min(face_size_, row0 + tile_edge); ++row)
+            for (int column = column0; column < std::min(face_size_, column0 + tile_edge); ++column) {
+                const TexelAddress t{face, column, row};
+                const int slot = slot_of(t);
+                if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) continue;
+                const bool recorded = (tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
+                if (!drop(t, recorded)) continue;
+                invalidate(t);
+                ++dropped;
+            }
+        return dropped;
+    }
+
+    // Marks every valid texel of tile `index` (TileState::index) as recorded and adds `path` to the tile's
+    // record: for texels copied from another cube whose records are known (carry_path_records). Between frames.
+    void record_texels_of_tile(std::size_t index, const PathRecord& path) noexcept {
+        assert_between_frames();
+        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return;
+        for (int slot = 0; slot < tile_texels; ++slot)
+            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
+                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
+    }
+
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
     // `texel` must lie on the cube (asserted).
     bool store_at(const TexelAddress& texel, const Value& value) noexcept {
@@ -353,6 +473,7 @@ public:
         const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
         if (tile->doubtful_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed) & bit)
             state_->doubtful_texels.fetch_sub(1, std::memory_order_relaxed);
+        tile->recorded_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed);
     }
 
     // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
@@ -444,6 +565,11 @@ private:
                 pending_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 pending_max[k].store(0u, std::memory_order_relaxed);
             }
+            for (auto& w : recorded_bits) w.store(0, std::memory_order_relaxed);
+            for (int k = 0; k < 3; ++k) {
+                vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                vertex_max[k].store(0u, std::memory_order_relaxed);
+            }
             pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
         }
         // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
@@ -498,6 +624,12 @@ private:
         std::atomic<std::uint32_t> pending_nearest;
         float nearest = std::numeric_limits<float>::infinity();
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
+        // What the paths stored into this tile saw (store() with a PathRecord): their union, kept until the
+        // tile is dropped; read between frames only (raycache/invalidation.hpp).
+        std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
+        std::atomic<std::uint64_t> path_objects{0};
+        std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
+        std::atomic<std::uint32_t> path_flags{0};
     };
 
     struct State {
@@ -659,6 +791,32 @@ private:
     bool refuse() noexcept {
         state_->counters.add(refused_stores);
         return false;
+    }
+
+    // Adds a written texel's path record to its tile (atomic or, min, max; loads first, so a tile whose
+    // union already holds the record is not written).
+    void record_path(const TexelAddress& t, const PathRecord& path) noexcept {
+        Tile* tile = tile_of(t);
+        const int slot = slot_of(t);
+        tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
+    }
+    static void merge_path(Tile& tile_ref, const PathRecord& path) noexcept {
+        Tile* tile = &tile_ref;
+        if ((tile->path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
+            tile->path_objects.fetch_or(path.objects, std::memory_order_relaxed);
+        const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |
+                                    (path.unbounded ? path_unbounded : 0u);
+        if ((tile->path_flags.load(std::memory_order_relaxed) & flags) != flags)
+            tile->path_flags.fetch_or(flags, std::memory_order_relaxed);
+        if (!path.has_vertices()) return;
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t lo_key = ordered(path.vertex_lo[k] + 0.0f), hi_key = ordered(path.vertex_hi[k] + 0.0f);
+            std::uint32_t lo = tile->vertex_min[k].load(std::memory_order_relaxed);
+            while (lo_key < lo && !tile->vertex_min[k].compare_exchange_weak(lo, lo_key, std::memory_order_relaxed)) {}
+            std::uint32_t hi = tile->vertex_max[k].load(std::memory_order_relaxed);
+            while (hi_key > hi && !tile->vertex_max[k].compare_exchange_weak(hi, hi_key, std::memory_order_relaxed)) {}
+        }
     }
 
     // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and

@@ -38,6 +38,22 @@ CacheMode parse_cache_mode(const std::string& text) {
     throw UsageError("--cache: unknown mode '" + text + "'; use off, cct, cdct or ceiling");
 }
 
+const char* to_string(InvalidationPolicy policy) {
+    switch (policy) {
+    case InvalidationPolicy::none: return "none";
+    case InvalidationPolicy::all: return "all";
+    case InvalidationPolicy::exact: return "exact";
+    }
+    return "?";
+}
+
+InvalidationPolicy parse_invalidation(const std::string& text) {
+    if (text == "none") return InvalidationPolicy::none;
+    if (text == "all") return InvalidationPolicy::all;
+    if (text == "exact") return InvalidationPolicy::exact;
+    throw UsageError("--invalidate: unknown policy '" + text + "'; use none, all or exact");
+}
+
 namespace {
 
 long parse_int(const std::string& option, const std::string& text, long min, long max) {
@@ -132,6 +148,7 @@ Options parse_options(int argc, const char* const argv[]) {
             const std::string text = next();
             o.origin_parallax = text == "inf" ? std::numeric_limits<float>::infinity() : parse_float(arg, text, true);
         }
+        else if (arg == "--invalidate") o.invalidate = parse_invalidation(next());
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -211,6 +228,9 @@ std::string help_text(const std::string& program) {
         "                      off (Embree tracer)                                    [0.1]\n"
         "  --origin-parallax F CCT: ... or further than F x the distance to the nearest\n"
         "                      surface its rays hit (radians); inf: off (Embree)    [0.01]\n"
+        "  --invalidate P      dynamic scenes (dynamic-N), when objects move: none (keep\n"
+        "                      every texel), all (empty every cube) or exact (only the\n"
+        "                      texels the moves can have changed; Embree tracer, CCT) [exact]\n"
         "  --cdct-search S     secant (a few texel reads, then a consistency test) or\n"
         "                      relief (the thesis's walk, over a depth pyramid)       [secant]\n"
         "  --max-reads N       CDCT secant: texel reads before a miss, 1..64          [8]\n"
