@@ -76,9 +76,7 @@ CommandLine::CommandLine(const std::string& program)
     app.formatter(std::make_shared<HelpLayout>());
     app.set_help_flag(); // --help is an option like the others: parse() reports it in Options::help
     app.allow_extras();  // unknown arguments are reported by parse(), by name
-    app.footer("Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
-               "(including a run that needs more memory than is available: MemAvailable, or the environment's\n"
-               "RCX_AVAILABLE_MEMORY=BYTES).");
+    add_note(""); // the closing lines
 
     Options& o = options_;
     const Options d; // the defaults --help shows
@@ -234,6 +232,13 @@ void CommandLine::add_option(const std::string& names, const std::string& value,
         ->group(section_)
         ->trigger_on_parse() // stored as met, so "--size 8x8 --width 9" means what it says
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+void CommandLine::add_note(const std::string& paragraph) {
+    if (!paragraph.empty()) notes_ += paragraph + "\n\n";
+    app_->footer(notes_ + "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
+                          "(including a run that needs more memory than is available: MemAvailable, or the environment's\n"
+                          "RCX_AVAILABLE_MEMORY=BYTES).");
 }
 
 void CommandLine::add_flag(const std::string& names, bool& target, const std::string& description) {

@@ -33,6 +33,8 @@ public:
                     std::function<void(const std::string& text)> store);
     // An option without a value: present sets `target`; "--name=anything" is refused.
     void add_flag(const std::string& names, bool& target, const std::string& description);
+    // A paragraph for the end of --help, before the closing lines on value syntax and exit status.
+    void add_note(const std::string& paragraph);
 
     // Parses argv[1..argc-1]: each option is applied in command-line order, so a repeated option's last
     // value wins. Throws UsageError naming the option (or argument) at fault. Call once.
@@ -45,6 +47,7 @@ private:
     Options options_;
     bool no_pyramid_ = false; // --no-pyramid, a flag that clears Options::pyramid
     std::string section_;
+    std::string notes_;
 };
 
 // "[value]": how --help shows a default. Floats in their shortest form (0.1, not 0.100000).
