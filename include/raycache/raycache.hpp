@@ -18,3 +18,4 @@
 #include "raycache/cdct.hpp"
 #include "raycache/prefill.hpp"
 #include "raycache/cache_file.hpp"
+#include "raycache/gpu_buffers.hpp"
