@@ -146,9 +146,20 @@ struct TracedRay {
     float distance = std::numeric_limits<float>::infinity();
 };
 
+// Stores what a ray traced from `origin` along `direction` brought back (shared/cdct_store.h): its hit
+// (store_hit at origin + distance * unit(direction)), or, for an infinite or NaN distance, an escape
+// (store_escape). Nothing for a negative distance or a direction that is not one (false, no store made).
+// Thread-safe as CacheCube::store.
+inline bool store_traced(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
+                         const glm::vec3& direction, const TracedRay& traced, const ReliefParameters& p) noexcept {
+    const shared::raycache_cdct_store_key k = shared::raycache_cdct_traced_store(
+        origin, direction, traced.distance, bounds.centre, bounds.half_size, p.max_depth);
+    return k.store && cube.store(k.key, DepthSample{traced.color, k.distance});
+}
+
 // Algorithm 1 with the CDCT: the search p.search names (depth_search) answers when it can; otherwise trace() runs, its hit is
-// stored (store_hit, or store_escape when it escaped; nothing for a negative distance, which would key
-// the hit by a point behind the ray) and its colour returned unchanged.
+// stored (store_traced: store_hit, or store_escape when it escaped; nothing for a negative distance, which
+// would key the hit by a point behind the ray) and its colour returned unchanged.
 // trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
 // `pyramid`, when given, speeds up the relief search (see relief_search); the secant search needs none.
 template <class Trace>
@@ -161,9 +172,7 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
     const TracedRay traced = std::forward<Trace>(trace)();
-    const shared::raycache_cdct_store_key k = shared::raycache_cdct_traced_store(
-        origin, direction, traced.distance, bounds.centre, bounds.half_size, p.max_depth);
-    if (k.store) cube.store(k.key, DepthSample{traced.color, k.distance});
+    store_traced(cube, bounds, origin, direction, traced, p);
     return traced.color;
 }
 
