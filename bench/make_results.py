@@ -3,7 +3,8 @@
 
 Reads: walkthrough.md and walkthrough_frames.csv when present (raycache_walkthrough_bench: the headline, at
 the top), tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
-vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench) and micro.json
+vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench), dynamic.md when present
+(raycache_dynamic_bench) and micro.json
 (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
 import csv
@@ -224,6 +225,10 @@ def main():
           "the thesis tables' ratios of medians of repeated frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", ""]
     md += walkthrough_section(results, rel, walk_scenes)
+    dynamic = os.path.join(results, "dynamic.md")
+    if os.path.exists(dynamic):  # raycache_dynamic_bench: invalidation in dynamic scenes
+        with open(dynamic) as f:
+            md += [f.read().rstrip("\n"), ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")

@@ -31,6 +31,7 @@ if [[ "${1:-}" == "--quick" ]]; then
   out=build-bench/quick
   rm -rf "$out"
   build-bench/bench/raycache_walkthrough_bench --quick --out "$out"
+  build-bench/bench/raycache_dynamic_bench --quick --out "$out"
   build-bench/bench/raycache_bench --quick --out "$out"
   vulkan_bench --quick --out "$out"
   build-bench/bench/raycache_micro_bench --benchmark_min_time=0.01 --benchmark_out="$out/micro.json" --benchmark_out_format=json
@@ -42,6 +43,7 @@ out=docs/results
 rm -rf "$out"
 mkdir -p "$out"
 build-bench/bench/raycache_walkthrough_bench --out "$out"
+build-bench/bench/raycache_dynamic_bench --out "$out"
 build-bench/bench/raycache_bench --out "$out"
 vulkan_bench --out "$out"
 build-bench/bench/raycache_micro_bench --benchmark_min_time=0.5 --benchmark_repetitions=3 \

@@ -55,6 +55,20 @@ TEST_CASE("the next face size moves to the nearest step only when the ideal is f
     CHECK(raycache::next_face_size(256, 60000000000ull, 1.0, capped) == 512);
 }
 
+TEST_CASE("the first sizing, after the first counted frame, goes straight to the nearest step") {
+    AdaptiveResolution a; // first size 256, hysteresis 2 half octaves
+    // 6 * 362^2 = 786,264 rays over every direction: ideal 362, one half octave above 256. A later frame
+    // stays at 256 (hysteresis); the first sizing moves, since the cube holds only one cold frame's texels.
+    CHECK(raycache::next_face_size(256, 786264, 1.0, a) == 256);
+    CHECK(raycache::first_face_size(256, 786264, 1.0, a) == 362);
+    // Half the directions covered, 2 rays a texel: 6 N^2 * 0.5 * 2 = 6 N^2, so 1536 rays give N = 16.
+    AdaptiveResolution two = a;
+    two.rays_per_texel = 2.0f;
+    CHECK(raycache::first_face_size(256, 1536, 0.5, two) == 16);
+    // No rays: keep the size.
+    CHECK(raycache::first_face_size(256, 0, 0.0, a) == 256);
+}
+
 TEST_CASE("adaptive settings are validated with a message naming the field") {
     AdaptiveResolution a;
     a.rays_per_texel = 0.0f;
@@ -108,4 +122,30 @@ TEST_CASE("resampling takes, for each coarse texel, the fine texel whose centre 
     CHECK(a->y == doctest::Approx(0.5f).epsilon(0.005));
     CHECK(b->z == doctest::Approx(1.0f).epsilon(0.005));
     CHECK(coarse.valid_texels() == 2u);
+}
+
+TEST_CASE("resampling carries the origin boxes and nearest hit distances of the fine tiles into the coarse ones") {
+    // 64 -> 32: fine tiles (0, 0) and (1, 0) of +X (columns 0..15 and 16..31, rows 0..15) both fall into
+    // coarse tile (0, 0) (columns 0..15 at half the resolution).
+    CctCube fine(64), coarse(32);
+    const glm::vec3 grey(0.5f);
+    fine.store(texel_direction(TexelAddress{0, 5, 5}, 64), grey, glm::vec3(0.0f, 0.0f, 0.0f), 3.0f);
+    fine.store(texel_direction(TexelAddress{0, 20, 5}, 64), grey, glm::vec3(0.2f, 0.1f, 0.0f), 2.0f);
+    // Another face's tile, stored without an origin, gives no box.
+    fine.store(texel_direction(TexelAddress{1, 5, 5}, 64), grey);
+    fine.begin_frame();
+    CHECK(raycache::resample_into(fine, coarse) == 3u);
+    coarse.begin_frame();
+    const auto box = coarse.origin_box(TexelAddress{0, 0, 0});
+    REQUIRE(box);
+    CHECK(box->first == glm::vec3(0.0f, 0.0f, 0.0f));
+    CHECK(box->second == glm::vec3(0.2f, 0.1f, 0.0f));
+    CHECK(coarse.nearest_hit(TexelAddress{0, 0, 0}) == 2.0f);
+    CHECK_FALSE(coarse.origin_box(TexelAddress{1, 0, 0}));
+    // So a ray from either fine tile's origins is answered (a resampled tile without its box would answer
+    // any origin, then take the first frame's stores as its whole box).
+    const raycache::OriginTolerance tight{0.01f};
+    CHECK(coarse.lookup(texel_direction(TexelAddress{0, 2, 2}, 32), glm::vec3(0.0f), tight));
+    CHECK(coarse.lookup(texel_direction(TexelAddress{0, 10, 2}, 32), glm::vec3(0.2f, 0.1f, 0.0f), tight));
+    CHECK_FALSE(coarse.lookup(texel_direction(TexelAddress{0, 2, 2}, 32), glm::vec3(0.5f, 0.0f, 0.0f), tight));
 }

@@ -121,6 +121,14 @@ TEST_CASE("only attached ids have cubes, plain and instanced ids are told apart,
     rtcCommitScene(w.scene);
     CHECK_THROWS_WITH_AS(caches.attach(w.scene, {w.floor}, 16), doctest::Contains("no geometry"), std::invalid_argument);
     CHECK_THROWS_AS(SceneCache(Technique::cdct, raycache::ReliefParameters{0.0f, 0.01f, 10, 100.0f}), std::invalid_argument);
+    for (const float parallax : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN()}) {
+        raycache::embree::SceneCacheSettings bad;
+        bad.origin_parallax = parallax;
+        CHECK_THROWS_WITH_AS(SceneCache(Technique::cct, bad), doctest::Contains("origin_parallax"), std::invalid_argument);
+    }
+    raycache::embree::SceneCacheSettings off;
+    off.origin_parallax = std::numeric_limits<float>::infinity();
+    CHECK_NOTHROW(SceneCache(Technique::cct, off));
 }
 
 TEST_CASE("a reflected ray traced with rtcIntersect1 is cached: traced in the cold frame, answered in the next") {

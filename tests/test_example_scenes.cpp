@@ -47,7 +47,7 @@ void check_mesh(const rcx::Mesh& m, double tolerated = 0.0) {
 TEST_CASE("every listed scene builds with a checkerboard floor, a light and a cached object") {
     for (const std::string& name : rcx::scene_names()) {
         CAPTURE(name);
-        if (name == "concave" && !std::filesystem::exists(wuson)) {
+        if ((name == "concave" || name.rfind("dynamic-", 0) == 0) && !std::filesystem::exists(wuson)) {
             CHECK_THROWS_WITH_AS(rcx::make_scene(name), doctest::Contains("assimp-testmodels"), std::runtime_error);
             continue;
         }
@@ -118,7 +118,7 @@ TEST_CASE("unknown scene names throw invalid_argument listing the valid names") 
         } catch (const std::invalid_argument& e) {
             const std::string what = e.what();
             for (const char* valid : {"behind-N", "grid-32", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass",
-                                      "mirrors-1000"})
+                                      "mirrors-1000", "dynamic-N"})
                 CHECK(what.find(valid) != std::string::npos);
         }
     }
@@ -142,6 +142,104 @@ TEST_CASE("mirrors-1000 has 1000 small cached mirror spheres, apart, above the f
     }
     // Lattice neighbours do not touch: each cube encloses only its own sphere.
     CHECK(glm::length(s.spheres[0].centre - s.spheres[1].centre) > 2.0f * s.spheres[0].radius);
+}
+
+TEST_CASE("a motion travels its circle at its speed and bobs between its frame-0 height and bob above it") {
+    rcx::Motion m;
+    m.circle_radius = 2.0f;
+    m.degrees_per_frame = 30.0f;
+    m.phase_degrees = 90.0f; // frame 0 at the circle's +Z point (0, 2): relative to the circle's centre
+    m.bob = 0.4f;
+    // Hand-derived: frame 3 has turned 90 degrees, to the -X point (-2, 0): offset (-2, bob/2, -2).
+    const glm::vec3 three = m.offset(3);
+    CHECK(three.x == doctest::Approx(-2.0f).epsilon(1e-5));
+    CHECK(three.y == doctest::Approx(0.2f).epsilon(1e-5));
+    CHECK(three.z == doctest::Approx(-2.0f).epsilon(1e-5));
+    // Frame 6: half a turn, to (0, -2): offset (0, bob, -4), the highest point.
+    const glm::vec3 six = m.offset(6);
+    CHECK(six.x == doctest::Approx(0.0f).scale(1.0f).epsilon(1e-5));
+    CHECK(six.y == doctest::Approx(0.4f).epsilon(1e-5));
+    CHECK(six.z == doctest::Approx(-4.0f).epsilon(1e-5));
+    // A whole turn (frame 12) and frame 0 bring it back.
+    CHECK(glm::length(m.offset(12)) < 1e-5f);
+    CHECK(m.offset(0) == glm::vec3(0.0f));
+    for (int f = 0; f < 40; ++f) CHECK(m.offset(f).y >= 0.0f); // never below its frame-0 height
+}
+
+TEST_CASE("dynamic-N: N moving spheres and a moving Wuson among four static cached mirrors") {
+    if (!std::filesystem::exists(wuson)) {
+        CHECK_THROWS_WITH_AS(rcx::make_scene("dynamic-8"), doctest::Contains("assimp-testmodels"), std::runtime_error);
+        return;
+    }
+    const rcx::Scene s = rcx::make_scene("dynamic-8");
+    CHECK(s.name == "dynamic-8");
+    REQUIRE(s.spheres.size() == 4u + 8u);
+    REQUIRE(s.meshes.size() == 2u); // the floor and the Wuson
+    CHECK(s.dynamic());
+    REQUIRE(s.motions.size() == 9u);
+    CHECK(s.cached_object_count() == 4 + 4); // the static mirrors and the even moving spheres
+    for (std::size_t i = 0; i < 4; ++i) CHECK(s.spheres[i].material.cached);
+    for (const rcx::Motion& m : s.motions) {
+        if (m.kind == rcx::Motion::Kind::sphere) CHECK(m.index >= 4u); // the mirrors stand still
+        else CHECK(m.index == 1u);                                      // the Wuson, not the floor
+    }
+    CHECK_FALSE(rcx::make_scene("behind-4").dynamic());
+    CHECK(rcx::make_scene("dynamic-256").spheres.size() == 260u);
+    for (const char* bad : {"dynamic-0", "dynamic-257", "dynamic-", "dynamic-x"}) {
+        CAPTURE(bad);
+        CHECK_THROWS_WITH_AS(rcx::make_scene(bad), doctest::Contains("dynamic-N takes N = 1..256"), std::invalid_argument);
+    }
+}
+
+TEST_CASE("a dynamic scene at frame f moves exactly its moving objects, by their offsets, and nothing else") {
+    if (!std::filesystem::exists(wuson)) return; // assimp-testmodels not installed
+    const rcx::Scene s = rcx::make_scene("dynamic-16");
+    const rcx::Scene same = s.at_frame(0);
+    for (std::size_t i = 0; i < s.spheres.size(); ++i) CHECK(same.spheres[i].centre == s.spheres[i].centre);
+    const int frame = 45;
+    const rcx::Scene later = s.at_frame(frame);
+    REQUIRE(later.spheres.size() == s.spheres.size());
+    REQUIRE(later.meshes.size() == s.meshes.size());
+    std::vector<glm::vec3> want(s.spheres.size());
+    for (std::size_t i = 0; i < s.spheres.size(); ++i) want[i] = s.spheres[i].centre;
+    glm::vec3 mesh_offset(0.0f);
+    for (const rcx::Motion& m : s.motions) {
+        if (m.kind == rcx::Motion::Kind::sphere) want[m.index] += m.offset(frame);
+        else mesh_offset = m.offset(frame);
+    }
+    int moved = 0;
+    for (std::size_t i = 0; i < s.spheres.size(); ++i) {
+        CAPTURE(i);
+        CHECK(glm::length(later.spheres[i].centre - want[i]) < 1e-5f);
+        CHECK(later.spheres[i].radius == s.spheres[i].radius);
+        CHECK(later.spheres[i].material.cached == s.spheres[i].material.cached);
+        moved += later.spheres[i].centre != s.spheres[i].centre ? 1 : 0;
+        CHECK(later.spheres[i].centre.y - later.spheres[i].radius >= rcx::floor_height - 1e-5f); // not in the floor
+    }
+    CHECK(moved == 16);
+    CHECK(glm::length(mesh_offset) > 0.1f);
+    for (std::size_t v = 0; v < s.meshes[1].positions.size(); v += 97)
+        CHECK(glm::length(later.meshes[1].positions[v] - (s.meshes[1].positions[v] + mesh_offset)) < 1e-5f);
+    CHECK(later.meshes[0].positions == s.meshes[0].positions); // the floor stays
+    CHECK(later.camera.eye == s.camera.eye);
+}
+
+TEST_CASE("dynamic-N's objects never overlap one another along their paths") {
+    if (!std::filesystem::exists(wuson)) return; // assimp-testmodels not installed
+    const rcx::Scene s = rcx::make_scene("dynamic-64");
+    for (int frame = 0; frame < 240; frame += 3) {
+        const rcx::Scene at = s.at_frame(frame);
+        const rcx::Bounds mesh = rcx::mesh_bounds(at.meshes[1]);
+        for (std::size_t i = 0; i < at.spheres.size(); ++i) {
+            const rcx::Sphere& a = at.spheres[i];
+            // Against the Wuson's box (in x/z: the spheres stand beside it, not over it).
+            const glm::vec3 nearest = glm::clamp(a.centre, mesh.min, mesh.max);
+            if (glm::length(nearest - a.centre) <= a.radius) FAIL("sphere " << i << " meets the Wuson at frame " << frame);
+            for (std::size_t j = i + 1; j < at.spheres.size(); ++j)
+                if (glm::length(a.centre - at.spheres[j].centre) <= a.radius + at.spheres[j].radius)
+                    FAIL("spheres " << i << " and " << j << " overlap at frame " << frame);
+        }
+    }
 }
 
 TEST_CASE("an orbit keeps the distance to the target and turns the eye about +Y by the step") {

@@ -58,3 +58,64 @@ TEST_CASE("tiles stored without origins answer rays from anywhere, and a bad ori
     CHECK_FALSE(cube.store(glm::vec3(0, 1, 0), grey, glm::vec3(nan)));
     CHECK(cube.statistics().refused_stores == 1u);
 }
+
+TEST_CASE("a store refused because its texel is already visible leaves the box alone: the box bounds the origins of the values kept") {
+    CctCube cube(64);
+    const glm::vec3 neighbour = texel_direction(TexelAddress{0, 33, 32}, 64); // same tile as plus_x
+    CHECK(cube.store(plus_x, grey, glm::vec3(0.0f)));
+    CHECK(cube.store(neighbour, grey, glm::vec3(0.0f)));
+    cube.begin_frame();
+    cube.set_doubtful(TexelAddress{0, 32, 32}); // traced every frame from now on, as a colour edge's texels are
+    cube.begin_frame();
+    // The doubtful texel's ray, from x = 0.5 now, is traced; its store is refused (the texel holds a value).
+    CHECK_FALSE(cube.lookup(plus_x, glm::vec3(0.5f, 0.0f, 0.0f), 1.0f));
+    CHECK_FALSE(cube.store(plus_x, glm::vec3(0.9f), glm::vec3(0.5f, 0.0f, 0.0f)));
+    cube.begin_frame();
+    // The neighbour's value still comes from x = 0 only: a ray from 0.5 is 0.4 beyond drift 0.1 of it.
+    CHECK_FALSE(cube.lookup(neighbour, glm::vec3(0.5f, 0.0f, 0.0f), 0.1f));
+    CHECK(cube.lookup(neighbour, glm::vec3(0.05f, 0.0f, 0.0f), 0.1f));
+}
+
+TEST_CASE("with a parallax bound a tile answers origins within parallax x its nearest hit distance, capped by drift") {
+    CctCube cube(64);
+    const glm::vec3 neighbour = texel_direction(TexelAddress{0, 33, 32}, 64); // same tile as plus_x
+    const raycache::OriginTolerance tolerance{1.0f, 0.05f};
+    CHECK(cube.store(plus_x, grey, glm::vec3(0.0f), 10.0f));
+    CHECK(cube.store(neighbour, grey, glm::vec3(0.0f), 2.0f)); // the nearest: 2, so 0.05 x 2 = 0.1 of drift
+    cube.begin_frame();
+    CHECK(cube.nearest_hit(TexelAddress{0, 40, 40}) == 2.0f); // any texel of the tile
+    CHECK(cube.lookup(plus_x, glm::vec3(0.09f, 0.0f, 0.0f), tolerance));
+    CHECK(cube.lookup(plus_x, glm::vec3(0.0f, -0.09f, 0.09f), tolerance)); // per axis, as the box is
+    cube.begin_frame();
+    CHECK(cube.dropped_tiles() == 0u);
+    CHECK_FALSE(cube.lookup(plus_x, glm::vec3(0.11f, 0.0f, 0.0f), tolerance));
+    cube.begin_frame();
+    CHECK(cube.dropped_tiles() == 1u);
+
+    // Rays that escaped (infinite distance) leave only the drift: 0.3 away is answered with drift 0.5.
+    CHECK(cube.store(plus_x, grey, glm::vec3(0.0f), std::numeric_limits<float>::infinity()));
+    cube.begin_frame();
+    CHECK(cube.lookup(plus_x, glm::vec3(0.3f, 0.0f, 0.0f), raycache::OriginTolerance{0.5f, 0.05f}));
+    CHECK_FALSE(cube.lookup(plus_x, glm::vec3(0.3f, 0.0f, 0.0f), raycache::OriginTolerance{0.25f, 0.05f}));
+    // A NaN or negative distance is refused.
+    CHECK_FALSE(cube.store(neighbour, grey, glm::vec3(0.0f), -1.0f));
+    CHECK_FALSE(cube.store(neighbour, grey, glm::vec3(0.0f), std::numeric_limits<float>::quiet_NaN()));
+}
+
+TEST_CASE("a store whose origin would stretch its tile's visible box beyond the tolerance is refused, so the box stays tight") {
+    CctCube cube(64);
+    const glm::vec3 a = texel_direction(TexelAddress{0, 33, 32}, 64), b = texel_direction(TexelAddress{0, 34, 32}, 64);
+    const raycache::OriginTolerance tolerance{0.1f, std::numeric_limits<float>::infinity()};
+    CHECK(cube.store(plus_x, grey, glm::vec3(0.0f), 5.0f, tolerance)); // a fresh tile takes any origin
+    cube.begin_frame();
+    // Empty texels of the tile: 0.08 from the box {0} makes it 0.08 wide (<= 0.1): kept; 0.15 would not.
+    CHECK(cube.store(a, grey, glm::vec3(0.08f, 0.0f, 0.0f), 5.0f, tolerance));
+    CHECK_FALSE(cube.store(b, grey, glm::vec3(0.15f, 0.0f, 0.0f), 5.0f, tolerance));
+    CHECK(cube.statistics().refused_stores == 1u);
+    cube.begin_frame();
+    CHECK(cube.lookup(a, glm::vec3(0.08f, 0.0f, 0.0f), tolerance));
+    CHECK_FALSE(cube.lookup(b, glm::vec3(0.08f, 0.0f, 0.0f), tolerance)); // b was never written
+    // The box is [0, 0.08] on x: 0.17 is 0.09 beyond it, within drift; 0.19 is not.
+    CHECK(cube.lookup(plus_x, glm::vec3(0.17f, 0.0f, 0.0f), tolerance));
+    CHECK_FALSE(cube.lookup(plus_x, glm::vec3(0.19f, 0.0f, 0.0f), tolerance));
+}

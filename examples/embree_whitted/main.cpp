@@ -41,7 +41,18 @@ struct FrameRecord {
     double mean_error = 0.0;
     double max_error = 0.0;
     double hit_rate = -1.0;
+    double kept = -1.0;        // dynamic scenes: fraction of the cached texels kept when objects moved
+    double invalidate_ms = 0.0;
 };
+
+raycache::embree::Invalidation invalidation_of(rcx::InvalidationPolicy p) {
+    switch (p) {
+    case rcx::InvalidationPolicy::none: return raycache::embree::Invalidation::none;
+    case rcx::InvalidationPolicy::all: return raycache::embree::Invalidation::all;
+    case rcx::InvalidationPolicy::exact: break;
+    }
+    return raycache::embree::Invalidation::exact;
+}
 
 std::string frame_path(const rcx::Options& o, const std::string& scene, const char* what, int frame) {
     char name[256];
@@ -100,6 +111,7 @@ int run(const rcx::Options& o) {
             cache_settings.filtered = o.filtered;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
+            cache_settings.origin_parallax = o.origin_parallax;
             caches = std::make_unique<raycache::embree::SceneCache>(
                 o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct,
                 cache_settings);
@@ -148,8 +160,9 @@ int run(const rcx::Options& o) {
         }
         if (o.cache == rcx::CacheMode::cdct)
             std::printf(", delta %g, epsilon %g, max steps %d", static_cast<double>(o.delta), static_cast<double>(o.epsilon), o.max_steps);
+        if (scene.dynamic() && rcx::uses_caches(o.cache)) std::printf(", invalidate %s", rcx::to_string(o.invalidate));
         std::printf("; threads %s; PNGs in %s\n", o.threads > 0 ? std::to_string(o.threads).c_str() : "all", o.out.c_str());
-        std::printf("frame         ms   rays traced  hit rate  filled%s\n",
+        std::printf("frame         ms   rays traced  hit rate  filled%s%s\n", scene.dynamic() ? "    kept  inval ms" : "",
                     o.compare ? "    uncached ms  speed-up   PSNR dB  mean err  max err  differing" : "");
         std::fflush(stdout);
     }
@@ -168,10 +181,18 @@ int run(const rcx::Options& o) {
     for (int f = 0; f < frames; ++f) {
         const rcx::Camera camera = scene.camera_at(f);
         FrameRecord r;
+        if (scene.dynamic() && f > 0) { // objects move between frames; the caches learn what moved
+            const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
+            if (settings.caches) {
+                const raycache::embree::InvalidationStatistics inv = settings.caches->scene_changed(change, invalidation_of(o.invalidate));
+                r.kept = inv.kept_fraction();
+                r.invalidate_ms = inv.milliseconds;
+            }
+        }
         rcx::embree::FrameStats stats;
         settings.warm_up_stride = f == 0 ? o.warm_up : 0; // only the first frame has nothing to reuse
         const rcx::Image image = tracer.render(camera, settings, &stats);
-        r.cached_ms = stats.milliseconds;
+        r.cached_ms = stats.milliseconds + r.invalidate_ms; // invalidating is part of a cached frame's cost
         bar.advance();
         double filled = -1.0;
         if (settings.caches) {
@@ -208,6 +229,7 @@ int run(const rcx::Options& o) {
             bar.clear();
             std::printf("%5d %10.2f %13llu   %s  %s", f, r.cached_ms, static_cast<unsigned long long>(stats.rays),
                         percent(r.hit_rate).c_str(), percent(filled).c_str());
+            if (scene.dynamic()) std::printf("  %s %9.3f", percent(r.kept).c_str(), r.invalidate_ms);
             if (o.compare)
                 std::printf(" %12.2f %8.2fx   %s  %8.5f %8.4f   %s", r.uncached_ms, r.uncached_ms / r.cached_ms,
                             rcx::psnr_text(r.psnr_db).c_str(), r.mean_error, r.max_error,

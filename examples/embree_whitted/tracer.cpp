@@ -57,6 +57,7 @@ struct Tracer::Impl {
     RTCDevice device = nullptr;
     RTCScene rtc = nullptr;
     std::vector<ObjectRef> objects; // by Embree geometry id
+    std::vector<float*> vertices;   // by Embree geometry id: its vertex buffer (moved objects are rewritten)
 
     Impl() = default;
     Impl(const Impl&) = delete;
@@ -76,12 +77,13 @@ struct Tracer::Impl {
         throw std::runtime_error(std::string("Embree tracer: ") + what + ": Embree error " + std::to_string(static_cast<int>(e)));
     }
 
-    void attach(RTCGeometry g, ObjectRef ref) {
+    void attach(RTCGeometry g, ObjectRef ref, float* vertex_buffer) {
         rtcCommitGeometry(g);
         const unsigned id = rtcAttachGeometry(rtc, g);
         rtcReleaseGeometry(g);
-        if (objects.size() <= id) objects.resize(id + 1);
+        if (objects.size() <= id) objects.resize(id + 1), vertices.resize(id + 1);
         objects[id] = ref;
+        vertices[id] = vertex_buffer;
     }
 
     const Material& material(unsigned geom) const {
@@ -98,6 +100,10 @@ struct Shader {
     CacheMode mode;
     raycache::embree::SceneCache* caches;
     FrameStats stats{};
+    // What the path of the leaving ray being traced for a cache saw (null outside such a trace), and that
+    // ray's depth: deeper rays are bounces after its first hit.
+    raycache::PathRecord* record = nullptr;
+    int record_depth = 0;
 
     // The first hit along the ray, shaded; hits on geometry `pass_through` are skipped (pre-filling a
     // cube traces from inside its own object).
@@ -129,6 +135,13 @@ struct Shader {
             rtcIntersect1(t.rtc, &context, &rh);
             ++stats.rays;
         }
+        if (record) {
+            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) record->unbounded |= depth > record_depth; // a bounce escaped
+            else {
+                record->hit(raycache::embree::path_key({rh.hit.geomID, rh.hit.instID[0]}), origin + rh.ray.tfar * direction);
+                record->chained |= depth > record_depth; // a segment from one hit point to another
+            }
+        }
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {t.scene.environment, infinity};
         return {shade(rh, origin, direction, depth), rh.ray.tfar};
     }
@@ -150,6 +163,7 @@ struct Shader {
         ray.time = 0.0f;
         rtcOccluded1(t.rtc, &context, &ray);
         ++stats.shadow_rays;
+        if (record) record->lit = true;
         return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
     }
 
@@ -165,7 +179,21 @@ struct Shader {
         case CacheMode::ceiling: return t.scene.environment; // any constant: the cost of no tracing at all
         case CacheMode::cct:
         case CacheMode::cdct:
-            return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, trace_leaving);
+            // The recording form: the cache learns what the traced path saw (for exact invalidation).
+            return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, [&](raycache::PathRecord& path) {
+                raycache::PathRecord* const outer = record;
+                const int outer_depth = record_depth;
+                record = &path;
+                record_depth = depth + 1;
+                const raycache::TracedRay traced = trace_leaving();
+                record = outer;
+                record_depth = outer_depth;
+                if (outer) { // this ray is a bounce of an enclosing cached path: what it saw is part of that path
+                    outer->merge(path);
+                    (std::isinf(traced.distance) ? outer->unbounded : outer->chained) = true;
+                }
+                return traced;
+            });
         }
         return trace_leaving().color;
     }
@@ -271,7 +299,7 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
         v[1] = s.centre.y;
         v[2] = s.centre.z;
         v[3] = s.radius;
-        t.attach(g, {true, i});
+        t.attach(g, {true, i}, v);
     }
     for (std::size_t i = 0; i < t.scene.meshes.size(); ++i) {
         const Mesh& m = t.scene.meshes[i];
@@ -290,13 +318,63 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
             for (int c = 0; c < 3; ++c) v[3 * k + static_cast<std::size_t>(c)] = m.positions[k][c];
         for (std::size_t k = 0; k < m.triangles.size(); ++k)
             for (int c = 0; c < 3; ++c) idx[3 * k + static_cast<std::size_t>(c)] = m.triangles[k][c];
-        t.attach(g, {false, i});
+        t.attach(g, {false, i}, v);
     }
     rtcCommitScene(t.rtc);
     t.check("building the scene");
 }
 
 Tracer::~Tracer() = default;
+
+namespace {
+// The sphere around a mesh: its box's centre, out to its farthest vertex.
+raycache::BoundingSphere bounding_sphere(const Mesh& m) {
+    glm::vec3 lo(infinity), hi(-infinity);
+    for (const glm::vec3& p : m.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const glm::vec3 c = 0.5f * (lo + hi);
+    float r2 = 0.0f;
+    for (const glm::vec3& p : m.positions) r2 = std::max(r2, glm::dot(p - c, p - c));
+    return {c, std::sqrt(r2) * 1.0001f};
+}
+} // namespace
+
+raycache::embree::SceneChange Tracer::move_to(const Scene& next) {
+    Impl& t = *impl_;
+    const Scene& now = t.scene;
+    if (next.spheres.size() != now.spheres.size() || next.meshes.size() != now.meshes.size())
+        throw std::invalid_argument("Embree tracer: move_to needs the same objects in the same order (Scene::at_frame)");
+    raycache::embree::SceneChange change;
+    for (unsigned id = 0; id < t.objects.size(); ++id) {
+        const ObjectRef& ref = t.objects[id];
+        RTCGeometry g = rtcGetGeometry(t.rtc, id);
+        raycache::BoundingSphere before, after;
+        if (ref.is_sphere) {
+            const Sphere &a = now.spheres[ref.index], &b = next.spheres[ref.index];
+            if (a.centre == b.centre && a.radius == b.radius) continue;
+            float* v = t.vertices[id];
+            v[0] = b.centre.x, v[1] = b.centre.y, v[2] = b.centre.z, v[3] = b.radius;
+            before = {a.centre, a.radius}, after = {b.centre, b.radius};
+        } else {
+            const Mesh &a = now.meshes[ref.index], &b = next.meshes[ref.index];
+            if (a.positions == b.positions) continue;
+            if (a.positions.size() != b.positions.size())
+                throw std::invalid_argument("Embree tracer: move_to cannot change mesh '" + a.name + "''s vertex count");
+            float* v = t.vertices[id];
+            for (std::size_t k = 0; k < b.positions.size(); ++k)
+                for (int c = 0; c < 3; ++c) v[3 * k + static_cast<std::size_t>(c)] = b.positions[k][c];
+            before = bounding_sphere(a), after = bounding_sphere(b);
+        }
+        rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(g);
+        change.moved.push_back({raycache::embree::ObjectId{id}, before, after, std::nullopt});
+    }
+    change.light_moved = next.light.position != now.light.position;
+    change.lights.push_back(next.light.position);
+    t.scene = next;
+    if (!change.moved.empty()) rtcCommitScene(t.rtc); // the BVH over the moved objects' new places
+    t.check("moving objects");
+    return change;
+}
 
 const Scene& Tracer::scene() const noexcept { return impl_->scene; }
 RTCScene Tracer::rtc_scene() const noexcept { return impl_->rtc; }
@@ -310,6 +388,11 @@ std::vector<unsigned> Tracer::cached_geometries() const {
 
 void Tracer::attach_caches(raycache::embree::SceneCache& caches, int face_size) const {
     for (unsigned id : cached_geometries()) caches.attach(impl_->rtc, raycache::embree::ObjectId{id}, face_size);
+}
+
+raycache::TracedRay Tracer::trace_uncached(const glm::vec3& origin, const glm::vec3& direction, int depth) const {
+    Shader shader{*impl_, CacheMode::off, nullptr};
+    return shader.trace(origin, direction, depth);
 }
 
 std::size_t Tracer::prefill(raycache::embree::SceneCache& caches, int threads, double* milliseconds) const {

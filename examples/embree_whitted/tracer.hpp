@@ -67,6 +67,16 @@ public:
     // the time it took.
     std::size_t prefill(raycache::embree::SceneCache& caches, int threads = 0, double* milliseconds = nullptr) const;
 
+    // Between frames: makes the tracer render `next`, the same scene with objects moved (Scene::at_frame): the
+    // moved objects' Embree buffers are rewritten and the scene's BVH rebuilt. Returns what moved (bounding
+    // spheres before and after) and the light, for SceneCache::scene_changed(). Throws std::invalid_argument
+    // when `next` has other objects.
+    raycache::embree::SceneChange move_to(const Scene& next);
+
+    // The colour (and hit distance) of one ray traced with the cache off, as a ray of recursion depth `depth`
+    // (a ray leaving an object is depth 1). For oracles that retrace cached rays. Thread-safe.
+    raycache::TracedRay trace_uncached(const glm::vec3& origin, const glm::vec3& direction, int depth) const;
+
     // Renders one frame. Thread-safe for concurrent calls only with distinct caches (or none).
     // Throws std::invalid_argument for a size < 1 or a cct/cdct mode without caches.
     Image render(const Camera& camera, const RenderSettings& settings, FrameStats* stats = nullptr) const;

@@ -15,6 +15,7 @@
 #include <raycache/shared/gpu_layout.h>
 
 #include "rcx/meshes.hpp"
+#include "rcx/rsh_reference.hpp"
 
 namespace rcx::gpu {
 
@@ -104,26 +105,14 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 
 } // namespace
 
-FlatBvh build_bvh(const Scene& scene) {
-    // Every primitive, with its bounds for the builder.
+std::vector<GpuPrimitive> gather_primitives(const Scene& scene) {
     std::vector<GpuPrimitive> all;
-    std::vector<RTCBuildPrimitive> build;
     std::uint32_t object = 0;
-    auto add = [&](const GpuPrimitive& p, const RTCBounds& b) {
-        RTCBuildPrimitive bp{};
-        bp.lower_x = b.lower_x, bp.lower_y = b.lower_y, bp.lower_z = b.lower_z;
-        bp.upper_x = b.upper_x, bp.upper_y = b.upper_y, bp.upper_z = b.upper_z;
-        bp.geomID = p.info[1];
-        bp.primID = static_cast<unsigned>(all.size());
-        all.push_back(p);
-        build.push_back(bp);
-    };
     for (const Sphere& s : scene.spheres) {
         GpuPrimitive p{};
         set4(p.p[0], s.centre, s.radius);
         p.info[0] = 0, p.info[1] = object, p.info[2] = 0;
-        const glm::vec3 r(s.radius);
-        add(p, bounds_of_points({s.centre - r, s.centre + r}, 0.0f));
+        all.push_back(p);
         ++object;
     }
     for (const Mesh& m : scene.meshes) {
@@ -139,9 +128,29 @@ FlatBvh build_bvh(const Scene& scene) {
                 set4(p.n[c], m.normals[t[c]], 0.0f);
             }
             p.info[0] = 1, p.info[1] = object, p.info[2] = static_cast<std::uint32_t>(k);
-            add(p, bounds_of_points({m.positions[t.x], m.positions[t.y], m.positions[t.z]}, 0.0f));
+            all.push_back(p);
         }
         ++object;
+    }
+    return all;
+}
+
+FlatBvh build_bvh(const Scene& scene) {
+    // Every primitive, with its bounds for the builder.
+    std::vector<GpuPrimitive> all = gather_primitives(scene);
+    std::vector<RTCBuildPrimitive> build;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        const GpuPrimitive& p = all[i];
+        const glm::vec3 a(p.p[0][0], p.p[0][1], p.p[0][2]);
+        const RTCBounds b = p.info[0] == 0 ? bounds_of_points({a - glm::vec3(p.p[0][3]), a + glm::vec3(p.p[0][3])}, 0.0f)
+                                           : bounds_of_points({a, glm::vec3(p.p[1][0], p.p[1][1], p.p[1][2]),
+                                                               glm::vec3(p.p[2][0], p.p[2][1], p.p[2][2])}, 0.0f);
+        RTCBuildPrimitive bp{};
+        bp.lower_x = b.lower_x, bp.lower_y = b.lower_y, bp.lower_z = b.lower_z;
+        bp.upper_x = b.upper_x, bp.upper_y = b.upper_y, bp.upper_z = b.upper_z;
+        bp.geomID = p.info[1];
+        bp.primID = static_cast<unsigned>(i);
+        build.push_back(bp);
     }
     if (all.empty()) throw std::runtime_error("Vulkan tracer: the scene has no primitives");
 
@@ -537,6 +546,9 @@ struct Tracer::Impl {
     std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, counters, dummy, texels, pending;
     std::unique_ptr<vk::Buffer> output, dirty, blocks, gbuffer;
     std::unique_ptr<Raster> raster;
+    std::unique_ptr<RshFrame> rsh;          // --secondary rsh: every ray through the ray-space hierarchy
+    std::unique_ptr<vk::Buffer> rsh_prims;  // ... its primitives (raycache_rsh_primitive, scene order)
+    double update_ms = 0.0;                 // the last set_scene
     std::uint32_t block_count = 0;
     std::uint32_t texel_count = 0;
     bool cdct = false;
@@ -556,7 +568,20 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         t.end_frame = std::make_unique<vk::ComputePipeline>(
             context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
             4);
-    t.bvh = build_bvh(scene);
+    const bool rsh = settings.secondary == Secondary::rsh;
+    if (rsh && settings.mode != CacheMode::off)
+        throw std::invalid_argument("Vulkan tracer: --secondary rsh traces every ray, without caching cubes: use --cache off");
+    if (rsh) {
+        t.bvh.primitives = gather_primitives(scene); // no scene structure: the primitives in scene order
+        if (t.bvh.primitives.empty()) throw std::runtime_error("Vulkan tracer: the scene has no primitives");
+        t.bvh.nodes.assign(1, BvhNode{});
+        RshSettings rs;
+        rs.pair_capacity = settings.pair_capacity;
+        t.rsh = std::make_unique<RshFrame>(context, spirv_dir, rs);
+        t.rsh_prims = std::make_unique<vk::Buffer>(vk::buffer_of(context, rsh::primitives_of(scene), 48));
+    } else {
+        t.bvh = build_bvh(scene);
+    }
 
     // Objects: materials, and a cube descriptor for each cached one (face size 0: none).
     std::vector<GpuObject> objects;
@@ -606,7 +631,9 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
                                     std::to_string(range) + "); use a smaller --face-size");
     t.texel_count = static_cast<std::uint32_t>(texels);
 
-    t.nodes = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.nodes, 16));
+    // Room for any binary BVH over these primitives (2n - 1 nodes), so set_scene uploads in place.
+    t.nodes = std::make_unique<vk::Buffer>(context, std::max(t.bvh.nodes.size(), 2 * t.bvh.primitives.size()) * sizeof(BvhNode));
+    t.nodes->upload(t.bvh.nodes.data(), t.bvh.nodes.size() * sizeof(BvhNode));
     t.primitives = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
     t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
     t.cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, cubes, 16));
@@ -632,7 +659,31 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
 
 Tracer::~Tracer() = default;
 
-std::size_t Tracer::bvh_nodes() const noexcept { return impl_->bvh.nodes.size(); }
+const char* to_string(Secondary secondary) { return secondary == Secondary::rsh ? "rsh" : "bvh"; }
+
+void Tracer::set_scene(const Scene& moved) {
+    Impl& t = *impl_;
+    const auto start = std::chrono::steady_clock::now();
+    if (t.rsh) {
+        const std::vector<GpuPrimitive> prims = gather_primitives(moved);
+        const std::vector<rsh::Primitive> rp = rsh::primitives_of(moved);
+        if (prims.size() != t.bvh.primitives.size())
+            throw std::invalid_argument("Vulkan tracer: set_scene needs the same primitives, moved");
+        t.primitives->upload(prims.data(), prims.size() * sizeof(GpuPrimitive));
+        t.rsh_prims->upload(rp.data(), rp.size() * sizeof(rsh::Primitive));
+    } else {
+        FlatBvh bvh = build_bvh(moved);
+        if (bvh.primitives.size() != t.bvh.primitives.size() || bvh.nodes.size() * sizeof(BvhNode) > t.nodes->size())
+            throw std::invalid_argument("Vulkan tracer: set_scene needs the same primitives, moved");
+        t.bvh = std::move(bvh);
+        t.nodes->upload(t.bvh.nodes.data(), t.bvh.nodes.size() * sizeof(BvhNode));
+        t.primitives->upload(t.bvh.primitives.data(), t.bvh.primitives.size() * sizeof(GpuPrimitive));
+    }
+    t.scene = moved;
+    t.update_ms = ms_since(start);
+}
+
+std::size_t Tracer::bvh_nodes() const noexcept { return impl_->rsh ? 0 : impl_->bvh.nodes.size(); }
 int Tracer::face_size() const noexcept { return impl_->settings.face_size; }
 std::size_t Tracer::cube_bytes() const noexcept {
     return impl_->texels ? static_cast<std::size_t>(2 * impl_->texels->size()) : 0;
@@ -673,7 +724,17 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
 
     auto start = std::chrono::steady_clock::now();
     const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
-    t.context.submit([&](vk::Commands& commands) {
+    if (t.rsh) {
+        if (t.raster)
+            t.context.submit([&](vk::Commands& commands) {
+                t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
+            });
+        RshSceneBuffers b;
+        b.prims = t.primitives.get(), b.objects = t.objects.get(), b.params = t.params.get(), b.rsh_prims = t.rsh_prims.get();
+        b.prim_count = static_cast<std::uint32_t>(t.bvh.primitives.size());
+        b.gbuffer = t.raster ? &gbuffer : nullptr;
+        t.rsh->render(width, height, t.scene.max_depth, b, *t.output, stats ? &stats->rsh : nullptr);
+    } else t.context.submit([&](vk::Commands& commands) {
         if (t.raster) {
             t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
             commands.barrier(); // the copy's writes, visible to the tracing shader
@@ -714,7 +775,9 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         stats->dirty_fraction = t.block_count ? static_cast<double>(dirty_blocks) / t.block_count : 0.0;
         stats->lookups = t.counters->as<std::uint32_t>()[0];
         stats->hits = t.counters->as<std::uint32_t>()[1];
+        stats->update_ms = t.update_ms;
     }
+    t.update_ms = 0.0;
     return image;
 }
 

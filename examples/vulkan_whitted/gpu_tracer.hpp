@@ -15,6 +15,7 @@
 #include "rcx/image.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
+#include "rsh_frame.hpp"
 
 namespace rcx::gpu {
 
@@ -37,10 +38,20 @@ struct FlatBvh {
     std::vector<GpuPrimitive> primitives; // in leaf order
 };
 
+// The scene's primitives in its own order: spheres, then each mesh's triangles (objects numbered as the
+// Embree tracer numbers its geometries). Throws std::invalid_argument for a malformed mesh.
+std::vector<GpuPrimitive> gather_primitives(const Scene& scene);
+
 // Builds the BVH with Embree's BVH builder (binary, up to 4 primitives a leaf, SAH) and flattens it.
 // Objects are numbered as the Embree tracer numbers its geometries: spheres, then meshes.
 // Throws std::runtime_error when Embree fails or the scene has nothing in it.
 FlatBvh build_bvh(const Scene& scene);
+
+// How rays after the primary hit are traced: the BVH (built on the CPU, every frame for a dynamic scene)
+// or the ray-space hierarchy (rsh_frame.hpp: built on the GPU over the rays each frame, no scene
+// structure; primary rays too, unless hybrid).
+enum class Secondary { bvh, rsh };
+const char* to_string(Secondary secondary);
 
 struct TracerSettings {
     CacheMode mode = CacheMode::off;
@@ -52,6 +63,8 @@ struct TracerSettings {
     int max_steps = 1024;
     float max_gap = 0.5f;
     bool hybrid = false;      // primary hits from a raster pass into a G-buffer (thesis Table 5.1), the rest in compute
+    Secondary secondary = Secondary::bvh;
+    std::uint32_t pair_capacity = 1u << 21; // rsh: pairs a stream holds (RshSettings)
 };
 
 struct FrameStats {
@@ -60,6 +73,8 @@ struct FrameStats {
     double dirty_fraction = 0.0;         // of the texel blocks (1024 elements), visited by that pass
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube
     std::uint64_t hits = 0;              // ... and were answered by it
+    double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh) or upload (rsh)
+    RshFrameStats rsh;                   // rsh: the frame's traces
 };
 
 class Tracer {
@@ -73,6 +88,12 @@ public:
     ~Tracer();
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
+
+    // Moves the scene's objects (a dynamic scene's at_frame): the same objects, primitives and materials
+    // in the same order, other positions. bvh: rebuilds the BVH and uploads it; rsh: uploads the
+    // primitives only. The time goes into the next frame's FrameStats::update_ms. Throws
+    // std::invalid_argument when the primitive count differs.
+    void set_scene(const Scene& moved);
 
     // Renders one frame, then (cct, cdct) runs the end-frame pass so this frame's stores become visible.
     Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr);

@@ -44,7 +44,15 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const st
     return (std::filesystem::path(o.out) / name).string();
 }
 
-int run(const rcx::Options& o, bool hybrid) {
+// This tracer's own options (beside rcx::parse_options').
+struct VulkanOptions {
+    bool hybrid = false;
+    rcx::gpu::Secondary secondary = rcx::gpu::Secondary::bvh;
+    std::uint32_t pair_capacity = 1u << 21;
+};
+
+int run(const rcx::Options& o, const VulkanOptions& v) {
+    const bool hybrid = v.hybrid;
     if (o.prefill) throw InputError("--prefill is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     // What the GPU side does not do yet: refused rather than ignored.
     const rcx::Options defaults;
@@ -54,6 +62,8 @@ int run(const rcx::Options& o, bool hybrid) {
         throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
     if (o.origin_drift != defaults.origin_drift)
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
+    if (o.origin_parallax != defaults.origin_parallax)
+        throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     if (!o.load_cache.empty() || !o.save_cache.empty())
@@ -67,7 +77,7 @@ int run(const rcx::Options& o, bool hybrid) {
     }
 
     rcx::vk::ContextOptions context_options;
-    context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct;
+    context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct || v.secondary == rcx::gpu::Secondary::rsh;
     std::unique_ptr<rcx::vk::Context> context;
     try {
         context = std::make_unique<rcx::vk::Context>(context_options);
@@ -102,6 +112,8 @@ int run(const rcx::Options& o, bool hybrid) {
     settings.max_steps = o.max_steps;
     settings.max_gap = o.max_gap;
     settings.hybrid = hybrid;
+    settings.secondary = v.secondary;
+    settings.pair_capacity = v.pair_capacity;
     const std::string spirv = rcx::gpu::default_spirv_dir();
     std::unique_ptr<rcx::gpu::Tracer> tracer, reference;
     try {
@@ -149,9 +161,15 @@ int run(const rcx::Options& o, bool hybrid) {
     double sum_ms = 0.0, warm_ms = 0.0, sum_plain = 0.0, warm_plain = 0.0, psnr_min = std::numeric_limits<double>::infinity();
     for (int f = 0; f < frames; ++f) {
         const rcx::Camera camera = scene.camera_at(f);
+        if (scene.dynamic() && f > 0) { // objects move: the BVH is rebuilt, the ray-space hierarchy needs nothing
+            const rcx::Scene moved = scene.at_frame(f);
+            tracer->set_scene(moved);
+            if (reference) reference->set_scene(moved);
+        }
         rcx::gpu::FrameStats stats;
         const rcx::Image image = tracer->render(camera, o.width, o.height, &stats);
-        rcx::write_png(frame_path(o, scene.name, rcx::to_string(o.cache), f, hybrid), image);
+        rcx::write_png(frame_path(o, scene.name, std::string(rcx::to_string(o.cache)) +
+                                   (v.secondary == rcx::gpu::Secondary::rsh ? "-rsh" : ""), f, hybrid), image);
         const double ms = stats.milliseconds + stats.end_frame_milliseconds;
         sum_ms += ms;
         if (f > 0) warm_ms += ms;
@@ -174,6 +192,16 @@ int run(const rcx::Options& o, bool hybrid) {
                 std::snprintf(hit, sizeof hit, "%5.1f%%", 100.0 * static_cast<double>(stats.hits) / static_cast<double>(stats.lookups));
             std::printf("%5d %10.2f %13.2f   %s", f, stats.milliseconds, stats.end_frame_milliseconds, hit);
             if (o.compare) std::printf(" %14.2f %8.2fx   %s", plain_ms, plain_ms / ms, rcx::psnr_text(psnr).c_str());
+            if (v.secondary == rcx::gpu::Secondary::rsh) {
+                const rcx::gpu::RshStats& r = stats.rsh.trace;
+                std::printf("   rsh: %d generations, %u batches (%u overflowed), %.3g cone-sphere tests, %llu leaf pairs; GPU ms "
+                            "build %.1f, tests %.1f, compaction %.1f, final %.1f; shading %.1f",
+                            stats.rsh.generations, r.batches, r.overflows, static_cast<double>(r.cone_sphere_tests),
+                            static_cast<unsigned long long>(r.leaf_pairs), r.build_ms, r.traverse_ms, r.compaction_ms,
+                            r.final_ms, stats.rsh.shade_ms);
+            } else if (stats.update_ms > 0.0) {
+                std::printf("   BVH rebuild %.1f ms", stats.update_ms);
+            }
             std::printf("\n");
             std::fflush(stdout);
         }
@@ -202,12 +230,29 @@ int run(const rcx::Options& o, bool hybrid) {
 
 int main(int argc, char** argv) {
     const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_vulkan_whitted").filename().string();
-    // --hybrid is this tracer's own option (primary visibility by a raster pass); the rest are shared.
-    bool hybrid = false;
+    // --hybrid (primary visibility by a raster pass), --secondary bvh|rsh and --pair-capacity N are this
+    // tracer's own options; the rest are shared.
+    VulkanOptions vulkan;
     std::vector<const char*> args;
     for (int i = 0; i < argc; ++i) {
-        if (i > 0 && std::string(argv[i]) == "--hybrid") hybrid = true;
-        else args.push_back(argv[i]);
+        const std::string a = argv[i];
+        if (i > 0 && a == "--hybrid") {
+            vulkan.hybrid = true;
+        } else if (i > 0 && (a == "--secondary" || a == "--pair-capacity")) {
+            const std::string value = i + 1 < argc ? argv[++i] : "";
+            if (a == "--secondary" && (value == "bvh" || value == "rsh")) {
+                vulkan.secondary = value == "rsh" ? rcx::gpu::Secondary::rsh : rcx::gpu::Secondary::bvh;
+            } else if (a == "--pair-capacity" && !value.empty() && value.find_first_not_of("0123456789") == std::string::npos &&
+                       value.size() <= 9 && std::stoul(value) >= 64 && std::stoul(value) <= (1ul << 24)) {
+                vulkan.pair_capacity = static_cast<std::uint32_t>(std::stoul(value));
+            } else {
+                std::fprintf(stderr, "%s: %s takes %s\n", program.c_str(), a.c_str(),
+                             a == "--secondary" ? "bvh or rsh" : "a number of pairs, 64 .. 16777216");
+                return 2;
+            }
+        } else {
+            args.push_back(argv[i]);
+        }
     }
     rcx::Options options;
     try {
@@ -220,13 +265,16 @@ int main(int argc, char** argv) {
         std::fputs(rcx::help_text(program).c_str(), stdout);
         std::fputs("\nVulkan tracer: --hybrid   primary visibility by a raster pass into a G-buffer, secondary rays in compute\n"
                    "(thesis Table 5.1); with --compare the uncached reference is rendered the same way.\n"
+                   "--secondary bvh|rsh   trace rays after the raster pass (or all rays, without --hybrid) through the BVH\n"
+                   "(default) or the ray-space hierarchy of Roger et al. 2007 (needs --cache off); --pair-capacity N: its pair\n"
+                   "stream capacity (default 2097152; a level that would exceed it splits the primitives into batches).\n"
                    "--threads is ignored, --prefill, --load-cache and --save-cache are refused, the CDCT search is the linear walk.\n"
                    "Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv files are looked for.\n",
                    stdout);
         return 0;
     }
     try {
-        return run(options, hybrid);
+        return run(options, vulkan);
     } catch (const InputError& e) {
         std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
         return 2;

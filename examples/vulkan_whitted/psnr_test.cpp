@@ -9,6 +9,7 @@
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
+#include "test_support.hpp"
 #include "rcx/image.hpp"
 #include "rcx/scene.hpp"
 #include "tracer.hpp"
@@ -25,14 +26,8 @@ int main(int argc, char** argv) {
         else names.push_back(argv[i]);
     }
     if (names.empty()) names = {"behind-8", "grid-32"};
-    std::unique_ptr<rcx::vk::Context> context;
-    try {
-        context = std::make_unique<rcx::vk::Context>();
-    } catch (const rcx::vk::NoDeviceError& e) {
-        std::printf("skipped: %s\n", e.what());
-        return 77;
-    }
-    std::printf("device %s, validation %s\n", context->device_name().c_str(), context->validation_enabled() ? "on" : "off");
+    std::unique_ptr<rcx::vk::Context> context = rcx::gpu::test::context_or_skip();
+    if (!context) return 77;
     int failures = 0;
     const int size = 96;
     for (const std::string& name : names) {
@@ -60,10 +55,6 @@ int main(int argc, char** argv) {
         }
     }
     context.reset();
-    const std::uint64_t errors = rcx::vk::validation_errors_in_process();
-    if (errors > 0) {
-        std::printf("FAIL: the validation layer reported %llu error(s)\n", static_cast<unsigned long long>(errors));
-        ++failures;
-    }
+    failures += rcx::gpu::test::validation_failures();
     return failures == 0 ? 0 : 1;
 }

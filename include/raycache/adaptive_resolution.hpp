@@ -13,7 +13,8 @@
 // leaving rays took; the covered fraction times 6 N^2 is the texel area they spread over at face size N.
 // adaptive_face_size() picks N so that area holds rays / rays_per_texel texels, on a ladder of sizes a
 // half octave apart. resample_into() fills a coarser cube from a finer one (each coarse texel takes the
-// valid fine texel nearest its centre), so shrinking a cube keeps it warm.
+// valid fine texel nearest its centre, and each coarse tile the origins of the fine tiles it drew from),
+// so shrinking a cube keeps it warm.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -130,6 +131,14 @@ inline int next_face_size(int current, std::uint64_t rays, double covered_fracti
     return nearest_face_size_step(ideal, a);
 }
 
+// The face size for a cube after the first frame its rays were counted in: the nearest step to the ideal,
+// without hysteresis (the cube holds only that cold frame's texels, so moving costs nearly nothing and
+// waiting would keep a first guess for the whole walkthrough). A frame without rays keeps `current`.
+inline int first_face_size(int current, std::uint64_t rays, double covered_fraction, const AdaptiveResolution& a) noexcept {
+    const double ideal = ideal_face_size(rays, covered_fraction, a.rays_per_texel);
+    return ideal > 0.0 ? nearest_face_size_step(ideal, a) : current;
+}
+
 // Fills the empty texels of `coarse` from `fine` (a cube of a larger face size): each coarse texel takes
 // the value of the valid fine texel whose centre direction falls in it nearest to its centre (ties: the
 // first in linear order), so the value stands for the coarse texel's centre as well as the fine cube
@@ -157,14 +166,42 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
         const float distance2 = u * u + v * v;
         if (distance2 < b.distance2) b = Best{distance2, t};
     });
+    // Each coarse tile's origins: the union of the boxes, and the nearest distance, of the fine tiles its
+    // texels came from, so the coarse tile answers the rays its values suit and no others.
+    struct Origins {
+        bool any = false;
+        glm::vec3 lo{0.0f}, hi{0.0f};
+        float nearest = std::numeric_limits<float>::infinity();
+    };
+    const int tiles_per_edge = (n + CacheCube<Texel>::tile_edge - 1) / CacheCube<Texel>::tile_edge;
+    std::vector<Origins> origins(std::size_t{RAYCACHE_FACE_COUNT} * tiles_per_edge * tiles_per_edge);
+    auto tile_of = [&](const TexelAddress& t) -> Origins& {
+        return origins[(static_cast<std::size_t>(t.face) * tiles_per_edge + t.row / CacheCube<Texel>::tile_edge) * tiles_per_edge +
+                       t.column / CacheCube<Texel>::tile_edge];
+    };
     std::size_t stored = 0;
     for (std::size_t i = 0; i < best.size(); ++i) {
         if (!std::isfinite(best[i].distance2)) continue;
         const TexelAddress target{static_cast<int>(i / (static_cast<std::size_t>(n) * n)), static_cast<int>(i % n),
                                   static_cast<int>(i / n % n)};
         if (coarse.load(target)) continue;
-        stored += coarse.store_at(target, *fine.load(best[i].source));
+        if (!coarse.store_at(target, *fine.load(best[i].source))) continue;
+        ++stored;
+        if (const auto box = fine.origin_box(best[i].source)) {
+            Origins& o = tile_of(target);
+            o.lo = o.any ? glm::min(o.lo, box->first) : box->first;
+            o.hi = o.any ? glm::max(o.hi, box->second) : box->second;
+            o.any = true;
+            o.nearest = std::min(o.nearest, fine.nearest_hit(best[i].source));
+        }
     }
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+        for (int row = 0; row < tiles_per_edge; ++row)
+            for (int column = 0; column < tiles_per_edge; ++column) {
+                const TexelAddress first{face, column * CacheCube<Texel>::tile_edge, row * CacheCube<Texel>::tile_edge};
+                const Origins& o = tile_of(first);
+                if (o.any) coarse.set_origin_box(first, o.lo, o.hi, o.nearest);
+            }
     return stored;
 }
 

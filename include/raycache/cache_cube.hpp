@@ -19,7 +19,11 @@
 // store(direction, value, origin) widens its tile's box of origins (pending until the next begin_frame()),
 // and lookup(direction, origin, drift) misses, marking the tile stale, when the origin lies more than
 // `drift` outside the tile's visible box. begin_frame() drops stale tiles, which refill from the current
-// rays. Boxes and marks are order-independent (min, max, or), read only from frame-constant state.
+// rays. A fixed drift suits far surroundings only: a surface at distance d seen from an origin moved by s
+// shifts by about s / d radians, so near surfaces (a floor under a mirror ball) go wrong long before far
+// ones. Stores given the hit distance keep, per tile, the nearest surface its rays met, and a lookup with
+// an OriginTolerance allows at most `parallax` x that distance of drift. Boxes, distances and marks are
+// order-independent (min, max, or), read only from frame-constant state.
 //
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
 // locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
@@ -39,6 +43,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <new>
 #include <optional>
@@ -51,11 +56,20 @@
 #include "raycache/assert.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/memory_budget.hpp"
+#include "raycache/path_record.hpp"
 #include "raycache/shared/ray_box.h"
 #include "raycache/statistics.hpp"
 #include "raycache/texel.hpp"
 
 namespace raycache {
+
+// How far a ray's origin may lie outside the origins its tile was stored from and still be answered:
+// `drift` world units, and no more than `parallax` times the distance to the nearest surface the tile's
+// stored rays hit (the angle, in radians, by which that surface may appear to move; infinity: no bound).
+struct OriginTolerance {
+    float drift = 0.0f;
+    float parallax = std::numeric_limits<float>::infinity();
+};
 
 template <class Texel>
 class CacheCube {
@@ -154,6 +168,13 @@ public:
     // box of the origins its tile's visible texels were stored from; the tile is then marked stale and
     // dropped at the next begin_frame(). Thread-safe, wait-free (a marking is one relaxed store).
     std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, float drift) noexcept {
+        return lookup(direction, origin, OriginTolerance{drift});
+    }
+
+    // lookup(direction, origin, drift) with the drift also bounded by parallax (OriginTolerance): a tile whose
+    // rays met a surface at distance d answers origins within min(drift, parallax * d) of its box (drift
+    // alone while none of its stores gave a finite distance).
+    std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         std::optional<Value> value;
@@ -162,7 +183,7 @@ public:
             value = visible_value(t);
             if (value) {
                 Tile* tile = tile_of(t);
-                if (!tile->origins_cover(origin, drift)) {
+                if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
                     tile->stale.store(1u, std::memory_order_relaxed);
                     value.reset();
                 }
@@ -203,13 +224,150 @@ public:
         return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
     }
 
-    // store() for a ray that left from `origin`: also widens its tile's pending box of origins (whether or
-    // not the word is written), which lookup(direction, origin, drift) reads from the next frame on.
+    // store() for a ray that left from `origin`: also widens its tile's pending box of origins (unless the
+    // texel already holds a visible value), which lookup(direction, origin, drift) reads from the next frame on.
     bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin) noexcept {
+        return store(direction, value, origin, std::numeric_limits<float>::infinity());
+    }
+
+    // store(direction, value, origin) for a ray whose hit lay `hit_distance` along the unit direction
+    // (infinity: it escaped): the tile also keeps the nearest such distance, which bounds the drift of
+    // lookups given a parallax (OriginTolerance). A NaN or negative distance is refused.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance) noexcept {
+        return store(direction, value, origin, hit_distance, OriginTolerance{std::numeric_limits<float>::infinity()});
+    }
+
+    // store(direction, value, origin, hit_distance) that keeps the tile's origins tight: refused when the tile
+    // already has a visible origin box and adding `origin` would make it wider, on any axis, than the
+    // drift `tolerance` allows for the tile (its nearest hit distance, or this one when nearer). Otherwise a
+    // tile filled a little more each frame along a moving camera would stretch its box along the path, and
+    // its first values would answer rays from ever further away. Only frame-constant state decides.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
+               const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin)) return refuse();
-        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &origin);
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &from);
+    }
+
+    // store() of a traced ray with what its path saw (raycache/path_record.hpp): when the word is written, its
+    // tile adds `path` to the union of its stores' records and marks the texel as recorded, for
+    // raycache/invalidation.hpp. Texels stored without a record count as having seen anything.
+    bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
+               const OriginTolerance& tolerance, const PathRecord& path) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
+        const TexelAddress t{a.face, a.column, a.row};
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        if (!store_word(t, Texel::encode(value), &from)) return false;
+        record_path(t, path);
+        return true;
+    }
+    bool store(const glm::vec3& direction, const Value& value, const PathRecord& path) noexcept {
+        const InFrame use = in_frame();
+        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
+        if (a.face == RAYCACHE_NO_FACE) return refuse();
+        const TexelAddress t{a.face, a.column, a.row};
+        if (!store_word(t, Texel::encode(value))) return false;
+        record_path(t, path);
+        return true;
+    }
+
+    // Bits of TileState::path_flags: what a tile's recorded paths did (raycache/path_record.hpp).
+    static constexpr std::uint32_t path_lit = 1u, path_chained = 2u, path_unbounded = 4u;
+
+    // One allocated tile, for invalidation (raycache/invalidation.hpp): its texels, the union of the path
+    // records stored into it, and the box of the origins its texels were stored from (visible and pending).
+    struct TileState {
+        std::size_t index;               // for invalidate_in_tile()
+        int face, column0, row0, column1, row1; // texels [column0, column1) x [row0, row1) of the face
+        std::uint64_t objects;           // Bloom mask of the objects the recorded paths hit
+        glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
+        std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
+        bool has_origins;
+        glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
+        int unrecorded_texels;           // texels holding a value whose store brought no path record
+    };
+
+    // f(const TileState&) for every allocated tile, in index order. Between frames only.
+    template <class F>
+    void for_each_tile_state(F&& f) const {
+        for (std::size_t i = 0; i < tile_count(); ++i) {
+            const Tile* tile = state_->tiles[i].load(std::memory_order_acquire);
+            if (!tile) continue;
+            const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+            const int face = static_cast<int>(i / (per_edge * per_edge));
+            const int tile_row = static_cast<int>((i / per_edge) % per_edge), tile_column = static_cast<int>(i % per_edge);
+            TileState t{i, face, tile_column * tile_edge, tile_row * tile_edge,
+                        std::min(face_size_, (tile_column + 1) * tile_edge), std::min(face_size_, (tile_row + 1) * tile_edge),
+                        tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
+                        tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
+            for (int slot = 0; slot < tile_texels; ++slot)
+                t.unrecorded_texels += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) &&
+                                       !((tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u);
+            // record_path() widens all three axes at once, so one axis tells whether the box is empty.
+            if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
+                for (int k = 0; k < 3; ++k) {
+                    t.vertex_lo[k] = unordered(tile->vertex_min[k].load(std::memory_order_relaxed));
+                    t.vertex_hi[k] = unordered(tile->vertex_max[k].load(std::memory_order_relaxed));
+                }
+            } else {
+                t.vertex_lo = glm::vec3(1.0f), t.vertex_hi = glm::vec3(-1.0f);
+            }
+            t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
+                                                 tile->pending_max[0].load(std::memory_order_relaxed);
+            if (t.has_origins) {
+                for (int k = 0; k < 3; ++k) {
+                    const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
+                    const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
+                    float a = tile->has_box ? tile->box_min[k] : std::numeric_limits<float>::infinity();
+                    float b = tile->has_box ? tile->box_max[k] : -std::numeric_limits<float>::infinity();
+                    if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
+                    t.origin_lo[k] = a, t.origin_hi[k] = b;
+                }
+            }
+            f(static_cast<const TileState&>(t));
+        }
+    }
+
+    // Empties the texels of tile `index` (TileState::index) holding a value for which
+    // drop(TexelAddress, bool recorded) returns true; `recorded`: the texel's store brought a path record.
+    // Returns how many were emptied. Between frames only.
+    template <class Drop>
+    std::size_t invalidate_in_tile(std::size_t index, Drop&& drop) {
+        assert_between_frames();
+        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return 0;
+        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+        const int face = static_cast<int>(index / (per_edge * per_edge));
+        const int row0 = static_cast<int>((index / per_edge) % per_edge) * tile_edge;
+        const int column0 = static_cast<int>(index % per_edge) * tile_edge;
+        std::size_t dropped = 0;
+        for (int row = row0; row < std::min(face_size_, row0 + tile_edge); ++row)
+            for (int column = column0; column < std::min(face_size_, column0 + tile_edge); ++column) {
+                const TexelAddress t{face, column, row};
+                const int slot = slot_of(t);
+                if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) continue;
+                const bool recorded = (tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
+                if (!drop(t, recorded)) continue;
+                invalidate(t);
+                ++dropped;
+            }
+        return dropped;
+    }
+
+    // Marks every valid texel of tile `index` (TileState::index) as recorded and adds `path` to the tile's
+    // record: for texels copied from another cube whose records are known (carry_path_records). Between frames.
+    void record_texels_of_tile(std::size_t index, const PathRecord& path) noexcept {
+        assert_between_frames();
+        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return;
+        for (int slot = 0; slot < tile_texels; ++slot)
+            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
+                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -261,13 +419,23 @@ public:
 
     // Makes [lo, hi] the visible origin box of `texel`'s tile, for loading a saved cube; false (nothing set)
     // when the tile holds no texel yet. Between frames.
-    bool set_origin_box(const TexelAddress& texel, const glm::vec3& lo, const glm::vec3& hi) noexcept {
+    bool set_origin_box(const TexelAddress& texel, const glm::vec3& lo, const glm::vec3& hi,
+                        float nearest = std::numeric_limits<float>::infinity()) noexcept {
         RAYCACHE_ASSERT(contains(texel));
         Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
         if (!tile) return false;
         for (int k = 0; k < 3; ++k) tile->box_min[k] = lo[k], tile->box_max[k] = hi[k];
         tile->has_box = true;
+        tile->nearest = nearest >= 0.0f ? nearest : std::numeric_limits<float>::infinity();
         return true;
+    }
+
+    // The nearest hit distance of the stores (given distances) into `texel`'s tile up to the last
+    // begin_frame(); infinity when none. For saving a cube. Between frames.
+    float nearest_hit(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        const Tile* tile = contains(texel) ? tile_of(texel) : nullptr;
+        return tile ? tile->nearest : std::numeric_limits<float>::infinity();
     }
 
     // Marks a texel holding a value as doubtful: from then on lookups and peeks miss on it (load() still
@@ -305,6 +473,7 @@ public:
         const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
         if (tile->doubtful_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed) & bit)
             state_->doubtful_texels.fetch_sub(1, std::memory_order_relaxed);
+        tile->recorded_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed);
     }
 
     // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
@@ -317,8 +486,6 @@ public:
         state_->counters.reset();
     }
 
-    // Ends a frame: this frame's stores become visible; returns the frame's counters and resets them.
-    // Between frames only.
     // Ends a frame: this frame's stores become visible, tiles marked stale are dropped (their texels empty,
     // their memory given back), pending origin boxes become visible; returns the frame's counters and
     // resets them. Between frames only.
@@ -398,6 +565,18 @@ private:
                 pending_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 pending_max[k].store(0u, std::memory_order_relaxed);
             }
+            for (auto& w : recorded_bits) w.store(0, std::memory_order_relaxed);
+            for (int k = 0; k < 3; ++k) {
+                vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                vertex_max[k].store(0u, std::memory_order_relaxed);
+            }
+            pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
+        }
+        // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
+        void near_pending(float d) noexcept {
+            const std::uint32_t key = ordered(d);
+            std::uint32_t now = pending_nearest.load(std::memory_order_relaxed);
+            while (key < now && !pending_nearest.compare_exchange_weak(now, key, std::memory_order_relaxed)) {}
         }
         // Widens the pending origin box by `o` (atomic min and max on ordered float bits).
         void widen_pending(const glm::vec3& o) noexcept {
@@ -417,6 +596,20 @@ private:
                 if (!(o[k] >= box_min[k] - drift && o[k] <= box_max[k] + drift)) return false;
             return true;
         }
+        // Whether the visible box grown by `o` stays within `drift` wide on every axis (true without a box).
+        bool box_stays_within(const glm::vec3& o, float drift) const noexcept {
+            if (!has_box) return true;
+            for (int k = 0; k < 3; ++k)
+                if (!(std::max(box_max[k], o[k]) - std::min(box_min[k], o[k]) <= drift)) return false;
+            return true;
+        }
+        // The drift a tolerance allows a tile whose nearest hit lies at `nearest`: min(drift, parallax x
+        // nearest); drift alone when either factor of the product is infinite.
+        static float allowed_drift(const OriginTolerance& t, float nearest) noexcept {
+            if (!(t.parallax < std::numeric_limits<float>::infinity()) || !(nearest < std::numeric_limits<float>::infinity()))
+                return t.drift;
+            return std::min(t.drift, t.parallax * nearest);
+        }
         std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet).
         std::atomic<std::uint64_t> written_bits[bit_words];
@@ -427,7 +620,16 @@ private:
         std::atomic<std::uint32_t> pending_min[3], pending_max[3];
         float box_min[3] = {0, 0, 0}, box_max[3] = {0, 0, 0};
         bool has_box = false;
+        // The nearest hit distance of the stores with distances: this frame's, and the visible one.
+        std::atomic<std::uint32_t> pending_nearest;
+        float nearest = std::numeric_limits<float>::infinity();
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
+        // What the paths stored into this tile saw (store() with a PathRecord): their union, kept until the
+        // tile is dropped; read between frames only (raycache/invalidation.hpp).
+        std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
+        std::atomic<std::uint64_t> path_objects{0};
+        std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
+        std::atomic<std::uint32_t> path_flags{0};
     };
 
     struct State {
@@ -561,6 +763,7 @@ private:
             }
             if (tile->pending_min[0].load(std::memory_order_relaxed) <= tile->pending_max[0].load(std::memory_order_relaxed))
                 tile->has_box = true;
+            tile->nearest = std::min(tile->nearest, unordered(tile->pending_nearest.load(std::memory_order_relaxed)));
         }
     }
 
@@ -590,16 +793,58 @@ private:
         return false;
     }
 
-    // Writes `word` into texel t under the frame rule; with `origin`, first widens the tile's pending box.
-    bool store_word(const TexelAddress& t, Word word, const glm::vec3* origin = nullptr) noexcept {
+    // Adds a written texel's path record to its tile (atomic or, min, max; loads first, so a tile whose
+    // union already holds the record is not written).
+    void record_path(const TexelAddress& t, const PathRecord& path) noexcept {
+        Tile* tile = tile_of(t);
+        const int slot = slot_of(t);
+        tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        merge_path(*tile, path);
+    }
+    static void merge_path(Tile& tile_ref, const PathRecord& path) noexcept {
+        Tile* tile = &tile_ref;
+        if ((tile->path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
+            tile->path_objects.fetch_or(path.objects, std::memory_order_relaxed);
+        const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |
+                                    (path.unbounded ? path_unbounded : 0u);
+        if ((tile->path_flags.load(std::memory_order_relaxed) & flags) != flags)
+            tile->path_flags.fetch_or(flags, std::memory_order_relaxed);
+        if (!path.has_vertices()) return;
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t lo_key = ordered(path.vertex_lo[k] + 0.0f), hi_key = ordered(path.vertex_hi[k] + 0.0f);
+            std::uint32_t lo = tile->vertex_min[k].load(std::memory_order_relaxed);
+            while (lo_key < lo && !tile->vertex_min[k].compare_exchange_weak(lo, lo_key, std::memory_order_relaxed)) {}
+            std::uint32_t hi = tile->vertex_max[k].load(std::memory_order_relaxed);
+            while (hi_key > hi && !tile->vertex_max[k].compare_exchange_weak(hi, hi_key, std::memory_order_relaxed)) {}
+        }
+    }
+
+    // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and
+    // nearest distance, or refuses a store that would stretch the box beyond what the tolerance allows.
+    // Where a store's ray left from, how far it went, and how much drift its tile allows.
+    struct StoreOrigin {
+        glm::vec3 origin;
+        float hit_distance;
+        OriginTolerance tolerance;
+    };
+
+    bool store_word(const TexelAddress& t, Word word, const StoreOrigin* from = nullptr) noexcept {
         if (!Texel::is_valid(word)) return refuse();
         Tile* tile = tile_for_store(t);
         if (!tile) return refuse(); // over the budget
-        if (origin) tile->widen_pending(*origin);
         const int slot = slot_of(t);
         std::atomic<Word>& texel = tile->texels[slot];
         Word old = texel.load(std::memory_order_acquire);
         if (Texel::is_valid(old) && !written(*tile, slot)) return refuse(); // visible: kept
+        // Only a word that may be kept widens the box (a same-frame rival may win either way): the box must
+        // bound the origins of the values the tile holds, or a doubtful texel retraced every frame from a
+        // moving camera would stretch it until no lookup ever missed on drift.
+        if (from) {
+            const float drift = Tile::allowed_drift(from->tolerance, std::min(tile->nearest, from->hit_distance));
+            if (!tile->box_stays_within(from->origin, drift)) return refuse();
+            tile->widen_pending(from->origin);
+            tile->near_pending(from->hit_distance);
+        }
         // Mark the texel as this frame's before writing it, so no reader can see the new word as visible.
         tile->written_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         if (!state_->written_this_frame.load(std::memory_order_relaxed))

@@ -20,6 +20,9 @@
 //            word must be valid)
 //   "END "   u32 cube count; nothing may follow
 //
+// Not saved: a tile's nearest hit distance (CacheCube::nearest_hit), so a loaded tile answers within the
+// drift alone of an OriginTolerance until a store gives it a distance again.
+//
 // Only tiles holding a value are written (sparse, as cubes allocate them). The scene identity is the
 // caller's: a 64-bit hash of whatever makes the cached colours right (geometry, materials, lights) and a
 // name for messages; a file saved for another scene is refused.

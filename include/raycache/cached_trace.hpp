@@ -76,4 +76,22 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, const
     return traced;
 }
 
+// cached_trace() and filtered_cached_trace() for a CCT ray leaving from `origin`, with the drift also bounded
+// by parallax (OriginTolerance): trace() returns the colour and the hit distance along the unit direction
+// (anything with members `color` and `distance`, as raycache::TracedRay; infinity when the ray escaped),
+// and the store keeps the distance for its tile, so tiles that see near surfaces refill sooner; a store that
+// would stretch its tile's origins beyond the tolerance is refused (CacheCube::store with a tolerance).
+template <class Trace>
+glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance,
+                           bool filtered, Trace&& trace) {
+    const auto use = cube.in_frame();
+    if (std::optional<glm::vec3> cached = cube.lookup(direction, origin, tolerance))
+        return filtered ? *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); })
+                        : *cached;
+    const auto traced = std::forward<Trace>(trace)();
+    const glm::vec3 colour = traced.color;
+    cube.store(direction, colour, origin, traced.distance, tolerance);
+    return colour;
+}
+
 } // namespace raycache

@@ -38,6 +38,22 @@ CacheMode parse_cache_mode(const std::string& text) {
     throw UsageError("--cache: unknown mode '" + text + "'; use off, cct, cdct or ceiling");
 }
 
+const char* to_string(InvalidationPolicy policy) {
+    switch (policy) {
+    case InvalidationPolicy::none: return "none";
+    case InvalidationPolicy::all: return "all";
+    case InvalidationPolicy::exact: return "exact";
+    }
+    return "?";
+}
+
+InvalidationPolicy parse_invalidation(const std::string& text) {
+    if (text == "none") return InvalidationPolicy::none;
+    if (text == "all") return InvalidationPolicy::all;
+    if (text == "exact") return InvalidationPolicy::exact;
+    throw UsageError("--invalidate: unknown policy '" + text + "'; use none, all or exact");
+}
+
 namespace {
 
 long parse_int(const std::string& option, const std::string& text, long min, long max) {
@@ -128,6 +144,11 @@ Options parse_options(int argc, const char* const argv[]) {
         else if (arg == "--warm-up") o.warm_up = static_cast<int>(parse_int(arg, next(), 0, 64));
         else if (arg == "--edge-threshold") o.edge_threshold = parse_float(arg, next(), false);
         else if (arg == "--origin-drift") o.origin_drift = parse_float(arg, next(), false);
+        else if (arg == "--origin-parallax") {
+            const std::string text = next();
+            o.origin_parallax = text == "inf" ? std::numeric_limits<float>::infinity() : parse_float(arg, text, true);
+        }
+        else if (arg == "--invalidate") o.invalidate = parse_invalidation(next());
         else if (arg == "--delta") o.delta = parse_float(arg, next(), true);
         else if (arg == "--epsilon") o.epsilon = parse_float(arg, next(), true);
         else if (arg == "--max-steps") o.max_steps = static_cast<int>(parse_int(arg, next(), 1, 1 << 24));
@@ -182,7 +203,8 @@ std::string help_text(const std::string& program) {
         "\n"
         "Scene and camera\n"
         "  --scene NAME        behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder,\n"
-        "                      concave, glass, mirrors-1000                          [behind-32]\n"
+        "                      concave, glass, mirrors-1000, dynamic-N (N = 1..256\n"
+        "                      moving spheres and a moving mesh among mirrors)       [behind-32]\n"
         "  --mesh FILE         the concave object of scene concave (any format Assimp reads)\n"
         "                      [/usr/share/assimp/models/PLY/Wuson.ply, Debian: assimp-testmodels]\n"
         "  --size WxH          image size (or --width W --height H)                  [512x512]\n"
@@ -204,6 +226,11 @@ std::string help_text(const std::string& program) {
         "  --origin-drift F    CCT: a tile met by a ray leaving further than F x the cube's\n"
         "                      half-size from its stores' origins refills; negative:\n"
         "                      off (Embree tracer)                                    [0.1]\n"
+        "  --origin-parallax F CCT: ... or further than F x the distance to the nearest\n"
+        "                      surface its rays hit (radians); inf: off (Embree)    [0.01]\n"
+        "  --invalidate P      dynamic scenes (dynamic-N), when objects move: none (keep\n"
+        "                      every texel), all (empty every cube) or exact (only the\n"
+        "                      texels the moves can have changed; Embree tracer, CCT) [exact]\n"
         "  --cdct-search S     secant (a few texel reads, then a consistency test) or\n"
         "                      relief (the thesis's walk, over a depth pyramid)       [secant]\n"
         "  --max-reads N       CDCT secant: texel reads before a miss, 1..64          [8]\n"

@@ -153,23 +153,29 @@ Scene cone_cylinder() {
     return s;
 }
 
-// Figure 5.11: a concave mirror object (the Wuson, from assimp-testmodels) and a mirror torus, both cached.
-Scene concave(const SceneParams& params) {
-    Scene s = base_scene("concave");
+// The Wuson (assimp-testmodels) turned three-quarters to a camera on +Z, `size` across, standing on the
+// floor at (x, z); names the Debian package when the default model is missing.
+Mesh wuson_on_floor(const std::string& scene_name, const SceneParams& params, float size, glm::vec2 at) {
     Mesh wuson;
     try {
         wuson = load_mesh(params.mesh_path);
     } catch (const std::exception& e) {
         if (params.mesh_path != SceneParams{}.mesh_path) throw;
-        throw std::runtime_error(std::string(e.what()) +
-                                 " (scene 'concave' needs the Wuson model; on Debian/Ubuntu: "
-                                 "apt-get install assimp-testmodels)");
+        throw std::runtime_error(std::string(e.what()) + " (scene '" + scene_name +
+                                 "' needs the Wuson model; on Debian/Ubuntu: apt-get install assimp-testmodels)");
     }
     wuson.name = "wuson";
     rotate_mesh(wuson, {0.0f, 1.0f, 0.0f}, -55.0f); // Y-up, body along Z: turn it three-quarters to the camera
-    fit_mesh(wuson, {0.0f, 0.0f, 0.0f}, 2.4f);
+    fit_mesh(wuson, {0.0f, 0.0f, 0.0f}, size);
     const Bounds b = mesh_bounds(wuson);
-    translate_mesh(wuson, {-1.2f, floor_height - b.min.y, 0.0f});
+    translate_mesh(wuson, {at.x, floor_height - b.min.y, at.y});
+    return wuson;
+}
+
+// Figure 5.11: a concave mirror object (the Wuson, from assimp-testmodels) and a mirror torus, both cached.
+Scene concave(const SceneParams& params) {
+    Scene s = base_scene("concave");
+    Mesh wuson = wuson_on_floor(s.name, params, 2.4f, {-1.2f, 0.0f});
     wuson.material = mirror(0.85f);
     Mesh torus = make_torus(0.7f, 0.25f, 96, 48);
     rotate_mesh(torus, {1.0f, 0.0f, 0.0f}, 70.0f); // nearly upright, its hole facing the camera
@@ -224,8 +230,70 @@ Scene mirrors1000() {
     return s;
 }
 
-const char* const valid_names =
-    "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, glass, mirrors-1000";
+// Moving objects among static mirrors (for dynamic-scene work: the ray-space hierarchy, cache
+// invalidation): four static cached mirror spheres (r = 0.9) at the corners of a 5.6-wide square, the
+// Wuson (matte, 1.0 across) circling the centre, and n small spheres (r = 0.35; even ones cached mirrors,
+// odd ones matte) on rings around it, each circling through its ring slot (circle r = 0.25) at 1.5 to 3
+// degrees a frame, some bobbing up to 0.4; no two objects ever overlap. The camera orbits 1 degree a frame
+// for 30 frames.
+Scene dynamic_scene(int n, const SceneParams& params) {
+    Scene s = base_scene("dynamic-" + std::to_string(n));
+    for (int i = 0; i < 4; ++i) {
+        const float x = (i % 2 == 0) ? -2.8f : 2.8f, z = (i / 2 == 0) ? -2.8f : 2.8f;
+        s.spheres.push_back(on_floor(x, z, 0.9f, mirror(0.85f, palette(static_cast<std::size_t>(i) + 4))));
+    }
+    // Ring 0 (6 slots) runs between the Wuson and the mirrors, rings of 16 outside the mirrors, 1.8 apart:
+    // slots far enough apart that neighbours circling them never meet.
+    for (int i = 0; i < n; ++i) {
+        const int ring = i < 6 ? 0 : 1 + (i - 6) / 16;
+        const int slot = i < 6 ? i : (i - 6) % 16;
+        const int slots = ring == 0 ? 6 : 16;
+        const float angle = (static_cast<float>(slot) + 0.5f * static_cast<float>(ring % 2)) * 2.0f * pi /
+                            static_cast<float>(slots);
+        const float ring_radius = ring == 0 ? 2.0f : 5.8f + 1.8f * static_cast<float>(ring - 1);
+        const Material m = (i % 2 == 0) ? mirror(0.7f, palette(static_cast<std::size_t>(i))) : matte(palette(static_cast<std::size_t>(i)));
+        s.spheres.push_back(on_floor(ring_radius * std::cos(angle), ring_radius * std::sin(angle), 0.35f, m));
+        Motion motion;
+        motion.kind = Motion::Kind::sphere;
+        motion.index = s.spheres.size() - 1;
+        motion.circle_radius = 0.25f;
+        motion.degrees_per_frame = 1.5f + 0.75f * static_cast<float>(i % 3);
+        motion.phase_degrees = 37.0f * static_cast<float>(i);
+        motion.bob = (i % 4 == 1) ? 0.4f : 0.0f;
+        s.motions.push_back(motion);
+    }
+    Mesh wuson = wuson_on_floor(s.name, params, 1.0f, {0.0f, 0.0f});
+    wuson.material = matte({0.85f, 0.8f, 0.7f});
+    s.meshes.push_back(std::move(wuson));
+    Motion mesh_motion;
+    mesh_motion.kind = Motion::Kind::mesh;
+    mesh_motion.index = s.meshes.size() - 1;
+    mesh_motion.circle_radius = 0.15f;
+    mesh_motion.degrees_per_frame = 2.0f;
+    s.motions.push_back(mesh_motion);
+    s.camera.eye = {0.0f, 6.0f, 12.5f};
+    s.camera.target = {0.0f, -0.5f, 0.0f};
+    s.camera.fov_y_degrees = 50.0f;
+    s.path.frames = 30;
+    return s;
+}
+
+const char* const valid_names = "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, "
+                                "glass, mirrors-1000, dynamic-N (N = 1..256)";
+
+// N of "<prefix>N" for N in [low, high]; -1 when the name does not start with prefix; throws
+// invalid_argument for a bad or out-of-range N.
+int numbered(const std::string& name, const std::string& prefix, int low, int high) {
+    if (name.compare(0, prefix.size(), prefix) != 0) return -1;
+    const std::string digits = name.substr(prefix.size());
+    const bool all_digits = !digits.empty() && digits.size() <= 3 &&
+                            std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+    const int n = all_digits ? std::stoi(digits) : -1;
+    if (n < low || n > high)
+        throw std::invalid_argument("scene '" + name + "': " + prefix + "N takes N = " + std::to_string(low) + ".." +
+                                    std::to_string(high) + "; valid scenes: " + valid_names);
+    return n;
+}
 
 } // namespace
 
@@ -281,6 +349,23 @@ CameraPath::Kind parse_path_kind(const std::string& text) {
     throw std::invalid_argument("unknown camera path '" + text + "'; valid paths: orbit, pan, fixed");
 }
 
+glm::vec3 Motion::offset(int frame) const {
+    const float p = phase_degrees * pi / 180.0f;
+    const float turned = degrees_per_frame * static_cast<float>(frame) * pi / 180.0f;
+    return {circle_radius * (std::cos(p + turned) - std::cos(p)), 0.5f * bob * (1.0f - std::cos(turned)),
+            circle_radius * (std::sin(p + turned) - std::sin(p))};
+}
+
+Scene Scene::at_frame(int frame) const {
+    Scene moved = *this;
+    for (const Motion& m : motions) {
+        const glm::vec3 d = m.offset(frame);
+        if (m.kind == Motion::Kind::sphere) moved.spheres.at(m.index).centre += d;
+        else translate_mesh(moved.meshes.at(m.index), d);
+    }
+    return moved;
+}
+
 int Scene::cached_object_count() const {
     int n = 0;
     for (const Sphere& s : spheres) n += s.material.cached ? 1 : 0;
@@ -309,17 +394,8 @@ Mesh checkerboard_floor(float height, float half_extent) {
 }
 
 Scene make_scene(const std::string& name, const SceneParams& params) {
-    const std::string prefix = "behind-";
-    if (name.compare(0, prefix.size(), prefix) == 0) {
-        const std::string digits = name.substr(prefix.size());
-        const bool all_digits = !digits.empty() && digits.size() <= 3 &&
-                                std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
-        const int n = all_digits ? std::stoi(digits) : -1;
-        if (n < 0 || n > max_behind_spheres)
-            throw std::invalid_argument("scene '" + name + "': behind-N takes N = 0.." +
-                                        std::to_string(max_behind_spheres) + "; valid scenes: " + valid_names);
-        return behind(n, params);
-    }
+    if (const int n = numbered(name, "behind-", 0, max_behind_spheres); n >= 0) return behind(n, params);
+    if (const int n = numbered(name, "dynamic-", 1, max_dynamic_spheres); n >= 0) return dynamic_scene(n, params);
     if (name == "grid-32") return grid32();
     if (name == "diffuse-31") return ring_scene(name, false);
     if (name == "reflective-32") return ring_scene(name, true);
@@ -333,7 +409,7 @@ Scene make_scene(const std::string& name, const SceneParams& params) {
 std::vector<std::string> scene_names() {
     return {"behind-0", "behind-1",   "behind-2",      "behind-4",      "behind-8", "behind-16", "behind-32",
             "grid-32",  "diffuse-31", "reflective-32", "cone-cylinder", "concave",  "glass",
-            "mirrors-1000"};
+            "mirrors-1000", "dynamic-8"};
 }
 
 } // namespace rcx

@@ -411,17 +411,31 @@ void Context::dispatch(const ComputePipeline& pipeline, std::initializer_list<Re
 void Commands::dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
                         std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y,
                         std::uint32_t groups_z) {
+    const std::uint32_t* limit = context_.properties().limits.maxComputeWorkGroupCount;
+    if (groups_x > limit[0] || groups_y > limit[1] || groups_z > limit[2])
+        throw Error("rcx::vk: dispatch of " + std::to_string(groups_x) + " x " + std::to_string(groups_y) + " x " +
+                    std::to_string(groups_z) + " groups exceeds the device's maxComputeWorkGroupCount");
+    bind(pipeline, resources, push, push_bytes);
+    vkCmdDispatch(command_buffer_, groups_x, groups_y, groups_z);
+}
+
+void Commands::dispatch_indirect(const ComputePipeline& pipeline, std::initializer_list<Resource> resources,
+                                 const void* push, std::uint32_t push_bytes, const Buffer& args, VkDeviceSize offset) {
+    if (offset % 4 != 0 || offset + 12 > args.size())
+        throw Error("rcx::vk: dispatch_indirect: arguments at offset " + std::to_string(offset) +
+                    " are not 3 aligned uints inside the buffer");
+    bind(pipeline, resources, push, push_bytes);
+    vkCmdDispatchIndirect(command_buffer_, args.handle(), offset);
+}
+
+void Commands::bind(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                    std::uint32_t push_bytes) {
     if (resources.size() != pipeline.bindings().size())
         throw Error("rcx::vk: dispatch given " + std::to_string(resources.size()) + " resources for a pipeline with " +
                     std::to_string(pipeline.bindings().size()) + " bindings");
     if (push_bytes != pipeline.push_constant_bytes())
         throw Error("rcx::vk: dispatch given " + std::to_string(push_bytes) + " bytes of push constants, pipeline takes " +
                     std::to_string(pipeline.push_constant_bytes()));
-    const std::uint32_t* limit = context_.properties().limits.maxComputeWorkGroupCount;
-    if (groups_x > limit[0] || groups_y > limit[1] || groups_z > limit[2])
-        throw Error("rcx::vk: dispatch of " + std::to_string(groups_x) + " x " + std::to_string(groups_y) + " x " +
-                    std::to_string(groups_z) + " groups exceeds the device's maxComputeWorkGroupCount");
-
     VkDescriptorPool pool = context_.make_descriptor_pool();
     pools_.push_back(pool);
     VkDescriptorSetLayout set_layout = pipeline.set_layout();
@@ -468,7 +482,6 @@ void Commands::dispatch(const ComputePipeline& pipeline, std::initializer_list<R
     vkCmdBindDescriptorSets(command_buffer_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &set, 0, nullptr);
     if (push_bytes)
         vkCmdPushConstants(command_buffer_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
-    vkCmdDispatch(command_buffer_, groups_x, groups_y, groups_z);
 }
 
 void Commands::barrier() {
@@ -476,9 +489,10 @@ void Commands::barrier() {
     b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
     b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
     b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
-                      VK_ACCESS_TRANSFER_WRITE_BIT;
+                      VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT;
     const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
-    vkCmdPipelineBarrier(command_buffer_, stages, stages, 0, 1, &b, 0, nullptr, 0, nullptr);
+    vkCmdPipelineBarrier(command_buffer_, stages, stages | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, 0, 1, &b, 0, nullptr, 0,
+                         nullptr);
 }
 
 void Commands::fill(const Buffer& buffer, std::uint32_t word) {
@@ -492,7 +506,8 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes) : device_(context.device())
     VkBufferCreateInfo info{};
     info.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
     info.size = bytes;
-    info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                 VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     check(vkCreateBuffer(device_, &info, nullptr, &buffer_), "vkCreateBuffer");
     try {

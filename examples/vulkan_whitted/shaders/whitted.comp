@@ -40,96 +40,15 @@ void mark_dirty(raycache_gpu_cube cube, vec3 key) {
 
 const int MODE_OFF = 0, MODE_CCT = 1, MODE_CDCT = 2, MODE_CEILING = 3;
 
-// ---- shading -----------------------------------------------------------------------------------------
-
-float surface_epsilon(vec3 p) {
-    vec3 a = abs(p);
-    return 1e-4 * max(1.0, max(a.x, max(a.y, a.z)));
-}
-
-float schlick(float n1, float n2, float cos_i, float cos_t) {
-    precise float r0 = (n1 - n2) / (n1 + n2);
-    float c = n1 <= n2 ? cos_i : cos_t;
-    precise float x = 1.0 - c;
-    precise float r = r0 * r0 + (1.0 - r0 * r0) * x * x * x * x * x;
-    return r;
-}
-
-// A ray spawned by a hit: its weight in the parent's colour; leaving: it leaves the (cached) object.
-struct Child {
-    vec3 o;
-    vec3 d;
-    vec3 w;
-    bool leaving;
-};
+#include "shade.glsl"
 
 // tracer.cpp's shade(): the local colour of the hit, and the reflected/refracted rays (none at max depth).
 vec3 shade(Hit h, vec3 origin, vec3 d, int depth, out Child children[3], out int count, out uint object) {
-    count = 0;
-    Prim prim = prims[h.prim];
-    object = prim.info.y;
-    Object m = objects[object];
-    precise vec3 p = origin + h.t * d;
-    vec3 ng, ns;
-    if (prim.info.x == 0u) {
-        ng = ns = pnormalize(p - prim.p0.xyz);
-    } else {
-        precise vec3 interp = (1.0 - h.u - h.v) * prim.n0.xyz + h.u * prim.n1.xyz + h.v * prim.n2.xyz;
-        ns = pnormalize(interp);
-        ng = pcross(prim.p1.xyz - prim.p0.xyz, prim.p2.xyz - prim.p0.xyz);
-        ng = pnormalize(pdot(ng, ns) < 0.0 ? -ng : ng);
-    }
-    bool inside = pdot(d, ng) > 0.0;
-    vec3 nf = inside ? -ng : ng;
-    vec3 n = inside ? -ns : ns;
-    if (pdot(n, d) >= 0.0) n = nf;
-    float eps = surface_epsilon(p);
-    precise vec3 above = p + eps * nf;
-    precise vec3 below = p - eps * nf;
-
-    vec3 base = m.m0.xyz;
-    if (m.m3.x != 0.0) {
-        float s = m.m2.w > 0.0 ? m.m2.w : 1.0;
-        int cell = int(floor(p.x / s)) + int(floor(p.z / s));
-        if ((cell & 1) != 0) base = m.m1.xyz;
-    }
-    float reflectivity = m.m2.x, transparency = m.m2.y, ior = m.m2.z;
-    float local = max(0.0, 1.0 - reflectivity - transparency);
-
-    vec3 color = vec3(0.0);
-    if (!inside) {
-        color += light_position.w * local * base;
-        precise vec3 to_light = light_position.xyz - p;
-        float distance = raycache_length(to_light);
-        precise vec3 l = to_light / distance;
-        float n_dot_l = pdot(n, l);
-        if (n_dot_l > 0.0 && pdot(nf, l) > 0.0 && intersect(above, l, distance - eps, true).prim < 0) {
-            color += light_intensity.xyz * (local * n_dot_l) * base;
-            if (m.m0.w > 0.0) {
-                precise vec3 refl = -l - 2.0 * pdot(n, -l) * n;
-                float r_dot_v = pdot(refl, -d);
-                if (r_dot_v > 0.0) color += light_intensity.xyz * (m.m0.w * pow(r_dot_v, m.m1.w));
-            }
-        }
-    }
-    if (depth >= frame.w) return color;
-
-    float cos_i = -pdot(d, n);
-    precise vec3 mirrored = pnormalize(d + 2.0 * cos_i * n);
-    if (reflectivity > 0.0 && !inside) children[count++] = Child(above, mirrored, vec3(reflectivity), true);
-    if (transparency > 0.0) {
-        float n1 = inside ? ior : 1.0, n2 = inside ? 1.0 : ior;
-        precise float eta = n1 / n2;
-        precise float sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-        float fresnel = 1.0;
-        if (sin2_t < 1.0) {
-            precise float cos_t = sqrt(1.0 - sin2_t);
-            fresnel = schlick(n1, n2, cos_i, cos_t);
-            precise vec3 t_dir = pnormalize(eta * d + (eta * cos_i - cos_t) * n);
-            children[count++] = Child(below, t_dir, vec3(transparency * (1.0 - fresnel)), inside);
-        }
-        if (fresnel > 0.0) children[count++] = Child(above, mirrored, vec3(transparency * fresnel), !inside);
-    }
+    Surface s = surface_at(h, origin, d);
+    object = s.object;
+    bool seen = s.lit && intersect(s.above, s.l, s.distance - s.eps, true).prim < 0;
+    vec3 color = surface_color(s, seen);
+    count = depth >= frame.w ? 0 : children_of(s, d, children);
     return color;
 }
 

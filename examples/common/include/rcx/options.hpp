@@ -24,6 +24,12 @@ const char* to_string(CacheMode mode);
 inline bool uses_caches(CacheMode mode) { return mode == CacheMode::cct || mode == CacheMode::cdct; }
 CacheMode parse_cache_mode(const std::string& text);
 
+// What the caches do when objects of a dynamic scene move between frames (SceneCache::scene_changed).
+enum class InvalidationPolicy { none, all, exact };
+// "none", "all", "exact"; parse_invalidation throws UsageError for anything else.
+const char* to_string(InvalidationPolicy policy);
+InvalidationPolicy parse_invalidation(const std::string& text);
+
 // A command line that cannot be run as given; what() says what to change. main() prints it and exits 2.
 class UsageError : public std::invalid_argument {
 public:
@@ -41,7 +47,9 @@ struct Options {
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
     int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
+    InvalidationPolicy invalidate = InvalidationPolicy::exact; // dynamic scenes: texels dropped when objects move
     float origin_drift = 0.1f;        // CCT: tiles met from origins further than this x half-size away refill; < 0 off
+    float origin_parallax = 0.01f;    // CCT: ... or further than this x the distance to the tile's nearest hit; inf off
     float delta = 0.2f;               // CDCT relief search step, world units
     float epsilon = 0.02f;            // CDCT binary refinement threshold
     int max_steps = 1024;             // CDCT linear steps (or pyramid nodes) before a miss

@@ -83,6 +83,23 @@ struct CameraPath {
 const char* to_string(CameraPath::Kind kind);
 CameraPath::Kind parse_path_kind(const std::string& text);
 
+// How one object of a dynamic scene moves: frame f translates it, from where its scene put it at frame 0,
+// along a horizontal circle it travels at a fixed angular speed, while it rises and falls between its
+// frame-0 height and `bob` above it (never below, so nothing sinks into the floor). Positions at frame f
+// depend on f only, not on earlier frames, so any frame can be rendered first.
+struct Motion {
+    enum class Kind { sphere, mesh };
+    Kind kind = Kind::sphere;
+    std::size_t index = 0;            // into Scene::spheres or Scene::meshes
+    float circle_radius = 0.0f;       // of the circle travelled, world units
+    float degrees_per_frame = 0.0f;   // angular speed along the circle
+    float phase_degrees = 0.0f;       // where on the circle frame 0 is (0 = the circle's +X point)
+    float bob = 0.0f;                 // highest rise over the frame-0 height, world units
+    // The translation from frame 0 to `frame`: (R cos(p + w f) - R cos p, bob (1 - cos(w f)) / 2,
+    // R sin(p + w f) - R sin p), with p the phase and w the speed in radians.
+    glm::vec3 offset(int frame) const;
+};
+
 struct Scene {
     std::string name;
     std::vector<Sphere> spheres;
@@ -95,8 +112,14 @@ struct Scene {
     int max_depth = 5;                // recursion limit: primary rays are depth 0, a hit at depth max_depth
                                       // spawns no reflected/refracted ray (shadow rays do not count)
 
+    std::vector<Motion> motions;      // empty for static scenes; at most one per object
+
     Camera camera_at(int frame) const { return path.at(camera, frame); }
     int cached_object_count() const;  // spheres and meshes whose material is cached
+    bool dynamic() const noexcept { return !motions.empty(); }
+    // This scene as it stands at `frame`: every moving object translated by its motion's offset; the
+    // camera, materials and object order unchanged (so object i is the same object in every frame).
+    Scene at_frame(int frame) const;
 };
 
 // What varies beyond the name.
@@ -108,10 +131,12 @@ struct SceneParams {
 };
 
 inline constexpr int max_behind_spheres = 32;
+inline constexpr int max_dynamic_spheres = 256;
 inline constexpr float floor_height = -1.0f;
 
 // Builds a scene by name: "behind-N" (N = 0..32), "grid-32", "diffuse-31", "reflective-32",
-// "cone-cylinder", "concave", "glass", "mirrors-1000" (1000 small cached mirror spheres). Throws std::invalid_argument listing the valid names for an
+// "cone-cylinder", "concave", "glass", "mirrors-1000" (1000 small cached mirror spheres), "dynamic-N"
+// (N = 1..256 moving spheres and a moving Wuson among four static cached mirrors). Throws std::invalid_argument listing the valid names for an
 // unknown name, std::runtime_error when a mesh file cannot be read (naming the Debian package).
 Scene make_scene(const std::string& name, const SceneParams& params = {});
 

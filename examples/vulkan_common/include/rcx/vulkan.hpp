@@ -62,7 +62,7 @@ class ComputePipeline;
 // A storage buffer in host-visible, host-coherent memory, mapped for its whole life.
 class Buffer {
 public:
-    // `bytes` > 0. Usage: storage, transfer source and destination.
+    // `bytes` > 0. Usage: storage, indirect dispatch arguments, transfer source and destination.
     Buffer(Context& context, VkDeviceSize bytes);
     ~Buffer();
     Buffer(Buffer&& other) noexcept;
@@ -164,7 +164,12 @@ public:
     void dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
                   std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y = 1,
                   std::uint32_t groups_z = 1);
-    // Makes the shader and transfer writes recorded so far visible to later dispatches and transfers.
+    // dispatch() with the group counts read on the device from `args` at `offset` (three uints, as
+    // VkDispatchIndirectCommand): counts that earlier passes computed, with no trip to the host.
+    void dispatch_indirect(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+                           std::uint32_t push_bytes, const Buffer& args, VkDeviceSize offset);
+    // Makes the shader and transfer writes recorded so far visible to later dispatches (their indirect
+    // arguments included) and transfers.
     void barrier();
     // Fills `buffer` with the 32-bit `word` on the device (vkCmdFillBuffer).
     void fill(const Buffer& buffer, std::uint32_t word);
@@ -172,6 +177,8 @@ public:
 
 private:
     friend class Context;
+    void bind(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
+              std::uint32_t push_bytes);
     Commands(Context& context, VkCommandBuffer command_buffer) : context_(context), command_buffer_(command_buffer) {}
     Context& context_;
     VkCommandBuffer command_buffer_;

@@ -30,6 +30,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cmath>
@@ -47,6 +48,8 @@
 #include <glm/glm.hpp>
 
 #include "raycache/raycache.hpp"
+#include "raycache/invalidation.hpp"
+#include "raycache/recorded_trace.hpp"
 
 namespace raycache {
 
@@ -141,6 +144,10 @@ struct SceneCacheSettings {
     // ignores where rays start, so a circling camera would otherwise read colours from the old viewpoint).
     // Negative: off.
     float origin_drift = 0.1f;
+    // CCT: and at most this many radians of parallax: a tile whose rays hit a surface at distance d answers
+    // only rays leaving within origin_parallax x d of its origins (a near floor under a mirror ball moves in
+    // the reflection long before the far walls do). Applies with origin_drift; infinity: off.
+    float origin_parallax = 0.01f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
 };
 
@@ -155,6 +162,44 @@ struct ObjectId {
 
 // The object an Embree hit landed on: {hit.geomID, hit.instID[0], hit.primID}.
 inline ObjectId object_of(const RTCHit& hit) noexcept { return {hit.geomID, hit.instID[0], hit.primID}; }
+
+// The key of an object in PathRecords (PathRecord::hit) and in scene changes: instance and geometry
+// (primitive ranges of one geometry share it).
+inline std::uint64_t path_key(ObjectId id) noexcept { return std::uint64_t{id.inst_id} << 32 | id.geom_id; }
+
+// What SceneCache::scene_changed() does with the cached texels.
+enum class Invalidation {
+    none,  // keep every texel (cubes of moved objects are still re-centred): what a static cache would do
+    all,   // empty every cube
+    exact, // empty the texels the changes can have affected (raycache/invalidation.hpp), keep the rest
+};
+
+// One object that moved between two frames: bounding spheres before and after; for an object with a cube,
+// optionally where its cube sits now (default: moved by the spheres' centres' offset, same half-size).
+struct ObjectMove {
+    ObjectId id;
+    BoundingSphere before, after;
+    std::optional<CubeBounds> cube;
+};
+
+// Everything that changed between two frames.
+struct SceneChange {
+    std::vector<ObjectMove> moved;
+    bool light_moved = false;
+    std::vector<glm::vec3> lights; // the point lights as they are now (for the shadow-ray tests)
+};
+
+// What SceneCache::scene_changed() did.
+struct InvalidationStatistics {
+    std::size_t valid_before = 0;   // texels holding a value, all cubes
+    std::size_t dropped = 0;        // texels emptied
+    std::size_t cubes_moved = 0;    // cubes re-centred with their objects
+    std::size_t cubes_changed = 0;  // cubes that lost a texel (their objects' reflections changed)
+    double milliseconds = 0.0;
+    double kept_fraction() const noexcept {
+        return valid_before ? 1.0 - static_cast<double>(dropped) / static_cast<double>(valid_before) : 1.0;
+    }
+};
 
 // Counters summed over every cube of a SceneCache, for one frame.
 struct SceneCacheStatistics {
@@ -241,6 +286,7 @@ class SceneCache {
         std::unique_ptr<CctCube> cct;
         std::unique_ptr<CdctCache> cdct;             // its cube, bounds, parameters and (depth_pyramid) pyramid
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
+        bool sized = false; // adaptive: sized once from counted rays (later moves need the hysteresis)
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -274,10 +320,15 @@ public:
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
-          origin_drift_(settings.origin_drift),
+          origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
         validate(relief_);
         validate(adaptive_);
+        if (!(origin_parallax_ > 0.0f))
+            throw std::invalid_argument("RayCache SceneCacheSettings::origin_parallax must be > 0 (infinity: off), got " +
+                                        std::to_string(origin_parallax_));
+        if (std::isnan(origin_drift_))
+            throw std::invalid_argument("RayCache SceneCacheSettings::origin_drift must be a number (negative: off)");
     }
 
     Technique technique() const noexcept { return technique_; }
@@ -369,23 +420,38 @@ public:
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
     // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
     // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
-    // infinity when it escaped; the CCT uses only the colour). It runs on a miss; its colour is returned
+    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax). It runs on a miss; its colour is returned
     // unchanged. Objects without a cube: returns trace().color. Thread-safe.
     template <class Trace>
     glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
-        static_assert(std::is_invocable_r_v<TracedRay, Trace&>,
-                      "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()`");
+        constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
+        static_assert(std::is_invocable_r_v<TracedRay, Trace&> || records,
+                      "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
+                      "`raycache::TracedRay trace(raycache::PathRecord&)`");
+        if constexpr (records) {
+            // The form that reports what the path saw: texels it fills can be invalidated exactly.
+            const int index = find(id);
+            PathRecord unused;
+            if (index < 0) return trace(unused).color;
+            Entry& e = entries_[static_cast<std::size_t>(index)];
+            if (technique_ == Technique::cct) {
+                if (e.coverage) e.coverage->mark(direction);
+                const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
+                return cct_cached_trace_recorded(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr,
+                                                 filtered_, trace);
+            }
+            return leaving_ray(id, origin, direction, [&] { return trace(unused); }); // the CDCT keeps no records
+        } else {
         const int index = find(id);
         if (index < 0) return std::forward<Trace>(trace)().color;
         Entry& e = entries_[static_cast<std::size_t>(index)];
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
             auto colour = [&] { return trace().color; };
-            if (origin_drift_ >= 0.0f) {
-                const float drift = origin_drift_ * e.bounds.half_size;
-                return filtered_ ? filtered_cached_trace(*e.cct, direction, origin, drift, colour)
-                                 : cached_trace(*e.cct, direction, origin, drift, colour);
-            }
+            if (origin_drift_ >= 0.0f)
+                return cct_cached_trace(*e.cct, direction, origin,
+                                        OriginTolerance{origin_drift_ * e.bounds.half_size, origin_parallax_}, filtered_,
+                                        trace);
             return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
         }
         int read = 0;
@@ -398,6 +464,65 @@ public:
                !max_texels_read_.compare_exchange_weak(most, static_cast<std::uint64_t>(read), std::memory_order_relaxed)) {
         }
         return color;
+        }
+    }
+
+    // Between frames, after objects (or lights) moved: cubes of moved objects move with them, emptied
+    // (except under Invalidation::none); the other cubes lose what `policy` says. Under exact, a CCT cube
+    // loses the texels the moves can have changed (raycache/invalidation.hpp: their rays' cones, and what
+    // their paths saw as leaving_ray's recording callback reported it; texels filled through the plain
+    // callback, resampled or loaded count as having seen everything), then, transitively, the texels whose
+    // paths hit a cached object whose cube lost texels. CDCT cubes keep no path records: exact empties them.
+    // Deterministic; between frames only (before or after begin_frame()).
+    InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy) {
+        const auto started = std::chrono::steady_clock::now();
+        InvalidationStatistics stats;
+        for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
+        std::vector<char> changed(entries_.size(), 0);
+        SceneChanges changes;
+        changes.lights = change.lights;
+        changes.light_moved = change.light_moved;
+        for (const ObjectMove& m : change.moved) {
+            changes.moved.push_back({path_key(m.id), m.before, m.after});
+            for (std::size_t i = 0; i < entries_.size(); ++i) {
+                Entry& e = entries_[i];
+                if (path_key(e.id) != path_key(m.id)) continue;
+                e.bounds = m.cube ? *m.cube : CubeBounds{e.bounds.centre + (m.after.centre - m.before.centre), e.bounds.half_size};
+                ++stats.cubes_moved;
+                if (policy == Invalidation::none) continue;
+                stats.dropped += empty_cube(e);
+                changed[i] = 1;
+            }
+        }
+        if (policy == Invalidation::all)
+            for (std::size_t i = 0; i < entries_.size(); ++i) stats.dropped += empty_cube(entries_[i]), changed[i] = 1;
+        if (policy == Invalidation::exact) {
+            std::vector<std::size_t> next; // entries that changed in the last pass
+            for (std::size_t i = 0; i < entries_.size(); ++i) {
+                if (changed[i]) {
+                    next.push_back(i);
+                    continue;
+                }
+                const std::size_t dropped = entries_[i].cct ? invalidate_entry(entries_[i], changes) : empty_cube(entries_[i]);
+                stats.dropped += dropped;
+                if (dropped) changed[i] = 1, next.push_back(i);
+            }
+            // A path that met a cached object read that object's cube: when the cube changed, so may the path.
+            while (!next.empty()) {
+                SceneChanges seen;
+                for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
+                next.clear();
+                for (std::size_t i = 0; i < entries_.size(); ++i) {
+                    if (changed[i] || !entries_[i].cct) continue;
+                    const std::size_t dropped = invalidate_entry(entries_[i], seen);
+                    stats.dropped += dropped;
+                    if (dropped) changed[i] = 1, next.push_back(i);
+                }
+            }
+        }
+        for (char c : changed) stats.cubes_changed += c ? 1 : 0;
+        stats.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+        return stats;
     }
 
     // Ends a frame on every cube (this frame's stores become visible) and returns the frame's totals.
@@ -438,6 +563,13 @@ public:
         const int index = find(id);
         if (index < 0) return std::nullopt;
         return with_cube(entries_[static_cast<std::size_t>(index)], [](const auto& cube) { return cube.statistics(); });
+    }
+
+    // f(ObjectId, const CubeBounds&, const CctCube*) for every attached object in attach order; the cube is
+    // null for the CDCT. For oracles and tools that read the texels. Between frames.
+    template <class F>
+    void for_each_cct_cube(F&& f) const {
+        for (const Entry& e : entries_) f(e.id, e.bounds, static_cast<const CctCube*>(e.cct.get()));
     }
 
     // Where object `id`'s cube sits; std::nullopt when it has none.
@@ -506,6 +638,19 @@ public:
     }
 
 private:
+    // Empties an entry's cube (and rebuilds its pyramid); the texels it held.
+    std::size_t empty_cube(Entry& e) {
+        const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
+        with_cube(e, [](auto& cube) { cube.clear(); });
+        if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+        return valid;
+    }
+    // One exact pass over a CCT entry; the texels it emptied.
+    std::size_t invalidate_entry(Entry& e, const SceneChanges& changes) {
+        const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
+        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes).dropped;
+    }
+
     // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
     // geometry split into primitive ranges, the range that holds id.prim_id. -1: none.
     int find(ObjectId id) const noexcept {
@@ -617,7 +762,9 @@ private:
     // Returns whether the size changed. Between frames.
     bool adapt(Entry& e, std::uint64_t rays) {
         const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-        const int next = next_face_size(current, rays, e.coverage->fraction(), adaptive_);
+        const int next = e.sized ? next_face_size(current, rays, e.coverage->fraction(), adaptive_)
+                                 : first_face_size(current, rays, e.coverage->fraction(), adaptive_);
+        e.sized = e.sized || rays > 0;
         e.coverage->reset();
         if (next == current) return false;
         Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), nullptr};
@@ -625,6 +772,7 @@ private:
         if (next < current) {
             if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
+                carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
                 mark_doubtful_edges(*e.cct, edge_threshold_);
             } else
                 resample_into(old.cdct->cube(), e.cdct->cube());
@@ -736,6 +884,7 @@ private:
     bool filtered_;
     float edge_threshold_;
     float origin_drift_;
+    float origin_parallax_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     std::vector<Entry> entries_;
     // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).

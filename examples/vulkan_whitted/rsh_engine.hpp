@@ -1,0 +1,76 @@
+// rsh_engine.hpp: the ray-space hierarchy of Roger, Assarsson and Holzschuch (EGSR 2007) as a Vulkan
+// compute engine: give it a buffer of rays (raycache_rsh_ray) and one of primitives
+// (raycache_rsh_primitive: triangles and spheres, anywhere, moved every frame: nothing about them is
+// kept between calls) and it writes each ray's closest hit (raycache_rsh_hit). Per call:
+//   1. prepare: bounding spheres of the primitives, one leaf per ray (shaders/rsh_prepare.comp);
+//   2. build: the hierarchy bottom-up, 4 consecutive rays / nodes per parent (rsh_build.comp);
+//   3. per batch of primitives: the stream of (root, primitive) pairs (rsh_root.comp), then per level the
+//      cone-sphere tests against the four children (rsh_traverse.comp) and the stream reduction: a
+//      work-efficient prefix sum over the kept flags (rsh_scan.comp, rsh_scan_add.comp) and the scatter
+//      (rsh_scatter.comp), sized by a one-invocation plan pass (rsh_plan.comp) through indirect dispatch,
+//      so the levels run in one submission without the host reading a count;
+//   4. at the leaves, each ray against its remaining primitives, the closest kept (rsh_final.comp).
+// The pair streams have a fixed capacity; a level that would exceed it is cut at the capacity (no write
+// past a buffer) and marks the batch overflowed: the host then splits that batch's primitives in two and
+// traces each half (section 3.4), and starts the next call with the smaller batch size. Layouts and the
+// geometry are raycache/shared/rsh_layout.h, shared with the C++ reference rcx/rsh_reference.hpp.
+// Needs 64-bit buffer atomics (shaderBufferInt64Atomics; lavapipe has them).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <rcx/vulkan.hpp>
+
+namespace rcx::gpu {
+
+struct RshSettings {
+    std::uint32_t pair_capacity = 1u << 21; // pairs a stream holds (two streams, plus 4 flags and 4 prefix
+                                            // sums a pair: about 48 bytes a pair in all); 64 .. 1 << 24
+    bool timestamps = true;                 // time the phases with GPU timestamps (when the queue has them)
+};
+
+struct RshStats {
+    std::uint32_t rays = 0;                 // slots traced (empty ones included)
+    std::uint32_t levels = 0;               // of the hierarchy below the root
+    std::uint32_t batches = 0;              // batches of primitives that completed
+    std::uint32_t overflows = 0;            // batches that overflowed and were split
+    std::uint64_t cone_sphere_tests = 0;    // all levels and batches, overflowed ones included
+    std::uint64_t leaf_pairs = 0;           // (ray, primitive) pairs intersected at the leaves
+    // GPU time of each phase (timestamps; 0 when the device has none), milliseconds.
+    double build_ms = 0.0;                  // bounding spheres, leaves, levels
+    double traverse_ms = 0.0;               // cone-sphere tests
+    double compaction_ms = 0.0;             // plan, prefix sum, scatter, root streams
+    double final_ms = 0.0;                  // final intersection
+    double wall_ms = 0.0;                   // the whole call on the host, submissions and waits included
+    bool timed = false;                     // whether the phase times are measured
+};
+
+class RshEngine {
+public:
+    // Loads shaders/rsh_*.spv from spirv_dir (rcx::vk::Error naming a missing file). Throws
+    // std::invalid_argument when the context has no 64-bit atomics or the capacity is out of range.
+    RshEngine(vk::Context& context, const std::string& spirv_dir, const RshSettings& settings = {});
+    ~RshEngine();
+    RshEngine(const RshEngine&) = delete;
+    RshEngine& operator=(const RshEngine&) = delete;
+
+    // Traces rays[0 .. ray_count) (slots with tmax <= 0 are empty) against primitives[0 .. primitive_count)
+    // and writes hits[0 .. ray_count). The rays should be ordered so that neighbours are coherent (Morton
+    // order over the screen makes each 4 consecutive rays a 2x2 block, as in the paper). Buffers must hold
+    // what the counts say (std::invalid_argument otherwise).
+    RshStats trace(const vk::Buffer& rays, std::uint32_t ray_count, const vk::Buffer& primitives,
+                   std::uint32_t primitive_count, const vk::Buffer& hits);
+
+    // The batch size the next call starts with (the capacity until a batch overflows; halved each time).
+    std::uint32_t batch_size() const noexcept;
+    std::uint32_t pair_capacity() const noexcept;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace rcx::gpu

@@ -1,0 +1,13 @@
+#version 450
+// rsh_build.comp: one level of the hierarchy, bottom-up (paper section 3.2): node k of the level starting at
+// pc.parent_first encloses nodes 4k..4k+3 of the level below (pc.child_first); pc.count nodes.
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 64) in;
+#include "rsh_common.glsl"
+
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= pc.count) return;
+    uint c = pc.child_first + 4u * k;
+    nodes[pc.parent_first + k] = raycache_rsh_enclose(nodes[c], nodes[c + 1u], nodes[c + 2u], nodes[c + 3u]);
+}

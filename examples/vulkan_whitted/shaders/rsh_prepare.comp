@@ -1,0 +1,17 @@
+#version 450
+// rsh_prepare.comp: the per-trace set-up of the ray-space hierarchy (rsh_engine.cpp): arg 0: the
+// bounding sphere of each primitive (pc.count of them); arg 1: the leaves, one per ray (pc.count rays),
+// empty for the padding up to 4^levels (leaves from pc.child_first, pc.parent_first of them in all).
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 64) in;
+#include "rsh_common.glsl"
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (pc.arg == 0u) {
+        if (i < pc.count) spheres[i] = raycache_rsh_bounding_sphere(primitives[i]);
+        return;
+    }
+    if (i >= pc.parent_first) return;
+    nodes[pc.child_first + i] = i < pc.count ? raycache_rsh_leaf(rays[i]) : raycache_rsh_empty_node();
+}

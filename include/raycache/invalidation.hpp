@@ -1,0 +1,205 @@
+// raycache/invalidation.hpp: between two frames, empties exactly the texels of a direction-keyed cube (the
+// CCT) that moved objects or a moved light can have changed, and keeps every other one.
+//
+// A texel answers rays leaving the cube's box (or, with the origin test, within `origin_drift` of its tile's
+// origin box) in its directions. Its value is stale after object X moved from sphere A to sphere B when
+//   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, then a 16 x 16 tile, then each texel);
+//   - or the rest of a path stored into its tile can have met X (the tile's PathRecord union,
+//     raycache/path_record.hpp): X among the objects hit (Bloom mask), A or B in the cone from a light to
+//     the box of hit points (shadow rays), A or B in that box (bounces between hit points), a bounce that
+//     escaped (unbounded), or a cached object whose own cube changed (transitively, by the caller);
+//   - or its store brought no PathRecord (nothing is known about the rest of its path).
+// A moved light empties every texel whose path hit something. A tile the path tests catch is emptied whole.
+#pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cache_cube.hpp"
+#include "raycache/cdct.hpp"
+#include "raycache/path_record.hpp"
+#include "raycache/shared/cone_sphere.h"
+
+namespace raycache {
+
+// A sphere that bounds an object (before or after a move).
+struct BoundingSphere {
+    glm::vec3 centre{0.0f};
+    float radius = 0.0f;
+};
+
+// What changed in the scene since the last frame, for one pass over a cube.
+struct SceneChanges {
+    struct Move {
+        std::uint64_t key = 0;  // the object's key in the PathRecords (PathRecord::hit)
+        BoundingSphere before, after;
+    };
+    std::vector<Move> moved;
+    // Objects whose appearance changed without their shape moving (a cached mirror whose cube changed):
+    // texels whose paths hit them are emptied; no geometric test.
+    std::vector<std::uint64_t> changed;
+    // The point lights as they are now (as they were when the texels were stored, unless light_moved).
+    std::vector<glm::vec3> lights;
+    bool light_moved = false;
+};
+
+// Where a cube's rays leave from: its box and the CCT's origin test.
+struct CubeRays {
+    CubeBounds bounds;
+    float origin_drift = -1.0f; // world units; < 0: no origin test (rays from anywhere in the box)
+};
+
+// What one pass did to one cube.
+struct InvalidationCounts {
+    std::size_t valid_before = 0; // texels holding a value before the pass
+    std::size_t dropped = 0;      // texels emptied
+    std::size_t tiles = 0;        // allocated tiles looked at
+    std::size_t tiles_by_path = 0;  // tiles emptied whole by their path records
+    std::size_t tiles_by_texel = 0; // tiles whose cone met a moved sphere, so each texel was tested
+};
+
+namespace detail {
+
+// The ball around the origins of a tile's rays: the cube's box (with a margin for the tracer's surface
+// offsets), or the tile's origin box grown by the drift, whichever is smaller.
+struct OriginBall {
+    glm::vec3 centre;
+    float radius;
+};
+inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm::vec3& lo, const glm::vec3& hi) {
+    const glm::vec3 c = rays.bounds.centre;
+    const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * rays.bounds.half_size);
+    OriginBall ball{c, 1.7320509f * rays.bounds.half_size * 1.001f + 1e-3f * scale};
+    if (has_origins && rays.origin_drift >= 0.0f) {
+        const float r = 0.5f * glm::length(hi - lo) + 1.7320509f * rays.origin_drift + 1e-4f * scale;
+        if (r < ball.radius) ball = OriginBall{0.5f * (lo + hi), r};
+    }
+    return ball;
+}
+
+inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_direction_cone& cone,
+                               const std::vector<SceneChanges::Move>& moved) {
+    for (const SceneChanges::Move& m : moved)
+        if (shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, m.before.centre, m.before.radius) ||
+            shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, m.after.centre, m.after.radius))
+            return true;
+    return false;
+}
+
+// Whether the rest of the paths recorded in a tile can have met a change.
+template <class State>
+bool paths_meet(const State& t, const SceneChanges& changes) {
+    const bool has_vertices = t.vertex_lo.x <= t.vertex_hi.x;
+    if (t.path_flags & 4u) return true; // unbounded: a bounce escaped
+    if (changes.light_moved && has_vertices) return true;
+    auto tagged = [&](std::uint64_t key) {
+        const std::uint64_t bits = object_bits(key);
+        return (t.objects & bits) == bits;
+    };
+    for (std::uint64_t key : changes.changed)
+        if (tagged(key)) return true;
+    for (const SceneChanges::Move& m : changes.moved) {
+        if (tagged(m.key)) return true;
+        if (!has_vertices) continue;
+        const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
+        const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
+        for (const BoundingSphere& s : {m.before, m.after}) {
+            if ((t.path_flags & 1u))
+                for (const glm::vec3& light : changes.lights)
+                    if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
+                                                           s.radius))
+                        return true;
+            if ((t.path_flags & 2u) && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
+        }
+    }
+    return false;
+}
+
+} // namespace detail
+
+// One pass of exact invalidation over a direction-keyed cube (the CCT: texels keyed by the ray's direction,
+// not the CDCT's depth images). Between frames only. Deterministic: the result depends on the cube's
+// contents and `changes` alone.
+template <class Texel>
+InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
+    cube.assert_between_frames();
+    InvalidationCounts counts;
+    counts.valid_before = cube.valid_texels();
+    const int n = cube.face_size();
+    const bool nothing = changes.moved.empty() && changes.changed.empty() && !changes.light_moved;
+    if (nothing) return counts;
+    // Top level: which faces' cones, from the whole cube's ball, can meet a moved sphere at all.
+    bool face_meets[RAYCACHE_FACE_COUNT];
+    const detail::OriginBall cube_ball = detail::origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+        face_meets[face] = detail::any_sphere_in_cone(cube_ball, shared::raycache_region_cone(face, 0, 0, n, n, n), changes.moved);
+
+    using Tile = typename CacheCube<Texel>::TileState;
+    std::vector<Tile> tiles;
+    cube.for_each_tile_state([&](const Tile& t) { tiles.push_back(t); });
+    counts.tiles = tiles.size();
+    for (const Tile& t : tiles) {
+        if (detail::paths_meet(t, changes)) {
+            ++counts.tiles_by_path;
+            counts.dropped += cube.invalidate_in_tile(t.index, [](const TexelAddress&, bool) { return true; });
+            continue;
+        }
+        // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
+        if (changes.moved.empty() && !changes.light_moved) continue;
+        const detail::OriginBall ball = detail::origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi);
+        const bool cone_meets =
+            face_meets[t.face] &&
+            detail::any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved);
+        if (cone_meets) ++counts.tiles_by_texel;
+        else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
+        counts.dropped += cube.invalidate_in_tile(t.index, [&](const TexelAddress& a, bool recorded) {
+            if (!recorded) return true; // nothing known about the rest of its path
+            return cone_meets && detail::any_sphere_in_cone(
+                                     ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
+                                     changes.moved);
+        });
+    }
+    return counts;
+}
+
+// After a cube was resampled into another (raycache/adaptive_resolution.hpp, resample_into: each texel of
+// `to` took a texel of `from` within its own rectangle of the face), gives every valid texel of `to` the
+// union of the path records of the tiles of `from` whose rectangles overlap its tile's, so the resampled
+// texels stay known to exact invalidation. Between frames.
+template <class Texel>
+void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
+    using Tile = typename CacheCube<Texel>::TileState;
+    std::vector<Tile> old;
+    from.for_each_tile_state([&](const Tile& t) { old.push_back(t); });
+    const float fn = static_cast<float>(from.face_size()), tn = static_cast<float>(to.face_size());
+    to.for_each_tile_state([&](const Tile& t) {
+        PathRecord union_of;
+        bool any = false, unknown = false; // unknown: an overlapping old tile held unrecorded texels
+        for (const Tile& o : old) {
+            if (o.face != t.face) continue;
+            const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(t.column1) / tn &&
+                                 static_cast<float>(t.column0) / tn < static_cast<float>(o.column1) / fn &&
+                                 static_cast<float>(o.row0) / fn < static_cast<float>(t.row1) / tn &&
+                                 static_cast<float>(t.row0) / tn < static_cast<float>(o.row1) / fn;
+            if (!overlap) continue;
+            any = true;
+            unknown = unknown || o.unrecorded_texels > 0;
+            union_of.objects |= o.objects;
+            if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
+                                                union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
+            union_of.lit |= (o.path_flags & 1u) != 0;
+            union_of.chained |= (o.path_flags & 2u) != 0;
+            union_of.unbounded |= (o.path_flags & 4u) != 0;
+        }
+        if (any && !unknown) to.record_texels_of_tile(t.index, union_of);
+    });
+}
+
+} // namespace raycache

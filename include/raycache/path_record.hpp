@@ -1,0 +1,64 @@
+// raycache/path_record.hpp: what a traced path saw, as the tracer reports it, so a cache can later drop
+// exactly the texels a moved object can have changed (raycache/invalidation.hpp).
+//
+// A cached ray's value depends on its first segment (the ray itself: covered by the texel's cone) and on
+// the rest of its path: the objects it hit, the shadow rays from its hit points to the light, and further
+// bounces. The tracer fills one PathRecord per traced leaving ray (SceneCache::leaving_ray with a callback
+// that takes a PathRecord&, or cct_cached_trace_recorded()); each 16 x 16 tile of a cube keeps the union of
+// the records of the stores into it (CacheCube::store with a path: 8 + 24 + 4 bytes a tile, and a bit per
+// texel saying its store brought a record).
+#pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#include <cstdint>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+namespace raycache {
+
+// The two bits of a 64-bit Bloom mask that stand for object `key` (any 64-bit id; equal keys, equal bits).
+// Two bits of 64: a tile whose paths hit 3 objects answers "maybe" for an unrelated one 0.8% of the time.
+inline std::uint64_t object_bits(std::uint64_t key) noexcept {
+    // splitmix64's finaliser: neighbouring ids land on unrelated bits.
+    key += 0x9E3779B97F4A7C15ull;
+    key = (key ^ (key >> 30)) * 0xBF58476D1CE4E5B9ull;
+    key = (key ^ (key >> 27)) * 0x94D049BB133111EBull;
+    key ^= key >> 31;
+    return (std::uint64_t{1} << (key & 63u)) | (std::uint64_t{1} << ((key >> 6) & 63u));
+}
+
+// What one traced path saw after leaving the cached object.
+struct PathRecord {
+    // Bloom mask (object_bits) of every object a ray of the path hit, the first hit included.
+    std::uint64_t objects = 0;
+    // Box of the path's hit points (empty while lo > hi).
+    glm::vec3 vertex_lo{std::numeric_limits<float>::infinity()};
+    glm::vec3 vertex_hi{-std::numeric_limits<float>::infinity()};
+    // A shadow ray went from a hit point to the light (so the segments hit point -> light matter).
+    bool lit = false;
+    // A bounce after the first hit was traced from one hit point to another (segments inside the box).
+    bool chained = false;
+    // A bounce after the first hit escaped to infinity: no bound on its segment, any move may change it.
+    bool unbounded = false;
+
+    // The path hit object `key` at `point`.
+    void hit(std::uint64_t key, const glm::vec3& point) noexcept {
+        objects |= object_bits(key);
+        vertex_lo = glm::min(vertex_lo, point);
+        vertex_hi = glm::max(vertex_hi, point);
+    }
+    bool has_vertices() const noexcept { return vertex_lo.x <= vertex_hi.x; }
+    // Adds what another record saw (a nested leaving ray's path is part of the outer one).
+    void merge(const PathRecord& other) noexcept {
+        objects |= other.objects;
+        vertex_lo = glm::min(vertex_lo, other.vertex_lo);
+        vertex_hi = glm::max(vertex_hi, other.vertex_hi);
+        lit = lit || other.lit;
+        chained = chained || other.chained;
+        unbounded = unbounded || other.unbounded;
+    }
+};
+
+} // namespace raycache

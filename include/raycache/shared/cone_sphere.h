@@ -1,0 +1,125 @@
+/* raycache/shared/cone_sphere.h: which cached texels a moved object can have changed, by cones and spheres.
+ *
+ * A cached texel answers rays that leave the object's box (or a smaller origin region) in the directions
+ * of the texel. Those rays all lie in a cone: rays from any point of a ball (centre c, radius R) in any
+ * direction within `spread` of `axis` meet a sphere (s, r) exactly when the cone from c itself (same axis
+ * and spread) meets the grown sphere (s, r + R): move the ray by c - p, its point moves by at most R.
+ * So one cone-sphere test, equation 1 of Roger, Assarsson and Holzschuch, "Whitted ray-tracing for
+ * dynamic scenes using a ray-space hierarchy on the GPU" (EGSR 2007), decides a whole region of texels:
+ *
+ *     the sphere meets the cone  <=>  |s - c| <= r  or  angle(s - c, axis) <= spread + asin(r / |s - c|)
+ *
+ * (the directions from c to the sphere are a cap of angular radius asin(r / |s - c|); two caps meet when
+ * their centres are at most the sum of their radii apart). Evaluated with cosines, no acos.
+ *
+ * Everything here errs on the side of "meets": spreads are widened by RAYCACHE_CONE_SLACK radians for the
+ * texel choice's rounding and the comparison has a relative margin, so a texel can be dropped needlessly,
+ * never kept wrongly. Spreads are at most 90 degrees (a cube face's cone is 54.7).
+ *
+ * Written in the language subset of raycache/shared/language.h; the C++ library uses it today (the GLSL
+ * side has no invalidation yet: see the README, "Dynamic scenes").
+ */
+#ifndef RAYCACHE_SHARED_CONE_SPHERE_H
+#define RAYCACHE_SHARED_CONE_SPHERE_H
+
+#include "raycache/shared/cube_face.h"
+
+/* Widening of every derived spread, radians: covers float rounding of the texel choice at region edges. */
+#define RAYCACHE_CONE_SLACK 1.0e-4
+
+#ifdef __cplusplus
+namespace raycache {
+namespace shared {
+#endif
+
+/* A cone of directions: a unit axis and the cosine and sine of its half-angle (the spread). */
+struct raycache_direction_cone {
+    vec3 axis;
+    float cos_spread;
+    float sin_spread;
+};
+
+/* Roger et al. 2007, equation 1: true when the sphere (centre, radius) meets the infinite cone with apex
+ * `apex`, unit axis and the given spread (<= 90 degrees). Conservative under rounding. */
+RAYCACHE_FN bool raycache_cone_meets_sphere(vec3 apex, raycache_direction_cone cone, vec3 centre, float radius) {
+    if (cone.cos_spread <= -1.0f) return true; /* every direction (raycache_cone_toward_ball) */
+    vec3 v = centre - apex;
+    float d2 = dot(v, v);
+    if (d2 <= radius * radius) return true; /* the apex lies in the sphere */
+    float d = sqrt(d2);
+    float sin_cap = radius / d;
+    float cos_cap = sqrt(max(0.0f, 1.0f - sin_cap * sin_cap));
+    /* cos(spread + cap); spread + cap < 180 degrees, where cos decreases, so the angle test is this one. */
+    float cos_sum = cone.cos_spread * cos_cap - cone.sin_spread * sin_cap;
+    return dot(v, cone.axis) >= d * cos_sum - 1.0e-5f * d;
+}
+
+/* Rays leaving any point of the ball (ball_centre, ball_radius) in any direction of `cone` meet the sphere
+ * (centre, radius) only if this is true (and whenever one does, it is: the Minkowski argument above). */
+RAYCACHE_FN bool raycache_rays_from_ball_meet_sphere(vec3 ball_centre, float ball_radius, raycache_direction_cone cone,
+                                                     vec3 centre, float radius) {
+    return raycache_cone_meets_sphere(ball_centre, cone, centre, radius + ball_radius);
+}
+
+/* The cone of half-angle acos(spread_cos) around unit `axis` widened by RAYCACHE_CONE_SLACK, capped at 90 degrees. */
+RAYCACHE_FN raycache_direction_cone raycache_widened_cone(vec3 axis, float spread_cos) {
+    float c = clamp(spread_cos, 0.0f, 1.0f);
+    float s = sqrt(max(0.0f, 1.0f - c * c));
+    raycache_direction_cone cone;
+    cone.axis = axis;
+    /* cos(a + e) = cos a cos e - sin a sin e, with cos e = 1 in float for e = 1e-4 */
+    cone.cos_spread = max(0.0f, c - s * float(RAYCACHE_CONE_SLACK));
+    cone.sin_spread = sqrt(max(0.0f, 1.0f - cone.cos_spread * cone.cos_spread));
+    return cone;
+}
+
+/* The cone of every direction through texels [column0, column1) x [row0, row1) of `face` on faces of
+ * face_size texels (a texel, a 16 x 16 tile, a whole face): its axis through the region's centre, its spread
+ * to the farthest corner. The region is the central projection of a rectangle, so it is the geodesic hull of
+ * its corners, and a cap of at most 90 degrees that holds the corners holds all of it. */
+RAYCACHE_FN raycache_direction_cone raycache_region_cone(int face, int column0, int row0, int column1, int row1,
+                                                         int face_size) {
+    float n = float(face_size);
+    float s0 = 2.0f * (float(column0) / n) - 1.0f;
+    float s1 = 2.0f * (float(column1) / n) - 1.0f;
+    float t0 = 2.0f * (float(row0) / n) - 1.0f;
+    float t1 = 2.0f * (float(row1) / n) - 1.0f;
+    vec3 axis = normalize(raycache_face_point(face, 1.0f, 0.5f * (s0 + s1), 0.5f * (t0 + t1)));
+    float c = 1.0f;
+    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s0, t0))));
+    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s1, t0))));
+    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s0, t1))));
+    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s1, t1))));
+    return raycache_widened_cone(axis, c);
+}
+
+/* The cone from `apex` that holds the ball (centre, radius): every segment from the apex to a point of the
+ * ball lies in it (shadow rays from a region of hit points to a point light). When the apex lies in the
+ * ball, a cone of every direction (cos_spread = -1), which meets every sphere. */
+RAYCACHE_FN raycache_direction_cone raycache_cone_toward_ball(vec3 apex, vec3 centre, float radius) {
+    vec3 v = centre - apex;
+    float d = length(v);
+    raycache_direction_cone cone;
+    if (!(d > radius)) {
+        cone.axis = vec3(0.0f, 1.0f, 0.0f);
+        cone.cos_spread = -1.0f; /* a full sphere of directions: meets everything */
+        cone.sin_spread = 0.0f;
+        return cone;
+    }
+    float s = radius / d;
+    return raycache_widened_cone(v / d, sqrt(max(0.0f, 1.0f - s * s)));
+}
+
+/* True when the sphere (centre, radius) meets the box [lo, hi] (distance from the centre to the box). */
+RAYCACHE_FN bool raycache_box_meets_sphere(vec3 lo, vec3 hi, vec3 centre, float radius) {
+    vec3 nearest = vec3(clamp(centre.x, lo.x, hi.x), clamp(centre.y, lo.y, hi.y), clamp(centre.z, lo.z, hi.z));
+    vec3 v = centre - nearest;
+    return dot(v, v) <= radius * radius * (1.0f + 1.0e-5f) + 1.0e-12f;
+}
+
+#ifdef __cplusplus
+} // namespace shared
+} // namespace raycache
+#endif
+
+#endif /* RAYCACHE_SHARED_CONE_SPHERE_H */

@@ -1,0 +1,184 @@
+// The cone-sphere geometry of invalidation (raycache/shared/cone_sphere.h): Roger et al.'s equation 1 on
+// hand-derived cases, the cone of a texel region against the texel choice, and the conservativeness of
+// "rays from a ball through a region meet a sphere" against brute force (rays sampled from the box's
+// corners, faces and inside, through directions sampled in the region, intersected with the sphere).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cube_face.hpp"
+#include "raycache/shared/cone_sphere.h"
+
+namespace {
+
+using raycache::shared::raycache_direction_cone;
+
+constexpr float pi = 3.14159265358979f;
+
+raycache_direction_cone cone_of(glm::vec3 axis, float degrees) {
+    const float a = degrees * pi / 180.0f;
+    return {glm::normalize(axis), std::cos(a), std::sin(a)};
+}
+
+bool meets(glm::vec3 apex, raycache_direction_cone cone, glm::vec3 centre, float radius) {
+    return raycache::shared::raycache_cone_meets_sphere(apex, cone, centre, radius);
+}
+
+// Whether the ray o + t d (t >= 0, d unit) meets the sphere: the nearest point of the ray to its centre.
+bool ray_meets_sphere(glm::vec3 o, glm::vec3 d, glm::vec3 c, float r) {
+    const float t = std::max(0.0f, glm::dot(c - o, d));
+    const glm::vec3 p = o + t * d;
+    return glm::dot(p - c, p - c) <= r * r;
+}
+
+} // namespace
+
+TEST_CASE("equation 1 on hand-derived cases: on the axis, off to the side, at the rim, behind the apex") {
+    const glm::vec3 o(0.0f);
+    const raycache_direction_cone c30 = cone_of({0, 0, 1}, 30.0f);
+    CHECK(meets(o, c30, {0, 0, 10}, 1.0f));  // on the axis
+    CHECK(!meets(o, c30, {10, 0, 0}, 1.0f)); // 90 degrees off, cap asin(0.1) = 5.7: 35.7 < 90
+    // At 40 degrees and distance 10 the sphere meets the 30-degree cone iff asin(r/10) >= 10 degrees, i.e.
+    // r >= 10 sin 10 = 1.7365.
+    const glm::vec3 at40 = 10.0f * glm::vec3(std::sin(40.0f * pi / 180.0f), 0.0f, std::cos(40.0f * pi / 180.0f));
+    CHECK(meets(o, c30, at40, 1.80f));
+    CHECK(!meets(o, c30, at40, 1.65f));
+    CHECK(!meets(o, c30, {0, 0, -5}, 1.0f)); // behind the apex
+    CHECK(meets(o, c30, {0, 0, -5}, 5.5f));  // the apex lies in the sphere
+    // A 90-degree cone is the half-space z >= 0: a sphere at (10, 0, -0.5) is 92.86 degrees off the axis;
+    // radius 1 gives a cap of 5.74 (meets), radius 0.4 a cap of 2.29 (does not).
+    const raycache_direction_cone c90 = cone_of({0, 0, 1}, 90.0f);
+    CHECK(meets(o, c90, {10, 0, -0.5f}, 1.0f));
+    CHECK(!meets(o, c90, {10, 0, -0.5f}, 0.4f));
+    // The apex moved: the same geometry translated.
+    CHECK(meets({3, 4, 5}, c30, glm::vec3(3, 4, 5) + at40, 1.80f));
+    CHECK(!meets({3, 4, 5}, c30, glm::vec3(3, 4, 5) + at40, 1.65f));
+}
+
+TEST_CASE("a whole face's cone reaches its corners, 54.74 degrees, and holds every direction the face's texels take") {
+    const raycache_direction_cone face = raycache::shared::raycache_region_cone(RAYCACHE_FACE_POSITIVE_Z, 0, 0, 1, 1, 1);
+    CHECK(face.axis.z == doctest::Approx(1.0f));
+    const float corner = 1.0f / std::sqrt(3.0f); // cos of the angle from +Z to (1, 1, 1)
+    CHECK(face.cos_spread <= corner);
+    CHECK(face.cos_spread >= corner - 2e-4f);
+
+    // Tiles and texels of several faces and sizes: every direction whose texel lies in the region is within
+    // the region's cone (directions sampled over the whole sphere; the texel choice decides membership).
+    std::mt19937 rng(7);
+    std::normal_distribution<float> g;
+    for (int n : {1, 5, 16, 37, 64}) {
+        for (int trial = 0; trial < 40; ++trial) {
+            const int f = trial % 6;
+            const int c0 = static_cast<int>(rng() % static_cast<unsigned>(n)), r0 = static_cast<int>(rng() % static_cast<unsigned>(n));
+            const int c1 = std::min(n, c0 + 1 + static_cast<int>(rng() % 16u)), r1 = std::min(n, r0 + 1 + static_cast<int>(rng() % 16u));
+            const raycache_direction_cone cone = raycache::shared::raycache_region_cone(f, c0, r0, c1, r1, n);
+            int inside = 0;
+            for (int k = 0; k < 4000; ++k) {
+                // Directions near the region: its centre plus noise of the region's size.
+                const float sc = 2.0f * ((static_cast<float>(c0 + c1) * 0.5f + g(rng) * static_cast<float>(c1 - c0)) / static_cast<float>(n)) - 1.0f;
+                const float tc = 2.0f * ((static_cast<float>(r0 + r1) * 0.5f + g(rng) * static_cast<float>(r1 - r0)) / static_cast<float>(n)) - 1.0f;
+                const glm::vec3 d = raycache::shared::raycache_face_point(f, 1.0f, sc, tc);
+                const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, n);
+                if (a.face != f || a.column < c0 || a.column >= c1 || a.row < r0 || a.row >= r1) continue;
+                ++inside;
+                REQUIRE(glm::dot(glm::normalize(d), cone.axis) >= cone.cos_spread);
+            }
+            CHECK(inside > 0);
+        }
+    }
+}
+
+TEST_CASE("rays from any point of the box through any direction of a tile: the test never misses a sphere they meet") {
+    // Brute force: a cube of half-size h at c; spheres placed at random; rays from the box's 8 corners, its
+    // centre and random interior and surface points, through random directions of the tile. Every sphere
+    // some ray meets must be reported; the test must also reject some spheres (it is not "always yes").
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const glm::vec3 c(0.3f, -0.2f, 0.1f);
+    const float h = 0.9f;
+    const float ball = 1.7320509f * h;
+    int met = 0, rejected = 0, reported_unmet = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        const int n = 32, f = trial % 6;
+        const int tc0 = 16 * static_cast<int>(rng() % 2u), tr0 = 16 * static_cast<int>(rng() % 2u);
+        const raycache_direction_cone cone = raycache::shared::raycache_region_cone(f, tc0, tr0, tc0 + 16, tr0 + 16, n);
+        const glm::vec3 s = c + 6.0f * glm::vec3(u(rng), u(rng), u(rng));
+        const float r = 0.1f + 0.6f * (u(rng) + 1.0f);
+        const bool said = raycache::shared::raycache_rays_from_ball_meet_sphere(c, ball, cone, s, r);
+        bool any = false;
+        for (int k = 0; k < 3000 && !any; ++k) {
+            glm::vec3 p;
+            if (k < 9) p = k == 8 ? c : c + h * glm::vec3((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+            else {
+                p = c + h * glm::vec3(u(rng), u(rng), u(rng));
+                if (k % 2) { // on a face of the box
+                    const int axis = static_cast<int>(rng() % 3u);
+                    p[axis] = c[axis] + (u(rng) < 0.0f ? -h : h);
+                }
+            }
+            // A direction of the tile: a point of its rectangle on the face, through the texel choice.
+            const float sc = 2.0f * ((static_cast<float>(tc0) + 8.0f + 8.0f * u(rng)) / n) - 1.0f;
+            const float tc = 2.0f * ((static_cast<float>(tr0) + 8.0f + 8.0f * u(rng)) / n) - 1.0f;
+            const glm::vec3 d = glm::normalize(raycache::shared::raycache_face_point(f, 1.0f, sc, tc));
+            any = ray_meets_sphere(p, d, s, r);
+        }
+        if (any) {
+            ++met;
+            REQUIRE(said);
+        } else if (!said)
+            ++rejected;
+        else
+            ++reported_unmet;
+    }
+    MESSAGE(met << " spheres met, " << rejected << " rejected, " << reported_unmet << " reported without a sampled ray meeting them");
+    CHECK(met > 50);
+    CHECK(rejected > 100);
+}
+
+TEST_CASE("the cone from a light toward a ball holds every segment from the light to the ball") {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const glm::vec3 light(0.0f, 10.0f, 0.0f);
+    int met = 0, rejected = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const glm::vec3 b(3.0f * u(rng), -0.5f + 0.5f * u(rng), 3.0f * u(rng));
+        const float rb = 0.05f + 0.5f * (u(rng) + 1.0f);
+        const raycache_direction_cone cone = raycache::shared::raycache_cone_toward_ball(light, b, rb);
+        const glm::vec3 s(3.0f * u(rng), 1.0f + 4.0f * (u(rng) + 1.0f), 3.0f * u(rng));
+        const float r = 0.2f + 0.3f * (u(rng) + 1.0f);
+        bool any = false;
+        for (int k = 0; k < 2000 && !any; ++k) {
+            glm::vec3 q = glm::vec3(u(rng), u(rng), u(rng));
+            if (glm::dot(q, q) > 1.0f) continue;
+            q = b + rb * q;
+            // segment light -> q meets the sphere
+            const glm::vec3 d = q - light;
+            const float t = glm::clamp(glm::dot(s - light, d) / glm::dot(d, d), 0.0f, 1.0f);
+            const glm::vec3 p = light + t * d;
+            any = glm::dot(p - s, p - s) <= r * r;
+        }
+        const bool said = meets(light, cone, s, r);
+        if (any) {
+            ++met;
+            REQUIRE(said);
+        } else if (!said)
+            ++rejected;
+    }
+    CHECK(met > 20);
+    CHECK(rejected > 20);
+    // The light inside the ball: every direction.
+    CHECK(meets(light, raycache::shared::raycache_cone_toward_ball(light, light + glm::vec3(0.1f), 1.0f), {0, -50, 0}, 0.1f));
+}
+
+TEST_CASE("sphere against box: inside, touching a face, past a corner") {
+    const glm::vec3 lo(0.0f), hi(1.0f);
+    CHECK(raycache::shared::raycache_box_meets_sphere(lo, hi, {0.5f, 0.5f, 0.5f}, 0.1f));
+    CHECK(raycache::shared::raycache_box_meets_sphere(lo, hi, {1.5f, 0.5f, 0.5f}, 0.51f));
+    CHECK(!raycache::shared::raycache_box_meets_sphere(lo, hi, {1.5f, 0.5f, 0.5f}, 0.49f));
+    // Past the corner (1, 1, 1) by (1, 1, 1): distance sqrt(3) = 1.732.
+    CHECK(!raycache::shared::raycache_box_meets_sphere(lo, hi, {2, 2, 2}, 1.70f));
+    CHECK(raycache::shared::raycache_box_meets_sphere(lo, hi, {2, 2, 2}, 1.75f));
+}

@@ -1,0 +1,302 @@
+// Exact invalidation of a CCT cube (raycache/invalidation.hpp) in an analytic world: spheres of distinct
+// colours lit by a point light with shadows, a mirror ball of radius 1 at the origin whose cube is filled
+// with traced rays and their path records. After a sphere moves, an oracle retraces, for every texel still
+// valid, rays from random points of the cube's box through random directions of the texel, in the world
+// before and after the move: a texel is stale when any of them sees a different colour. `exact` must leave
+// no stale texel (and skipping the invalidation must leave some); texels whose cone (computed here
+// independently, from angles) and whose tile's paths miss the moved sphere must be kept.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cache_cube.hpp"
+#include "raycache/cube_face.hpp"
+#include "raycache/invalidation.hpp"
+#include "raycache/path_record.hpp"
+
+namespace {
+
+using raycache::CctCube;
+using raycache::PathRecord;
+using raycache::TexelAddress;
+
+struct Ball {
+    glm::vec3 centre;
+    float radius;
+    glm::vec3 colour;
+};
+
+struct World {
+    std::vector<Ball> balls;
+    glm::vec3 light{0.0f, 8.0f, 0.0f};
+
+    // Nearest ball hit by o + t d (t > 0), or -1.
+    int nearest(glm::vec3 o, glm::vec3 d, float* t_hit, float t_max = INFINITY) const {
+        int best = -1;
+        float best_t = t_max;
+        for (std::size_t i = 0; i < balls.size(); ++i) {
+            const glm::vec3 oc = o - balls[i].centre;
+            const float b = glm::dot(oc, d), c = glm::dot(oc, oc) - balls[i].radius * balls[i].radius;
+            const float disc = b * b - c;
+            if (disc < 0.0f) continue;
+            const float t = -b - std::sqrt(disc);
+            if (t > 1e-4f && t < best_t) best_t = t, best = static_cast<int>(i);
+        }
+        if (t_hit) *t_hit = best_t;
+        return best;
+    }
+
+    // The colour seen along o + t d (d unit): the ball's colour, dimmed when the light is shadowed; black
+    // sky. Fills `path` when given.
+    glm::vec3 trace(glm::vec3 o, glm::vec3 d, PathRecord* path = nullptr) const {
+        float t = 0.0f;
+        const int i = nearest(o, d, &t);
+        if (i < 0) return glm::vec3(0.0f);
+        const glm::vec3 p = o + t * d;
+        if (path) {
+            path->hit(static_cast<std::uint64_t>(i), p);
+            path->lit = true;
+        }
+        const glm::vec3 n = glm::normalize(p - balls[static_cast<std::size_t>(i)].centre);
+        const glm::vec3 q = p + 1e-3f * n;
+        const glm::vec3 to_light = light - q;
+        const float dist = glm::length(to_light);
+        const bool shadowed = nearest(q, to_light / dist, nullptr, dist) >= 0;
+        return balls[static_cast<std::size_t>(i)].colour * (shadowed ? 0.25f : 1.0f);
+    }
+};
+
+World make_world() {
+    World w;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int i = 0; i < 12; ++i) {
+        const float a = 6.2831853f * static_cast<float>(i) / 12.0f;
+        const float r = 3.0f + 2.0f * u(rng);
+        w.balls.push_back({glm::vec3(r * std::cos(a), -0.6f + 1.2f * u(rng), r * std::sin(a)), 0.35f + 0.35f * u(rng),
+                           glm::vec3(0.2f + 0.8f * u(rng), 0.2f + 0.8f * u(rng), 0.2f + 0.8f * u(rng))});
+    }
+    // A ball above, between the others and the light: its shadow falls on them.
+    w.balls.push_back({glm::vec3(3.5f, 3.0f, 0.2f), 0.5f, glm::vec3(0.9f, 0.9f, 0.9f)});
+    return w;
+}
+
+const raycache::CubeBounds box{glm::vec3(0.0f), 1.0f};
+
+// Fills a cube as a mirror ball of radius 1 at the origin would: rays from points of its surface into the
+// half-space of their normal, traced in `w` with their path records. `stores` rays.
+struct StoredRay {
+    TexelAddress texel;
+    glm::vec3 origin, direction;
+};
+
+// Only directions with d.y <= max_up are stored; `rays`, when given, gets every ray stored.
+void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up = 1.0f, std::vector<StoredRay>* rays = nullptr) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> g;
+    for (int k = 0; k < stores; ++k) {
+        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        if (glm::dot(d, n) < 0.0f) d = -d;
+        if (d.y > max_up) continue;
+        PathRecord path;
+        const glm::vec3 c = w.trace(n, d, &path);
+        if (cube.store(d, c, path) && rays) {
+            const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
+            rays->push_back({{a.face, a.column, a.row}, n, d});
+        }
+    }
+    cube.begin_frame();
+}
+
+// A random direction through texel `a` and a random point of the cube's box (corners now and then).
+struct Sampler {
+    std::mt19937 rng{17};
+    std::uniform_real_distribution<float> u{0.0f, 1.0f};
+    glm::vec3 direction(const TexelAddress& a, int n) {
+        const float sc = 2.0f * ((static_cast<float>(a.column) + u(rng)) / static_cast<float>(n)) - 1.0f;
+        const float tc = 2.0f * ((static_cast<float>(a.row) + u(rng)) / static_cast<float>(n)) - 1.0f;
+        return glm::normalize(raycache::shared::raycache_face_point(a.face, 1.0f, sc, tc));
+    }
+    glm::vec3 origin(int k) {
+        if (k < 8) return box.half_size * glm::vec3((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+        return box.half_size * glm::vec3(2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f);
+    }
+};
+
+// Valid texels for which some sampled ray sees a different colour in `after` than in `before`.
+std::size_t stale_texels(const CctCube& cube, const World& before, const World& after) {
+    Sampler s;
+    std::size_t stale = 0;
+    cube.for_each_valid_texel([&](const TexelAddress& a) {
+        for (int k = 0; k < 48; ++k) {
+            const glm::vec3 o = s.origin(k), d = s.direction(a, cube.face_size());
+            if (glm::any(glm::greaterThan(glm::abs(before.trace(o, d) - after.trace(o, d)), glm::vec3(1e-6f)))) {
+                ++stale;
+                return;
+            }
+        }
+    });
+    return stale;
+}
+
+raycache::SceneChanges move_of(const World& before, const World& after, std::size_t i) {
+    raycache::SceneChanges changes;
+    changes.moved.push_back({i, {before.balls[i].centre, before.balls[i].radius}, {after.balls[i].centre, after.balls[i].radius}});
+    changes.lights.push_back(before.light);
+    return changes;
+}
+
+} // namespace
+
+TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
+    const World before = make_world();
+    for (std::size_t moved : {std::size_t{0}, std::size_t{4}, std::size_t{12}}) {
+        CAPTURE(moved);
+        World after = before;
+        after.balls[moved].centre += glm::vec3(0.3f, 0.25f, -0.2f);
+        CctCube kept(32), exact(32);
+        fill(kept, before, 30000, 1);
+        fill(exact, before, 30000, 1);
+        const std::size_t valid = exact.valid_texels();
+        REQUIRE(valid > 4000);
+
+        const std::size_t stale_without = stale_texels(kept, before, after);
+        const raycache::InvalidationCounts counts = raycache::invalidate_changes(exact, {box, -1.0f}, move_of(before, after, moved));
+        const std::size_t stale_with = stale_texels(exact, before, after);
+        MESSAGE("ball " << moved << ": " << valid << " texels, " << stale_without << " stale without invalidation, " << counts.dropped
+                        << " dropped by exact (" << counts.tiles_by_path << " tiles by path, " << counts.tiles_by_texel
+                        << " tested per texel), " << stale_with << " stale after");
+        CHECK(stale_without > 0);
+        CHECK(stale_with == 0);
+        CHECK(counts.dropped == valid - exact.valid_texels());
+        CHECK(counts.dropped < valid / 2); // it keeps most of the cube
+    }
+}
+
+TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are kept") {
+    const World before = make_world();
+    World after = before;
+    const std::size_t moved = 3;
+    after.balls[moved].centre += glm::vec3(0.0f, 0.3f, 0.0f);
+    CctCube cube(32);
+    fill(cube, before, 30000, 2);
+
+    // Which tiles' stored paths met the ball, from the rays themselves (the same seed as fill(), so the
+    // same rays): a tile whose paths hit the ball, or whose hit points' shadow rays can pass it.
+    std::vector<char> tile_met(6 * 2 * 2, 0);
+    {
+        std::mt19937 rng(2);
+        std::normal_distribution<float> g;
+        for (int k = 0; k < 30000; ++k) {
+            const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+            glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+            if (glm::dot(d, n) < 0.0f) d = -d;
+            PathRecord path;
+            before.trace(n, d, &path);
+            const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, 32);
+            const bool hit_it = (path.objects & raycache::object_bits(moved)) == raycache::object_bits(moved);
+            if (hit_it || path.has_vertices()) // hit points shadowed by it: decided by the tile's light cone, so count
+                tile_met[static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16)] |= hit_it ? 1 : 2;
+        }
+    }
+    // A texel's rays can reach the ball only within this angle of its centre direction: half the texel's
+    // diagonal (< 3 degrees at 32 texels) plus the ball's angular radius seen with the box's ball added.
+    auto clearly_away = [&](const TexelAddress& a, const Ball& b) {
+        const glm::vec3 d = glm::normalize(raycache::texel_direction(a, 32));
+        const float dist = glm::length(b.centre);
+        const float cap = std::asin(std::min(1.0f, (b.radius + 1.7321f) / dist));
+        const float angle = std::acos(glm::clamp(glm::dot(d, b.centre / dist), -1.0f, 1.0f));
+        return angle > cap + 3.0f * 3.14159265f / 180.0f;
+    };
+    std::vector<TexelAddress> must_keep;
+    cube.for_each_valid_texel([&](const TexelAddress& a) {
+        const std::size_t tile = static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16);
+        if (tile_met[tile] & 1) return;
+        if (clearly_away(a, before.balls[moved]) && clearly_away(a, after.balls[moved])) must_keep.push_back(a);
+    });
+    const std::size_t valid = cube.valid_texels();
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, move_of(before, after, moved));
+    std::size_t kept = 0, lost_to_light_cone = 0;
+    for (const TexelAddress& a : must_keep) {
+        if (cube.load(a)) ++kept;
+        else {
+            // The only other reason: its tile's shadow rays may pass the ball (tile_met bit 2); check that the
+            // light cone test really is what dropped it.
+            const std::size_t tile = static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16);
+            REQUIRE((tile_met[tile] & 2));
+            ++lost_to_light_cone;
+        }
+    }
+    MESSAGE(valid << " texels, " << must_keep.size() << " clearly away from the ball's cone and paths; " << kept << " kept, "
+                  << lost_to_light_cone << " dropped whole with tiles whose shadow rays may pass it; " << counts.dropped << " dropped in all");
+    CHECK(must_keep.size() > 1000);
+    CHECK(kept > must_keep.size() / 2);
+}
+
+TEST_CASE("a moved light drops every texel whose path hit something and keeps the rays that escaped") {
+    const World w = make_world();
+    CctCube cube(16);
+    fill(cube, w, 8000, 4);
+    std::size_t sky = 0;
+    Sampler s;
+    cube.for_each_valid_texel([&](const TexelAddress& a) { sky += *cube.load(a) == glm::vec3(0.0f); });
+    raycache::SceneChanges changes;
+    changes.light_moved = true;
+    changes.lights.push_back(w.light + glm::vec3(1.0f, 0.0f, 0.0f));
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    std::size_t remaining_lit = 0;
+    cube.for_each_valid_texel([&](const TexelAddress& a) { remaining_lit += *cube.load(a) != glm::vec3(0.0f); });
+    CHECK(remaining_lit == 0);
+    CHECK(cube.valid_texels() > 0);
+    CHECK(cube.valid_texels() <= sky); // whole tiles with a hit go, so at most the sky texels stay
+    CHECK(counts.dropped + cube.valid_texels() == counts.valid_before);
+}
+
+TEST_CASE("texels stored without a path record are dropped by any move; recorded ones far from it are kept") {
+    const World w = make_world();
+    CctCube cube(16);
+    // A recorded store and an unrecorded one, on opposite sides, far from every ball's path (sky upwards).
+    const glm::vec3 up(0.0f, 1.0f, 0.0f), down(0.0f, -1.0f, 0.0f);
+    cube.store(up, glm::vec3(0.5f), PathRecord{});
+    cube.store(down, glm::vec3(0.5f));
+    cube.begin_frame();
+    raycache::SceneChanges changes;
+    changes.moved.push_back({99, {glm::vec3(20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(counts.dropped == 1);
+    CHECK(cube.peek(up).has_value());
+    CHECK(!cube.peek(down).has_value());
+}
+
+TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the light over the paths' hit points catches its shadow") {
+    // The cube stores only rays within 11 degrees of horizontal, so no texel's cone reaches the caster high
+    // above ball 0; only its shadow on ball 0 changes when it moves.
+    World before = make_world();
+    before.balls.pop_back();
+    const glm::vec3 b0 = before.balls[0].centre;
+    before.balls.push_back({b0 + 0.55f * (before.light - b0), 0.4f, glm::vec3(1.0f)});
+    const std::size_t caster = before.balls.size() - 1;
+    World after = before;
+    after.balls[caster].centre += glm::vec3(0.0f, 0.0f, 0.5f);
+    // Here the oracle retraces the stored rays themselves: the path records describe the stored paths, and a
+    // ray from another origin hits ball 0 elsewhere, where the CCT answers it with the stored colour anyway.
+    CctCube cube(64);
+    std::vector<StoredRay> rays;
+    fill(cube, before, 60000, 9, 0.2f, &rays);
+    auto stale = [&] {
+        std::size_t n = 0;
+        for (const StoredRay& r : rays)
+            n += cube.load(r.texel).has_value() && before.trace(r.origin, r.direction) != after.trace(r.origin, r.direction);
+        return n;
+    };
+    CHECK(stale() > 0);
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, move_of(before, after, caster));
+    CHECK(counts.tiles_by_texel == 0); // no cone of stored rays reaches the caster
+    CHECK(counts.dropped > 0);
+    CHECK(stale() == 0);
+}
