@@ -641,8 +641,8 @@ private:
     // Empties an entry's cube (and rebuilds its pyramid); the texels it held.
     std::size_t empty_cube(Entry& e) {
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
-        with_cube(e, [](auto& cube) { cube.clear(); });
-        if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+        if (e.cct) e.cct->clear();
+        else e.cdct->clear(); // and its pyramid
         return valid;
     }
     // One exact pass over a CCT entry; the texels it emptied.
