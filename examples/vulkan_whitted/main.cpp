@@ -71,12 +71,19 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     if (!o.load_cache.empty() || !o.save_cache.empty())
         throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
                          " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (!o.pyramid)
+        throw InputError("--no-pyramid is not supported by the Vulkan tracer: its relief walk never uses a depth pyramid");
+    if (o.invalidate != defaults.invalidate)
+        throw InputError("--invalidate is not supported by the Vulkan tracer: its cubes cannot be invalidated yet");
     rcx::Scene scene;
     try {
         scene = rcx::scene_from_options(o);
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
+    if (scene.dynamic() && rcx::uses_caches(o.cache))
+        throw InputError("scene '" + scene.name + "' moves objects, and the Vulkan tracer's cubes cannot be invalidated "
+                         "yet: use --cache off here, or raycache_embree_whitted (--invalidate)");
 
     rcx::vk::ContextOptions context_options;
     context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct || v.secondary == rcx::gpu::Secondary::rsh;
