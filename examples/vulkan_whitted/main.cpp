@@ -263,9 +263,10 @@ int main(int argc, char** argv) {
                                 vulkan.pair_capacity =
                                     static_cast<std::uint32_t>(rcx::parse_int_value("--pair-capacity", text, 64, 1l << 24));
                             });
-    command_line.add_note("Vulkan tracer: --threads is ignored, --prefill, --load-cache and --save-cache are refused, the\n"
-                          "CDCT relief search is the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder>\n"
-                          "overrides where the .spv files are looked for.");
+    command_line.add_note("Vulkan tracer: --threads is ignored; the options marked (Embree tracer), --prefill,\n"
+                          "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"
+                          "the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv\n"
+                          "files are looked for.");
     rcx::Options options;
     try {
         options = command_line.parse(argc, argv);
