@@ -523,8 +523,7 @@ public:
     CubeStatistics begin_frame() noexcept {
         assert_between_frames();
         const CubeStatistics finished = statistics();
-        if (state_->written_this_frame.exchange(false, std::memory_order_relaxed)) clear_written_bits();
-        end_frame_origins();
+        end_frame_tiles(state_->written_this_frame.exchange(false, std::memory_order_relaxed));
         state_->counters.reset();
         return finished;
     }
@@ -763,11 +762,14 @@ private:
             }
     }
 
-    // Between frames: drops the tiles marked stale and makes pending origin boxes visible.
-    void end_frame_origins() noexcept {
+    // One pass over the tiles: clears the written bits (when anything was written), drops stale tiles and
+    // makes pending origin boxes and nearest distances visible.
+    void end_frame_tiles(bool any_written) noexcept {
         for (std::size_t i = 0; i < tile_count(); ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
+            if (any_written)
+                for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
             if (tile->stale.load(std::memory_order_relaxed)) {
                 std::int64_t valid = 0;
                 std::size_t doubtful_count = 0;
@@ -795,14 +797,6 @@ private:
             if (tile->pending_min[0].load(std::memory_order_relaxed) <= tile->pending_max[0].load(std::memory_order_relaxed))
                 tile->has_box = true;
             tile->nearest = std::min(tile->nearest, unordered(tile->pending_nearest.load(std::memory_order_relaxed)));
-        }
-    }
-
-    void clear_written_bits() noexcept {
-        for (std::size_t i = 0; i < tile_count(); ++i) {
-            Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
-            if (!tile) continue;
-            for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
         }
     }
 
