@@ -204,9 +204,9 @@ public:
     std::optional<Value> lookup_at(const TexelAddress& t, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         RAYCACHE_ASSERT(contains(t));
-        std::optional<Value> value = contains(t) ? visible_value(t) : std::nullopt;
+        Tile* tile = contains(t) ? tile_of(t) : nullptr;
+        std::optional<Value> value = visible_value(tile, t);
         if (value) {
-            Tile* tile = tile_of(t);
             if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
                 tile->stale.store(1u, std::memory_order_relaxed);
                 value.reset();
@@ -800,8 +800,9 @@ private:
         }
     }
 
-    std::optional<Value> visible_value(const TexelAddress& t) const noexcept {
-        const Tile* tile = tile_of(t);
+    std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
+    // The same, for `t`'s tile already loaded (null: none).
+    std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t) const noexcept {
         if (!tile) return std::nullopt;
         // Acquire pairs with the store's release: a word written this frame comes with its written bit,
         // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.
