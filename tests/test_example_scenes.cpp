@@ -14,6 +14,7 @@
 #include "rcx/meshes.hpp"
 #include "rcx/scene.hpp"
 #include "rcx/scene_hash.hpp"
+#include "rcx/tessellate.hpp"
 
 namespace {
 
@@ -389,6 +390,79 @@ TEST_CASE("procedural meshes have outward windings, unit normals and their analy
     CHECK(b.max.y == doctest::Approx(2.0f));
     CHECK_THROWS_AS(rcx::make_cone(1.0f, 1.0f, 2), std::invalid_argument);
     CHECK_THROWS_AS(rcx::make_torus(0.5f, 1.0f), std::invalid_argument);
+}
+
+TEST_CASE("a UV sphere mesh has outward windings, its vertices on the sphere and 2 segments (rings - 1) triangles") {
+    const rcx::Mesh m = rcx::make_sphere(2.0f, 8, 4);
+    check_mesh(m);
+    CHECK(m.triangles.size() == 48u);          // 8 + 8 at the poles, 2 x 8 x 2 between: 2 x 8 x 3
+    CHECK(m.positions.size() == 2u + 3u * 8u); // two poles, three rings of 8
+    for (const glm::vec3& p : m.positions) CHECK(glm::length(p) == doctest::Approx(2.0f).epsilon(1e-5));
+    const rcx::Bounds b = rcx::mesh_bounds(m);
+    CHECK(b.max.y == doctest::Approx(2.0f)); // the poles on the y axis
+    CHECK(b.min.y == doctest::Approx(-2.0f));
+    CHECK(b.max.x == doctest::Approx(2.0f)); // a vertex of the equator at +x
+    CHECK(rcx::make_sphere(1.0f, 3, 2).triangles.size() == 6u);
+    CHECK_THROWS_AS(rcx::make_sphere(1.0f, 2, 4), std::invalid_argument);
+    CHECK_THROWS_AS(rcx::make_sphere(1.0f, 8, 1), std::invalid_argument);
+    CHECK_THROWS_AS(rcx::make_sphere(0.0f, 8, 4), std::invalid_argument);
+}
+
+TEST_CASE("tessellating a scene's moving spheres makes them meshes that move the same way; the rest stays") {
+    rcx::Scene s;
+    s.meshes.push_back(rcx::checkerboard_floor());
+    rcx::Material red;
+    red.diffuse = {1.0f, 0.0f, 0.0f};
+    rcx::Material mirror;
+    mirror.reflectivity = 0.7f;
+    mirror.cached = true;
+    s.spheres.push_back({{0.0f, 0.0f, 0.0f}, 1.0f, red});     // stands still
+    s.spheres.push_back({{3.0f, 0.5f, 0.0f}, 0.5f, mirror});  // moves
+    s.spheres.push_back({{-3.0f, 0.25f, 1.0f}, 0.25f, red});  // moves
+    rcx::Motion a;
+    a.index = 1;
+    a.circle_radius = 1.0f;
+    a.degrees_per_frame = 90.0f;
+    rcx::Motion b = a;
+    b.index = 2;
+    b.bob = 0.5f;
+    s.motions = {a, b};
+
+    const rcx::Scene t = rcx::tessellate_moving_spheres(s, 4);
+    REQUIRE(t.spheres.size() == 1u);
+    CHECK(t.spheres[0].centre == s.spheres[0].centre);
+    REQUIRE(t.meshes.size() == 3u);
+    CHECK(t.meshes[0].positions == s.meshes[0].positions);
+    CHECK(rcx::sphere_mesh_triangles(4) == 48u); // 2L segments, L rings: 2 (2L)(L - 1)
+    for (std::size_t m = 1; m < 3; ++m) {
+        CAPTURE(m);
+        const rcx::Sphere& from = s.spheres[m];
+        CHECK(t.meshes[m].triangles.size() == 48u);
+        CHECK(t.meshes[m].material.cached == from.material.cached);
+        CHECK(t.meshes[m].material.diffuse == from.material.diffuse);
+        CHECK(t.meshes[m].material.reflectivity == from.material.reflectivity);
+        for (const glm::vec3& p : t.meshes[m].positions)
+            CHECK(glm::length(p - from.centre) == doctest::Approx(from.radius).epsilon(1e-5));
+        check_mesh(t.meshes[m]);
+    }
+    REQUIRE(t.motions.size() == 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        CHECK(t.motions[i].kind == rcx::Motion::Kind::mesh);
+        CHECK(t.motions[i].index == i + 1);
+    }
+    // Frame 2: a half turn of a circle of radius 1 from its +X point: 2 along -x; b also at the top of its bob.
+    const rcx::Scene later = t.at_frame(2);
+    CHECK(later.meshes[1].positions[0].x == doctest::Approx(t.meshes[1].positions[0].x - 2.0f));
+    CHECK(later.meshes[2].positions[0].y == doctest::Approx(t.meshes[2].positions[0].y + 0.5f));
+    CHECK(later.spheres[0].centre == s.spheres[0].centre);
+    CHECK_THROWS_AS(rcx::tessellate_moving_spheres(s, 1), std::invalid_argument);
+
+    if (!std::filesystem::exists(wuson)) return; // dynamic-N needs assimp-testmodels
+    const rcx::Scene dynamic = rcx::tessellate_moving_spheres(rcx::make_scene("dynamic-8"), 8);
+    std::size_t triangles = 0;
+    for (const rcx::Mesh& m : dynamic.meshes) triangles += m.triangles.size();
+    CHECK(dynamic.spheres.size() == 4u);                   // the static mirrors
+    CHECK(triangles == 2u + 3732u + 8u * 4u * 8u * 7u);     // floor, Wuson, 8 spheres of 4 L (L - 1)
 }
 
 namespace {
