@@ -8,7 +8,7 @@ packages=(
   cmake g++ clang libclang-rt-dev ninja-build git pkg-config
   libglm-dev doctest-dev libembree-dev libtbb-dev
   libvulkan-dev mesa-vulkan-drivers glslang-tools vulkan-validationlayers
-  libstb-dev libassimp-dev assimp-testmodels libbenchmark-dev
+  libstb-dev libcli11-dev libassimp-dev assimp-testmodels libbenchmark-dev
 )
 if [[ "${1:-}" == "--bench" ]]; then packages+=(python3 python3-matplotlib); fi
 

@@ -1,6 +1,6 @@
-// Bad data and misuse: vectors that are not directions (SPEC.md 1: "lookups miss, stores are ignored,
-// nothing is read or written out of bounds"), addresses off the cube (a programmer error: RAYCACHE_ASSERT,
-// then refused), and colours or distances that cannot be stored as given.
+// Bad data and misuse: vectors that are not directions (the library's guarantee: lookups miss, stores are
+// ignored, nothing is read or written out of bounds), addresses off the cube (a programmer error:
+// RAYCACHE_ASSERT, then refused), and colours or distances that cannot be stored as given.
 //
 // RAYCACHE_ASSERT is routed to a counter (instead of assert()) before any RayCache header is included,
 // so these tests see whether it fired and go on running.

@@ -1,7 +1,8 @@
 // CacheCube<CctTexel>: the colour caching technique's cube (thesis ch. 3), its frame rule, counters,
 // clear/invalidate, Algorithm 1 (cached_trace), and a user-defined texel type.
 //
-// Texels of the directions used here are worked out by hand from the spec's face table (SPEC.md 1):
+// Texels of the directions used here are worked out by hand from the face table
+// (raycache/shared/cube_face.h, the OpenGL/Vulkan cube-map convention), in the thesis's form:
 // +X: tu = (-z/|x| + 1)/2, tv = (-y/|x| + 1)/2; -X: tu = (z/|x| + 1)/2, tv = (-y/|x| + 1)/2;
 // -Z: tu = (-x/|z| + 1)/2, tv = (-y/|z| + 1)/2; column = floor(tu * N), row = floor(tv * N).
 // Colour words and decoded colours are worked out from the RGB9E5 definition (see test_texel_encoding.cpp).

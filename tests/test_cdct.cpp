@@ -493,7 +493,7 @@ TEST_CASE("with max_gap, a ray that passes behind a foreground edge misses inste
     CHECK(glm::length(head_on.point - centre) == doctest::Approx(2.0f).epsilon(0.01));
 }
 
-TEST_CASE("pre-filling traces every empty texel from the box surface and stores what it hit") {
+TEST_CASE("pre-filling traces every empty texel from the cube's centre outwards and stores what it hit") {
     // The world: a sphere of radius 6 around the centre, except below y = centre.y - 2 (a floor).
     auto trace = [](glm::vec3 o, glm::vec3 d) {
         const float floor_t = d.y < 0 ? (centre.y - 2.0f - o.y) / d.y : std::numeric_limits<float>::infinity();

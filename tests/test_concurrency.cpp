@@ -1,6 +1,6 @@
-// Many threads on one cube (SPEC.md 4: "many threads looking up and storing into one cube at once must be
-// free of data races"). Runs under ThreadSanitizer in CI (CTest label "concurrency"); sized to take a few
-// seconds there on two cores.
+// Many threads on one cube (the library's guarantee: any number of threads may look up and store into one
+// cube at once, free of data races). Runs under ThreadSanitizer in CI (CTest label "concurrency"); sized
+// to take a few seconds there on two cores.
 //
 // What the frame rule promises (cache_cube.hpp) and these tests check under real contention:
 //  - the cube's content after a frame does not depend on how the stores were split over threads or ordered;

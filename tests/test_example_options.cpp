@@ -1,10 +1,14 @@
-// The example tracers' shared command line (rcx/options.hpp): values, defaults, and errors a user can act on.
+// The example tracers' shared command line (rcx/options.hpp, rcx/command_line.hpp on CLI11): values,
+// defaults, --help, and errors a user can act on.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "rcx/command_line.hpp"
+#include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
 
 namespace {
@@ -138,4 +142,121 @@ TEST_CASE("an output folder on the kernel's proc file system is refused as such,
         CHECK_THROWS_WITH_AS(rcx::ensure_writable_directory(path), doctest::Contains("no files can be created there"),
                              std::runtime_error);
     }
+}
+
+namespace {
+
+// The message parse() throws for `args`, or "(accepted)".
+std::string usage_error(std::vector<const char*> args) {
+    try {
+        parse(args);
+    } catch (const rcx::UsageError& e) {
+        return e.what();
+    }
+    return "(accepted)";
+}
+
+} // namespace
+
+TEST_CASE("arguments CLI11 matches to no option are named in our words") {
+    CHECK(usage_error({"--bogus"}) == "unknown option '--bogus' (see --help)");
+    CHECK(usage_error({"--bogus=3"}) == "unknown option '--bogus=3' (see --help)");
+    CHECK(usage_error({"-x"}) == "unknown option '-x' (see --help)");
+    CHECK(usage_error({"positional"}) ==
+          "unexpected argument 'positional': the tracers take options only, each starting with -- (see --help)");
+    CHECK(usage_error({"--frames", "3", "4"}) ==
+          "unexpected argument '4': the tracers take options only, each starting with -- (see --help)");
+    CHECK(usage_error({"--secondary", "rsh"}) == "unknown option '--secondary' (see --help)"); // the Vulkan tracer's own
+}
+
+TEST_CASE("a missing value, a value for a flag and an empty '--name=' are refused naming the option") {
+    CHECK(usage_error({"--frames"}) == "--frames needs a value (see --help)");
+    CHECK(usage_error({"--quiet", "--out"}) == "--out needs a value (see --help)");
+    CHECK(usage_error({"--compare=yes"}) == "--compare takes no value");
+    CHECK(usage_error({"--quiet=no"}) == "--quiet takes no value");
+    CHECK(usage_error({"--help=1"}) == "--help takes no value");
+    // CLI11 would take the next argument as the value of "--out="; refused instead.
+    CHECK(usage_error({"--out=", "--compare"}) == "--out: nothing after '='");
+    CHECK(usage_error({"--frames="}) == "--frames: nothing after '='");
+}
+
+TEST_CASE("options apply in command-line order: the last of a repeated option wins") {
+    CHECK(*parse({"--frames", "3", "--frames=4"}).frames == 4);
+    const rcx::Options size_then_width = parse({"--size", "8x8", "--width", "9"});
+    CHECK(size_then_width.width == 9);
+    CHECK(size_then_width.height == 8);
+    CHECK(parse({"--width", "9", "--size", "8x8"}).width == 8);
+    CHECK(parse({"--cache", "off", "--cache", "cdct"}).cache == rcx::CacheMode::cdct);
+    // The first bad value on the command line is the one reported.
+    CHECK(usage_error({"--frames", "x", "--depth", "y"}) == "--frames: 'x' is not an integer");
+}
+
+TEST_CASE("values: negative numbers, short flags, inf and auto keep their meaning") {
+    CHECK(*parse({"--step", "-2.5"}).step_degrees == doctest::Approx(-2.5f));
+    CHECK(parse({"--edge-threshold=-1"}).edge_threshold == -1.0f);
+    CHECK(usage_error({"--threads", "-5"}) == "--threads: -5 is out of range 0..4096");
+    CHECK(usage_error({"--frames", "0x10"}) == "--frames: '0x10' is not an integer"); // CLI11's own conversion takes hex
+    CHECK(parse({"-q"}).quiet);
+    CHECK(parse({"-h"}).help);
+    CHECK(std::isinf(parse({"--origin-parallax", "inf"}).origin_parallax));
+    CHECK(usage_error({"--origin-parallax", "0"}) == "--origin-parallax: must be > 0, got 0");
+    CHECK(parse({"--face-size", "auto"}).face_size == 0);
+    CHECK(parse({"--face-size=64"}).face_size == 64);
+    CHECK(usage_error({"--face-size", "big"}) == "--face-size: 'big' is not an integer");
+    CHECK(usage_error({"--size", "8"}) == "--size: '8' is not WIDTHxHEIGHT (for example 512x512)");
+    CHECK(usage_error({"--cdct-search", "walk"}) == "--cdct-search: 'walk' is not secant or relief");
+    CHECK_FALSE(parse({"--cdct-search", "relief"}).secant);
+    CHECK(usage_error({"--invalidate", "some"}) == "--invalidate: unknown policy 'some'; use none, all or exact");
+    CHECK(parse({"--invalidate=none"}).invalidate == rcx::InvalidationPolicy::none);
+    CHECK(usage_error({"--cache", "lru"}) == "--cache: unknown mode 'lru'; use off, cct, cdct or ceiling");
+    CHECK(usage_error({"--max-gap", "-1"}) == "--max-gap: must be >= 0 (0 turns it off)");
+    CHECK_FALSE(parse({"--no-pyramid"}).pyramid);
+    CHECK(parse({}).pyramid);
+}
+
+TEST_CASE("--help lists every option by section, with the defaults of rcx::Options in brackets") {
+    const std::string help = rcx::help_text("tracer");
+    CHECK(help.rfind("Usage: tracer [OPTIONS]\n", 0) == 0);
+    for (const char* section : {"\nScene and camera:\n", "\nCache:\n", "\nRun:\n"}) {
+        CAPTURE(section);
+        CHECK(help.find(section) != std::string::npos);
+    }
+    for (const char* line : {"  --size WxH          image size (or --width W --height H) [512x512]\n",
+                             "  --delta F           CDCT relief search step, world units [0.2]\n",
+                             "  --threads N         worker threads, 0 = all cores [0]\n",
+                             "  -q,--quiet          only the summary; no progress bar\n"}) {
+        CAPTURE(line);
+        CHECK(help.find(line) != std::string::npos);
+    }
+    CHECK(help.find("[cct]") != std::string::npos);
+    CHECK(help.find("[0.01]") != std::string::npos); // --origin-parallax: %g, not 0.010000
+    CHECK(help.find("'--name value' or '--name=value'") != std::string::npos);
+}
+
+TEST_CASE("a tracer's own options parse and show beside the shared ones") {
+    rcx::CommandLine command_line("tracer");
+    bool hybrid = false;
+    int capacity = 0;
+    command_line.section("Own");
+    command_line.add_flag("--hybrid", hybrid, "a flag of this tracer");
+    command_line.add_option("--capacity", "N", "a number of this tracer [64]", [&](const std::string& text) {
+        capacity = static_cast<int>(rcx::parse_int_value("--capacity", text, 64, 128));
+    });
+    command_line.add_note("A note of this tracer.");
+    const std::vector<const char*> args{"tracer", "--hybrid", "--capacity=100", "--cache", "off"};
+    const rcx::Options o = command_line.parse(static_cast<int>(args.size()), args.data());
+    CHECK(hybrid);
+    CHECK(capacity == 100);
+    CHECK(o.cache == rcx::CacheMode::off);
+    const std::string help = command_line.help();
+    CHECK(help.find("\nOwn:\n  --hybrid            a flag of this tracer\n") != std::string::npos);
+    CHECK(help.find("A note of this tracer.\n\nOptions take their value") != std::string::npos);
+
+    rcx::CommandLine refusing("tracer");
+    refusing.add_option("--capacity", "N", "", [](const std::string& text) {
+        rcx::parse_int_value("--capacity", text, 64, 128);
+    });
+    const std::vector<const char*> bad{"tracer", "--capacity", "10"};
+    CHECK_THROWS_WITH_AS(refusing.parse(static_cast<int>(bad.size()), bad.data()),
+                         "--capacity: 10 is out of range 64..128", rcx::UsageError);
 }

@@ -1,7 +1,7 @@
 // raycache_vulkan_whitted: the Whitted tracer of raycache_embree_whitted as a Vulkan compute shader (one
 // invocation per pixel, its own BVH traversed in GLSL; runs on Mesa's lavapipe), with the rays leaving
 // reflective and refractive objects cached in caching cubes through RayCache's GLSL include. Same
-// scenes, camera paths and options as the Embree example (rcx::parse_options; --help).
+// scenes, camera paths and options as the Embree example (rcx::CommandLine; --help).
 //
 //   raycache_vulkan_whitted --scene behind-32 --size 256x256 --cache cct --frames 10 --compare
 //
@@ -27,8 +27,10 @@
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
+#include "rcx/command_line.hpp"
 #include "rcx/image.hpp"
 #include "rcx/memory.hpp"
+#include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
 
@@ -44,7 +46,7 @@ std::string frame_path(const rcx::Options& o, const std::string& scene, const st
     return (std::filesystem::path(o.out) / name).string();
 }
 
-// This tracer's own options (beside rcx::parse_options').
+// This tracer's own options (beside the shared rcx::Options).
 struct VulkanOptions {
     bool hybrid = false;
     rcx::gpu::Secondary secondary = rcx::gpu::Secondary::bvh;
@@ -69,12 +71,19 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     if (!o.load_cache.empty() || !o.save_cache.empty())
         throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
                          " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (!o.pyramid)
+        throw InputError("--no-pyramid is not supported by the Vulkan tracer: its relief walk never uses a depth pyramid");
+    if (o.invalidate != defaults.invalidate)
+        throw InputError("--invalidate is not supported by the Vulkan tracer: its cubes cannot be invalidated yet");
     rcx::Scene scene;
     try {
         scene = rcx::scene_from_options(o);
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
+    if (scene.dynamic() && rcx::uses_caches(o.cache))
+        throw InputError("scene '" + scene.name + "' moves objects, and the Vulkan tracer's cubes cannot be invalidated "
+                         "yet: use --cache off here, or raycache_embree_whitted (--invalidate)");
 
     rcx::vk::ContextOptions context_options;
     context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct || v.secondary == rcx::gpu::Secondary::rsh;
@@ -230,47 +239,43 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
 
 int main(int argc, char** argv) {
     const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_vulkan_whitted").filename().string();
-    // --hybrid (primary visibility by a raster pass), --secondary bvh|rsh and --pair-capacity N are this
-    // tracer's own options; the rest are shared.
+    // --hybrid, --secondary and --pair-capacity are this tracer's own options, declared beside the shared ones.
     VulkanOptions vulkan;
-    std::vector<const char*> args;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i > 0 && a == "--hybrid") {
-            vulkan.hybrid = true;
-        } else if (i > 0 && (a == "--secondary" || a == "--pair-capacity")) {
-            const std::string value = i + 1 < argc ? argv[++i] : "";
-            if (a == "--secondary" && (value == "bvh" || value == "rsh")) {
-                vulkan.secondary = value == "rsh" ? rcx::gpu::Secondary::rsh : rcx::gpu::Secondary::bvh;
-            } else if (a == "--pair-capacity" && !value.empty() && value.find_first_not_of("0123456789") == std::string::npos &&
-                       value.size() <= 9 && std::stoul(value) >= 64 && std::stoul(value) <= (1ul << 24)) {
-                vulkan.pair_capacity = static_cast<std::uint32_t>(std::stoul(value));
-            } else {
-                std::fprintf(stderr, "%s: %s takes %s\n", program.c_str(), a.c_str(),
-                             a == "--secondary" ? "bvh or rsh" : "a number of pairs, 64 .. 16777216");
-                return 2;
-            }
-        } else {
-            args.push_back(argv[i]);
-        }
-    }
+    rcx::CommandLine command_line(program);
+    command_line.section("Vulkan tracer");
+    command_line.add_flag("--hybrid", vulkan.hybrid,
+                          "primary visibility by a raster pass into a G-buffer, secondary rays in\n"
+                          "compute (thesis Table 5.1); with --compare the uncached reference is\n"
+                          "rendered the same way");
+    command_line.add_option("--secondary", "S",
+                            "trace rays after the raster pass (or all rays, without --hybrid)\n"
+                            "through the BVH (bvh) or the ray-space hierarchy of Roger et al. 2007\n"
+                            "(rsh; needs --cache off) " + rcx::shown_default(rcx::gpu::to_string(vulkan.secondary)),
+                            [&vulkan](const std::string& text) {
+                                if (text != "bvh" && text != "rsh")
+                                    throw rcx::UsageError("--secondary: '" + text + "' is not bvh or rsh");
+                                vulkan.secondary = text == "rsh" ? rcx::gpu::Secondary::rsh : rcx::gpu::Secondary::bvh;
+                            });
+    command_line.add_option("--pair-capacity", "N",
+                            "rsh: pairs a stream holds, 64..16777216; a level that would exceed it\n"
+                            "splits the primitives into batches " + rcx::shown_default(std::to_string(vulkan.pair_capacity)),
+                            [&vulkan](const std::string& text) {
+                                vulkan.pair_capacity =
+                                    static_cast<std::uint32_t>(rcx::parse_int_value("--pair-capacity", text, 64, 1l << 24));
+                            });
+    command_line.add_note("Vulkan tracer: --threads is ignored; the options marked (Embree tracer), --prefill,\n"
+                          "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"
+                          "the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv\n"
+                          "files are looked for.");
     rcx::Options options;
     try {
-        options = rcx::parse_options(static_cast<int>(args.size()), args.data());
+        options = command_line.parse(argc, argv);
     } catch (const rcx::UsageError& e) {
         std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
         return 2;
     }
     if (options.help) {
-        std::fputs(rcx::help_text(program).c_str(), stdout);
-        std::fputs("\nVulkan tracer: --hybrid   primary visibility by a raster pass into a G-buffer, secondary rays in compute\n"
-                   "(thesis Table 5.1); with --compare the uncached reference is rendered the same way.\n"
-                   "--secondary bvh|rsh   trace rays after the raster pass (or all rays, without --hybrid) through the BVH\n"
-                   "(default) or the ray-space hierarchy of Roger et al. 2007 (needs --cache off); --pair-capacity N: its pair\n"
-                   "stream capacity (default 2097152; a level that would exceed it splits the primitives into batches).\n"
-                   "--threads is ignored, --prefill, --load-cache and --save-cache are refused, the CDCT search is the linear walk.\n"
-                   "Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv files are looked for.\n",
-                   stdout);
+        std::fputs(command_line.help().c_str(), stdout);
         return 0;
     }
     try {

@@ -11,14 +11,19 @@
  * both); RAYCACHE_READ_ONLY needs neither. Layout, frames and clearing: raycache/shared/gpu_layout.h.
  * Algorithm 1 in a shader:
  *   raycache_relief_result f = raycache_cdct_search(cube, origin, direction, parameters); // as p.search says
- *   if (!f.hit) { trace; then raycache_cdct_store_hit(cube, hit point, colour, parameters),
- *                 or raycache_cdct_store_escape(cube, direction, colour, parameters) }
+ *   if (!f.hit) { trace; then raycache_cdct_store_traced(cube, origin, direction, colour, distance, parameters)
+ *                 (or raycache_cdct_store_hit / raycache_cdct_store_escape) }
+ * Parameters: raycache_relief_parameters (raycache/shared/search_parameters.h, C++'s ReliefParameters byte
+ * for byte), raycache_default_relief_parameters() for the defaults.
  */
 #ifndef RAYCACHE_CDCT_GLSL
 #define RAYCACHE_CDCT_GLSL
 
 #include "raycache/cube.glsl"
+#include "raycache/shared/cdct_store.h"
 #include "raycache/shared/depth_secant.h"
+#include "raycache/shared/relief_walk.h"
+#include "raycache/shared/search_parameters.h"
 
 #ifndef RAYCACHE_READ_ONLY
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -44,34 +49,6 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_PENDING_BINDING)
 };
 #endif
 
-/* Tuning of the CDCT's searches, raycache::ReliefParameters field for field (so a std430 copy of the
- * C++ struct reads as this one). */
-struct raycache_relief_parameters {
-    float step;      /* relief: delta, length of a linear step along the ray, world units, > 0 */
-    float epsilon;   /* relief: bisection stops when the bracket is shorter than this; secant: accept
-                        |f| <= epsilon or a bracket this short; > 0 */
-    int max_steps;   /* relief: linear steps before giving up (a miss), at most RAYCACHE_MAX_RELIEF_STEPS */
-    float max_depth; /* distance at which rays that escaped to the environment are stored */
-    float max_gap;   /* a crossing more than this beyond the cached surface is a miss (infinity: never) */
-    int search;      /* what raycache_cdct_search makes: RAYCACHE_DEPTH_SEARCH_SECANT or _RELIEF */
-    int max_reads;   /* secant: reads before giving up (a miss), 1..RAYCACHE_SECANT_MAX_READS (clamped) */
-};
-
-/* The C++ defaults: step 0.2, epsilon 0.02, 1024 steps, depth 100, no gap limit, the secant search with
- * 8 reads. */
-raycache_relief_parameters raycache_default_relief_parameters() {
-    return raycache_relief_parameters(0.2, 0.02, 1024, 100.0, RAYCACHE_INFINITY, RAYCACHE_DEPTH_SEARCH_SECANT, 8);
-}
-
-/* Outcome of a search, raycache::ReliefResult field for field. On a miss only texels_read is set. */
-struct raycache_relief_result {
-    bool hit;
-    vec3 color;      /* the texel seen at the crossing */
-    vec3 point;      /* origin + distance * unit(direction) */
-    float distance;  /* along the unit ray direction, within epsilon past the first crossing */
-    int texels_read; /* texels sampled, hit or miss */
-};
-
 /* An empty CDCT texel, as C++ writes it. */
 uvec2 raycache_cdct_invalid_texel() {
     return uvec2(RAYCACHE_CDCT_INVALID_COLOR, RAYCACHE_CDCT_INVALID_DISTANCE);
@@ -89,76 +66,23 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
     return raycache_cdct_texels[i];
 }
 
-/* Thesis Algorithm 4 on the cube's depth image, as raycache::relief_search without a pyramid: walk the
- * ray origin + t * unit(direction) from where it leaves the cube's box, in steps of p.step; at each point
- * Q read the texel in direction Q - centre; a crossing (stored distance <= |Q - centre|) is bisected
- * (at most 64 times, keeping the crossed end) down to p.epsilon. A miss: an empty or this-frame texel on
- * the way, p.max_steps used up, a step too small to change t (t + p.step == t), a crossing more than
- * p.max_gap behind the surface, a bad origin, direction, box or parameters (p.max_steps above
- * RAYCACHE_MAX_RELIEF_STEPS among them). Reads at most 1 + p.max_steps + 64 texels. */
+/* Thesis Algorithm 4 on the cube's depth image, as raycache::relief_search without a pyramid
+ * (raycache/shared/relief_walk.h walks; this function only reads the texels): walk the ray
+ * origin + t * unit(direction) from where it leaves the cube's box, in steps of p.step; at each point Q read
+ * the texel in direction Q - centre; a crossing (stored distance <= |Q - centre|) is bisected (at most 64
+ * times, keeping the crossed end) down to p.epsilon. A miss: an empty or this-frame texel on the way,
+ * p.max_steps used up, a step too small to change t (t + p.step == t), a crossing more than p.max_gap behind
+ * the surface, a bad origin, direction, box or parameters (p.max_steps above RAYCACHE_MAX_RELIEF_STEPS among
+ * them). Reads at most 1 + p.max_steps + 64 texels. */
 raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,
                                               raycache_relief_parameters p) {
-    raycache_relief_result r;
-    r.hit = false;
-    r.color = vec3(0.0);
-    r.point = vec3(0.0);
-    r.distance = 0.0;
-    r.texels_read = 0;
-    if (!raycache_is_direction(direction) || !raycache_is_finite3(origin) || !raycache_cube_box_is_usable(cube) ||
-        !(p.step > 0.0) || !(p.epsilon > 0.0) || p.max_steps > RAYCACHE_MAX_RELIEF_STEPS)
-        return r;
-    vec3 d = raycache_unit(direction);
-
-    /* The box exit: a crossing there means the cached surface lies inside the box (nothing to refine). */
-    precise float t = raycache_box_exit_distance(origin, d, cube.centre, cube.half_size);
-    vec3 v = raycache_ray_from_centre(origin, d, t, cube.centre);
-    uvec2 texel = raycache_cdct_texel_at(cube, v);
-    r.texels_read = 1;
-    if (!raycache_cdct_is_valid(texel)) return r;
-    bool crossed = raycache_cdct_distance(texel) <= raycache_length(v);
-
-    /* Linear walk to the first crossing, bracketed by [lo, hi]. */
-    precise float lo = t;
-    precise float hi = t;
-    if (!crossed) {
-        for (int i = 0; i < p.max_steps && !crossed; ++i) {
-            lo = t;
-            t = t + p.step;
-            if (!(t > lo)) return r; /* the step no longer moves the ray */
-            v = raycache_ray_from_centre(origin, d, t, cube.centre);
-            texel = raycache_cdct_texel_at(cube, v);
-            r.texels_read += 1;
-            if (!raycache_cdct_is_valid(texel)) return r;
-            crossed = raycache_cdct_distance(texel) <= raycache_length(v);
-        }
-        if (!crossed) return r;
-        hi = t;
-
-        /* Bisection, keeping the crossed end and its texel at hi. */
-        uvec2 at_hi = texel;
-        for (int k = 0; k < 64 && hi - lo > p.epsilon; ++k) {
-            precise float mid = 0.5 * (lo + hi);
-            v = raycache_ray_from_centre(origin, d, mid, cube.centre);
-            texel = raycache_cdct_texel_at(cube, v);
-            r.texels_read += 1;
-            if (!raycache_cdct_is_valid(texel)) return r;
-            if (raycache_cdct_distance(texel) <= raycache_length(v)) {
-                hi = mid;
-                at_hi = texel;
-            } else {
-                lo = mid;
-            }
-        }
-        precise float gap = raycache_length(raycache_ray_from_centre(origin, d, hi, cube.centre)) -
-                            raycache_cdct_distance(at_hi);
-        if (gap > p.max_gap) return r;
-        texel = at_hi;
+    raycache_relief_walk w = raycache_relief_start(origin, direction, cube.centre, cube.half_size, p, false);
+    while (w.status == RAYCACHE_RELIEF_READ) {
+        uvec2 texel = raycache_cdct_texel_at(cube, raycache_relief_point(w, w.t));
+        w = raycache_relief_step(w, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
+                                 raycache_cdct_color(texel));
     }
-    r.hit = true;
-    r.distance = hi;
-    r.point = raycache_ray_point(origin, d, hi);
-    r.color = raycache_cdct_color(texel);
-    return r;
+    return raycache_relief_walk_result(w);
 }
 
 /* The CDCT's cheap search, as raycache::secant_search (raycache/shared/depth_secant.h drives it; this
@@ -178,13 +102,7 @@ raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 
         s = raycache_secant_step(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
                                  raycache_cdct_color(texel));
     }
-    raycache_relief_result r;
-    r.hit = s.status == RAYCACHE_SECANT_HIT;
-    r.color = r.hit ? s.color : vec3(0.0);
-    r.point = r.hit ? raycache_ray_point(origin, s.d, s.t) : vec3(0.0);
-    r.distance = r.hit ? s.t : 0.0;
-    r.texels_read = s.reads;
-    return r;
+    return raycache_secant_result(s, origin);
 }
 
 /* The search p.search names, as raycache::depth_search without a pyramid: RAYCACHE_DEPTH_SEARCH_SECANT
@@ -203,27 +121,35 @@ raycache_relief_result raycache_cdct_search(raycache_gpu_cube cube, vec3 origin,
 bool raycache_cdct_store(raycache_gpu_cube cube, vec3 key, vec3 color, float distance) {
     uint i = raycache_cube_texel(cube, key);
     if (i >= uint(raycache_cdct_texels.length()) || i >= uint(raycache_cdct_pending.length())) return false;
-    uint distance_bits = floatBitsToUint(distance); /* tested on the bits: no float compare to fold away */
-    if (distance_bits == 0x80000000u) distance_bits = 0u; /* -0 becomes +0 */
-    if ((distance_bits & 0x80000000u) != 0u || !raycache_is_finite(distance)) return false;
+    uvec2 texel = raycache_cdct_store_texel(color, distance);
+    if (!raycache_cdct_is_valid(texel)) return false;
     if (raycache_cdct_is_valid(raycache_cdct_texels[i])) return false; /* visible: kept */
-    uint64_t word = packUint2x32(uvec2(raycache_pack_rgb9e5(color), distance_bits));
+    uint64_t word = packUint2x32(texel);
     return atomicMin(raycache_cdct_pending[i], word) > word;
 }
 
 /* Stores what a traced ray hit at hit_point: key hit_point - centre, distance |hit_point - centre|
  * clamped to p.max_depth (raycache::store_hit). Refused for a bad point or box, or as raycache_cdct_store. */
 bool raycache_cdct_store_hit(raycache_gpu_cube cube, vec3 hit_point, vec3 color, raycache_relief_parameters p) {
-    if (!raycache_is_finite3(hit_point) || !raycache_cube_box_is_usable(cube)) return false;
-    precise vec3 from_centre = hit_point - cube.centre;
-    float length = raycache_length(from_centre);
-    return raycache_cdct_store(cube, from_centre, color, (p.max_depth < length) ? p.max_depth : length);
+    raycache_cdct_store_key k = raycache_cdct_hit_store(hit_point, cube.centre, cube.half_size, p.max_depth);
+    return raycache_cdct_store(cube, k.key, color, k.distance);
 }
 
 /* Stores the colour of a ray that escaped to the environment in `direction`, at p.max_depth
  * (raycache::store_escape). */
 bool raycache_cdct_store_escape(raycache_gpu_cube cube, vec3 direction, vec3 color, raycache_relief_parameters p) {
-    return raycache_cdct_store(cube, direction, color, p.max_depth);
+    raycache_cdct_store_key k = raycache_cdct_escape_store(direction, p.max_depth);
+    return raycache_cdct_store(cube, k.key, color, k.distance);
+}
+
+/* Stores what a ray traced from origin along direction brought back, as raycache::cdct_cached_trace does
+ * after a miss: `distance` along the unit direction to its hit (store_hit there), infinity or NaN when it
+ * escaped (store_escape); nothing for a negative distance or a direction that is not one. */
+bool raycache_cdct_store_traced(raycache_gpu_cube cube, vec3 origin, vec3 direction, vec3 color, float distance,
+                                raycache_relief_parameters p) {
+    raycache_cdct_store_key k =
+        raycache_cdct_traced_store(origin, direction, distance, cube.centre, cube.half_size, p.max_depth);
+    return k.store && raycache_cdct_store(cube, k.key, color, k.distance);
 }
 #endif
 

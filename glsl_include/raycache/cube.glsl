@@ -37,9 +37,6 @@
 /* Returned instead of a buffer element when a vector has no texel. */
 #define RAYCACHE_NO_TEXEL 0xFFFFFFFFu
 
-/* +infinity (the default max_gap of the relief search). */
-#define RAYCACHE_INFINITY uintBitsToFloat(0x7F800000u)
-
 /* True when the cube's face size is 1..4096 (anything else has no texels). */
 bool raycache_cube_has_texels(raycache_gpu_cube cube) {
     return cube.face_size >= RAYCACHE_MIN_FACE_SIZE && cube.face_size <= RAYCACHE_MAX_FACE_SIZE;

@@ -1,9 +1,15 @@
 /* raycache/raycache.glsl: RayCache in GLSL (Vulkan): caching cubes read and written by shaders, bit for
  * bit the texels of the C++ library (same face table, texel rounding and encodings, one shared source).
  *
+ * BEFORE THE FIRST FRAME, FILL EVERY TEXEL AND PENDING BUFFER WITH 0xFFFFFFFF (RAYCACHE_GPU_CLEAR_WORD:
+ * vkCmdFillBuffer(cmd, buffer, 0, VK_WHOLE_SIZE, 0xFFFFFFFFu), or raycache::fill_gpu_words on the host,
+ * raycache/gpu_buffers.hpp). A zero-filled buffer reads as valid black texels: every lookup hits black
+ * and nothing is ever stored, with no error.
+ *
  * How to use it, from a compute, fragment or ray-generation shader:
  *   #extension GL_GOOGLE_include_directive : require
  *   #define RAYCACHE_SET 1                      // options: set, bindings, RAYCACHE_READ_ONLY (cube.glsl)
+ *   #define RAYCACHE_CDCT                       // only for the CDCT (see below); the CCT needs nothing
  *   #include "raycache/raycache.glsl"           // or only raycache/cct.glsl or raycache/cdct.glsl
  *   raycache_gpu_cube cube = my_cubes[object];  // descriptor: raycache/shared/gpu_layout.h, C++ too
  *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
@@ -12,6 +18,10 @@
  *                              // secant search or the relief walk, as parameters.search says
  *   raycache_filter_result b = raycache_filtered_value(reflected, N, 0.0); // bilinear, over the texel
  *                              // fetch named by RAYCACHE_FILTER_FETCH before the include (filter.glsl)
+ * The CCT and the filtered lookup need no device feature beyond Vulkan 1.1 (fragment shaders that store:
+ * fragmentStoresAndAtomics). The CDCT (raycache/cdct.glsl, included here only when RAYCACHE_CDCT is defined)
+ * stores with 64-bit atomics: its shaders declare the Int64 capability and the device must enable
+ * shaderInt64 and shaderBufferInt64Atomics (RAYCACHE_READ_ONLY: neither).
  * Between frames, one pass compiled with RAYCACHE_END_FRAME calls raycache_cct_end_frame(i) (and
  * raycache_cdct_end_frame(i)) for every buffer element i, which makes the frame's stores visible.
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
@@ -20,7 +30,9 @@
 #define RAYCACHE_RAYCACHE_GLSL
 
 #include "raycache/cct.glsl"
+#ifdef RAYCACHE_CDCT
 #include "raycache/cdct.glsl"
+#endif
 #include "raycache/filter.glsl"
 
 #endif /* RAYCACHE_RAYCACHE_GLSL */

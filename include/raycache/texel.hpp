@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "raycache/shared/cdct_store.h"
 #include "raycache/shared/texel_encoding.h"
 
 namespace raycache {
@@ -79,8 +80,7 @@ struct CdctTexel {
 
     static bool is_valid(Word word) noexcept { return shared::raycache_cdct_is_valid(to_pair(word)); }
     static Word encode(const Value& sample) noexcept {
-        if (!(sample.distance >= 0.0f) || !shared::raycache_is_finite(sample.distance)) return invalid;
-        return from_pair(shared::raycache_cdct_pack(sample.color, sample.distance + 0.0f)); // -0 becomes +0
+        return from_pair(shared::raycache_cdct_store_texel(sample.color, sample.distance)); // the GLSL store's rule
     }
     static Value decode(Word word) noexcept {
         const shared::uvec2 pair = to_pair(word);

@@ -265,7 +265,7 @@ Context::Context(const ContextOptions& options) : messenger_state_(new Messenger
         // Vulkan 1.2, VK_KHR_shader_atomic_int64 before).
         VkPhysicalDeviceFeatures supported{};
         vkGetPhysicalDeviceFeatures(physical_device_, &supported);
-        int64_atomics_ = has_int64_atomics(physical_device_, properties_.apiVersion);
+        int64_atomics_ = options.enable_int64 && has_int64_atomics(physical_device_, properties_.apiVersion);
         std::vector<const char*> device_extensions;
         if (int64_atomics_ && properties_.apiVersion < VK_API_VERSION_1_2)
             device_extensions.push_back(VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);

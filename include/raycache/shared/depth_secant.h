@@ -18,8 +18,9 @@
  *         read the texel of direction raycache_secant_point(s, s.t) -> (valid, distance, colour);
  *         s = raycache_secant_step(s, valid, distance, colour);
  *     }
- *     s.status == RAYCACHE_SECANT_HIT: the ray meets the cached surface at s.t, at the point
- *     raycache_ray_point(origin, s.d, s.t), and sees s.color; s.reads texels were read, hit or miss.
+ *     raycache_secant_result(s, origin): s.status == RAYCACHE_SECANT_HIT when the ray meets the cached
+ *     surface at s.t, at the point raycache_ray_point(origin, s.d, s.t), seeing s.color; s.reads texels
+ *     were read, hit or miss.
  * (raycache::secant_search in C++, raycache_cdct_secant_search in GLSL.) Products are rounded on their own
  * (never fused into an FMA), so both languages, and C++ built with or without FMA contraction, give the
  * same bits.
@@ -27,16 +28,11 @@
 #ifndef RAYCACHE_SHARED_DEPTH_SECANT_H
 #define RAYCACHE_SHARED_DEPTH_SECANT_H
 
-#include "raycache/shared/ray_box.h"
+#include "raycache/shared/search_parameters.h"
 
 #define RAYCACHE_SECANT_READ 0
 #define RAYCACHE_SECANT_HIT 1
 #define RAYCACHE_SECANT_MISS 2
-/* The most reads one search may take: max_reads above it is clamped to it. */
-#define RAYCACHE_SECANT_MAX_READS 64
-/* Which search a CDCT lookup makes (raycache::DepthSearch, the search field of the parameters). */
-#define RAYCACHE_DEPTH_SEARCH_SECANT 0
-#define RAYCACHE_DEPTH_SEARCH_RELIEF 1
 
 #ifdef __cplusplus
 namespace raycache {
@@ -182,6 +178,11 @@ RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s
     }
     s.t = next;
     return s;
+}
+
+/* The search's outcome as a search result (origin: the ray's origin given to raycache_secant_start). */
+RAYCACHE_FN raycache_relief_result raycache_secant_result(raycache_secant_search s, vec3 origin) {
+    return raycache_search_result(s.status == RAYCACHE_SECANT_HIT, origin, s.d, s.t, s.color, s.reads);
 }
 
 #ifdef __cplusplus

@@ -4,6 +4,8 @@
  * if/else, for, ?:, bit operations, floatBitsToUint/uintBitsToFloat, abs/floor/min/max/clamp/sqrt/dot,
  * fixed-size arrays (also as struct members) filled element by element (no initializer lists).
  * Functions are declared RAYCACHE_FN; out-parameters are avoided (return values or structs instead).
+ * Where a language must supply something (a texel fetch), the shared code is a state machine: the
+ * language's loop reads what the state asks for and hands it back (see depth_secant.h, relief_walk.h).
  */
 #ifndef RAYCACHE_SHARED_LANGUAGE_H
 #define RAYCACHE_SHARED_LANGUAGE_H
@@ -12,6 +14,7 @@
 #include <cstdint>
 #include <cmath>
 #include <algorithm>
+#include <limits>
 #include <glm/glm.hpp>
 
 namespace raycache {
@@ -63,6 +66,11 @@ inline float raycache_no_fma(float x) {
  * see RAYCACHE_NO_FMA below, applied to the one product where it matters. */
 #define RAYCACHE_PRECISE
 #define RAYCACHE_CONST constexpr
+/* A struct member's default value: C++ gives it (`float step RAYCACHE_DEFAULT(0.2f);`), GLSL has none
+ * (its structs are built by a function that assigns the same macros). */
+#define RAYCACHE_DEFAULT(value) = value
+/* +infinity as a float expression. */
+#define RAYCACHE_INFINITY (std::numeric_limits<float>::infinity())
 
 #else /* GLSL */
 
@@ -70,6 +78,8 @@ inline float raycache_no_fma(float x) {
 #define RAYCACHE_PRECISE precise
 #define RAYCACHE_CONST const
 #define raycache_no_fma(x) (x)
+#define RAYCACHE_DEFAULT(value)
+#define RAYCACHE_INFINITY uintBitsToFloat(0x7F800000u)
 
 #endif /* __cplusplus */
 

@@ -8,11 +8,6 @@
 
 #include "raycache/shared/cube_face.h"
 
-/* The most linear steps (or pyramid nodes) one relief search may take. ReliefParameters::max_steps above
- * it is refused by validate() and makes a search a miss without reading, in C++ and GLSL alike, so a
- * search reads at most 1 + RAYCACHE_MAX_RELIEF_STEPS + 64 texels and its count fits an int. */
-#define RAYCACHE_MAX_RELIEF_STEPS 16777216
-
 #ifdef __cplusplus
 namespace raycache {
 namespace shared {

@@ -4,6 +4,7 @@
 #include "raycache/shared/cube_face.h"
 bool raycache_test_fetch(raycache_texel_address texel, out vec3 color);
 #define RAYCACHE_FILTER_FETCH raycache_test_fetch
+#define RAYCACHE_CDCT
 #include "raycache/raycache.glsl"
 
 layout(std430, set = 1, binding = 0) buffer raycache_test_sink { vec4 raycache_test_values[]; };
@@ -41,6 +42,7 @@ void raycache_test_use_all() {
     sum.y += raycache_cdct_store_hit(cube, vec3(3.0), vec3(0.5), raycache_default_relief_parameters()) ? 1.0 : 0.0;
     sum.y += raycache_cdct_store_escape(cube, vec3(0.0, 0.0, 1.0), vec3(0.5), raycache_default_relief_parameters()) ? 1.0 : 0.0;
     sum.y += raycache_cdct_store(cube, vec3(0.0, 0.0, 1.0), vec3(0.5), 2.0) ? 1.0 : 0.0;
+    sum.y += raycache_cdct_store_traced(cube, vec3(0.1), vec3(0.0, 1.0, 0.0), vec3(0.5), 2.0, raycache_default_relief_parameters()) ? 1.0 : 0.0;
 #endif
 #ifdef RAYCACHE_END_FRAME
     raycache_cct_end_frame(0u);

@@ -1,11 +1,12 @@
-// rcx/options.hpp: the command line shared by the example tracers (same options, same meaning, whatever
-// the renderer), its help text, and the checks that turn bad input into messages a user can act on.
+// rcx/options.hpp: the options shared by the example tracers (same options, same meaning, whatever the
+// renderer), and parse_options/help_text, their command line (parsed by rcx/command_line.hpp on CLI11).
 #pragma once
 
 #include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "rcx/output_folder.hpp"
 #include "rcx/scene.hpp"
 
 namespace rcx {
@@ -72,12 +73,13 @@ struct Options {
     bool help = false;
 };
 
-// Parses argv[1..argc-1]; accepts "--name value" and "--name=value". Validates ranges, not the scene
-// name (make_scene does) nor the output folder (ensure_writable_directory does).
-// Throws UsageError naming the option for unknown options, missing values, bad numbers, out of range.
+// Parses argv[1..argc-1]; accepts "--name value" and "--name=value", in any order (a repeated option:
+// the last wins). Validates ranges, not the scene name (make_scene does) nor the output folder
+// (ensure_writable_directory does). Throws UsageError naming the option for unknown options, missing
+// values, bad numbers, out of range. A tracer with options of its own uses rcx::CommandLine instead.
 Options parse_options(int argc, const char* const argv[]);
 
-// The --help text; `program` is argv[0]'s file name.
+// The --help text of the shared options; `program` is argv[0]'s file name.
 std::string help_text(const std::string& program);
 
 // The SceneParams the options ask for (--mesh).
@@ -85,10 +87,6 @@ SceneParams scene_params(const Options& options);
 
 // Applies --frames/--step/--path/--depth to a scene built by make_scene.
 void apply_options(Scene& scene, const Options& options);
-
-// Creates `path` (and parents) when missing and checks a file can be written there.
-// Throws std::runtime_error with the path and the reason otherwise.
-void ensure_writable_directory(const std::string& path);
 
 // What every example tracer does first: builds the scene the options name (make_scene, scene_params),
 // applies the options to it, then checks the output folder (ensure_writable_directory(options.out)).

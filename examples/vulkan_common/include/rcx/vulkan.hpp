@@ -51,6 +51,9 @@ struct ContextOptions {
     // Fail with NoDeviceError unless the device has shaderInt64 and shaderBufferInt64Atomics
     // (RayCache's CDCT stores need them). Either way they are enabled when supported.
     bool require_int64_atomics = false;
+    // false: never enable shaderInt64 and shaderBufferInt64Atomics, so that a test can check that a shader
+    // needs neither (the validation layer then reports a shader that declares Int64).
+    bool enable_int64 = true;
 };
 
 class Context;

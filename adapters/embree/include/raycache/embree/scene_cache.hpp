@@ -49,7 +49,6 @@
 
 #include "raycache/raycache.hpp"
 #include "raycache/invalidation.hpp"
-#include "raycache/recorded_trace.hpp"
 
 namespace raycache {
 
@@ -284,8 +283,7 @@ class SceneCache {
         ObjectId id;
         CubeBounds bounds;
         std::unique_ptr<CctCube> cct;
-        std::unique_ptr<CdctCube> cdct;
-        std::unique_ptr<DepthPyramid> pyramid;       // CDCT with depth_pyramid only
+        std::unique_ptr<CdctCache> cdct;             // its cube, bounds, parameters and (depth_pyramid) pyramid
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
         bool sized = false; // adaptive: sized once from counted rays (later moves need the hysteresis)
     };
@@ -304,11 +302,11 @@ class SceneCache {
     // f(cube) on the entry's cube, whichever technique it holds (f is instantiated for both).
     template <class F>
     static decltype(auto) with_cube(Entry& e, F&& f) {
-        return e.cct ? f(*e.cct) : f(*e.cdct);
+        return e.cct ? f(*e.cct) : f(e.cdct->cube());
     }
     template <class F>
     static decltype(auto) with_cube(const Entry& e, F&& f) {
-        return e.cct ? f(static_cast<const CctCube&>(*e.cct)) : f(static_cast<const CdctCube&>(*e.cdct));
+        return e.cct ? f(static_cast<const CctCube&>(*e.cct)) : f(static_cast<const CdctCube&>(e.cdct->cube()));
     }
 
 public:
@@ -421,7 +419,9 @@ public:
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
     // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
     // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
-    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax). It runs on a miss; its colour is returned
+    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax), or `TracedRay
+    // trace(PathRecord&)`, which also reports what the path hit (raycache/path_record.hpp) so that
+    // scene_changed() can keep what a move cannot have changed. It runs on a miss; its colour is returned
     // unchanged. Objects without a cube: returns trace().color. Thread-safe.
     template <class Trace>
     glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
@@ -429,35 +429,28 @@ public:
         static_assert(std::is_invocable_r_v<TracedRay, Trace&> || records,
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
-        if constexpr (records) {
-            // The form that reports what the path saw: texels it fills can be invalidated exactly.
-            const int index = find(id);
-            PathRecord unused;
-            if (index < 0) return trace(unused).color;
-            Entry& e = entries_[static_cast<std::size_t>(index)];
-            if (technique_ == Technique::cct) {
-                if (e.coverage) e.coverage->mark(direction);
-                const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
-                return cct_cached_trace_recorded(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr,
-                                                 filtered_, trace);
-            }
-            return leaving_ray(id, origin, direction, [&] { return trace(unused); }); // the CDCT keeps no records
-        } else {
         const int index = find(id);
-        if (index < 0) return std::forward<Trace>(trace)().color;
+        if (index < 0) {
+            PathRecord unused;
+            if constexpr (records) return trace(unused).color;
+            else return trace().color;
+        }
         Entry& e = entries_[static_cast<std::size_t>(index)];
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
-            auto colour = [&] { return trace().color; };
-            if (origin_drift_ >= 0.0f)
-                return cct_cached_trace(*e.cct, direction, origin,
-                                        OriginTolerance{origin_drift_ * e.bounds.half_size, origin_parallax_}, filtered_,
-                                        trace);
-            return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
+            // The recording form lets exact invalidation keep what a move cannot have changed.
+            const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
+            return cct_cached_trace(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
         }
         int read = 0;
-        const glm::vec3 color =
-            cdct_cached_trace(*e.cdct, e.bounds, origin, direction, relief_, trace, &read, e.pyramid.get());
+        PathRecord unused; // the CDCT keeps no path records
+        const glm::vec3 color = e.cdct->cached_trace(
+            origin, direction,
+            [&] {
+                if constexpr (records) return trace(unused);
+                else return trace();
+            },
+            &read);
         texels_read_.add(0, static_cast<std::uint64_t>(read));
         // A rarely-taken CAS: only a search that reads more than every one before it writes.
         std::uint64_t most = max_texels_read_.load(std::memory_order_relaxed);
@@ -465,7 +458,6 @@ public:
                !max_texels_read_.compare_exchange_weak(most, static_cast<std::uint64_t>(read), std::memory_order_relaxed)) {
         }
         return color;
-        }
     }
 
     // Between frames, after objects (or lights) moved: cubes of moved objects move with them, emptied
@@ -532,9 +524,8 @@ public:
     SceneCacheStatistics begin_frame() {
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
-            if (e.pyramid) e.pyramid->update(*e.cdct); // before the frame's stores stop being marked
             if (e.cct) mark_doubtful_edges(*e.cct, edge_threshold_);
-            const CubeStatistics frame = with_cube(e, [](auto& cube) { return cube.begin_frame(); });
+            const CubeStatistics frame = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
             add(total, frame);
             if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
         }
@@ -584,8 +575,8 @@ public:
     // Empties every cube (the objects keep their cubes).
     void clear() {
         for (Entry& e : entries_) {
-            with_cube(e, [](auto& cube) { cube.clear(); });
-            if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+            if (e.cct) e.cct->clear();
+            else e.cdct->clear(); // and its pyramid
         }
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
@@ -597,9 +588,9 @@ public:
     // file and the system's reason when it cannot be written.
     void save(const std::string& path, const SceneIdentity& scene) const {
         if (technique_ == Technique::cct)
-            save_cache_file(path, scene, cubes_to_save(&Entry::cct));
+            save_cache_file(path, scene, cubes_to_save<CctTexel>());
         else
-            save_cache_file(path, scene, cubes_to_save(&Entry::cdct));
+            save_cache_file(path, scene, cubes_to_save<CdctTexel>());
     }
 
     // Replaces every cube by the one saved for its object in `path`: texels visible from the next frame,
@@ -613,9 +604,9 @@ public:
     void load(const std::string& path, const SceneIdentity& scene) {
         const std::vector<std::uint8_t> bytes = read_whole_file(path);
         if (technique_ == Technique::cct)
-            load_cubes(bytes, path, scene, &Entry::cct);
+            load_cubes<CctTexel>(bytes, path, scene);
         else
-            load_cubes(bytes, path, scene, &Entry::cdct);
+            load_cubes<CdctTexel>(bytes, path, scene);
     }
 
     // Texel memory of all cubes: sum of 6 * N^2 * (4 bytes CCT, 8 bytes CDCT).
@@ -635,7 +626,7 @@ public:
     // Memory of the CDCT depth pyramids (about a third of a float per texel).
     std::size_t pyramid_bytes() const noexcept {
         std::size_t bytes = 0;
-        for (const Entry& e : entries_) bytes += e.pyramid ? e.pyramid->bytes() : 0;
+        for (const Entry& e : entries_) bytes += e.cdct ? e.cdct->pyramid_bytes() : 0;
         return bytes;
     }
 
@@ -643,8 +634,8 @@ private:
     // Empties an entry's cube (and rebuilds its pyramid); the texels it held.
     std::size_t empty_cube(Entry& e) {
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
-        with_cube(e, [](auto& cube) { cube.clear(); });
-        if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+        if (e.cct) e.cct->clear();
+        else e.cdct->clear(); // and its pyramid
         return valid;
     }
     // One exact pass over a CCT entry; the texels it emptied.
@@ -700,7 +691,7 @@ private:
     // A new entry for object `id` with a cube around `bounds` (face_size as in attach()); its index.
     int add_entry(ObjectId id, int face_size, const CubeBounds& bounds) {
         const bool adaptive = face_size == adaptive_face_size;
-        Entry entry{id, bounds, nullptr, nullptr, nullptr, nullptr};
+        Entry entry{id, bounds, nullptr, nullptr, nullptr};
         make_cube(entry, adaptive ? adaptive_.first_face_size : face_size);
         if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         entries_.push_back(std::move(entry));
@@ -756,8 +747,7 @@ private:
         if (technique_ == Technique::cct) {
             e.cct = std::make_unique<CctCube>(face_size, budget_);
         } else {
-            e.cdct = std::make_unique<CdctCube>(face_size, budget_);
-            if (use_pyramid_ && relief_.search == DepthSearch::relief) e.pyramid = std::make_unique<DepthPyramid>(face_size);
+            e.cdct = std::make_unique<CdctCache>(face_size, e.bounds, relief_, use_pyramid_, budget_);
         }
     }
 
@@ -770,7 +760,7 @@ private:
         e.sized = e.sized || rays > 0;
         e.coverage->reset();
         if (next == current) return false;
-        Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), std::move(e.pyramid), nullptr};
+        Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), nullptr};
         make_cube(e, next);
         if (next < current) {
             if (technique_ == Technique::cct) {
@@ -778,9 +768,9 @@ private:
                 carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
                 mark_doubtful_edges(*e.cct, edge_threshold_);
             } else
-                resample_into(*old.cdct, *e.cdct);
+                resample_into(old.cdct->cube(), e.cdct->cube());
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
-            if (e.pyramid) e.pyramid->rebuild(*e.cdct);
+            if (e.cdct) e.cdct->rebuild_pyramid();
         }
         return true;
     }
@@ -808,20 +798,23 @@ private:
         return text;
     }
 
+    // The entry's cube of technique Texel.
+    static const CctCube* cube_of(const Entry& e, CctTexel) { return e.cct.get(); }
+    static const CdctCube* cube_of(const Entry& e, CdctTexel) { return &e.cdct->cube(); }
+
     template <class Texel>
-    std::vector<CubeToSave<Texel>> cubes_to_save(std::unique_ptr<CacheCube<Texel>> Entry::*cube) const {
+    std::vector<CubeToSave<Texel>> cubes_to_save() const {
         std::vector<CubeToSave<Texel>> cubes;
         for (const Entry& e : entries_) {
             const FileKey key = file_key(e);
-            cubes.push_back(CubeToSave<Texel>{key.first, e.bounds, (e.*cube).get(), key.second});
+            cubes.push_back(CubeToSave<Texel>{key.first, e.bounds, cube_of(e, Texel{}), key.second});
         }
         return cubes;
     }
 
     // load(): the file's cubes, matched to the entries and checked, then swapped in all at once.
     template <class Texel>
-    void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene,
-                    std::unique_ptr<CacheCube<Texel>> Entry::*cube) {
+    void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene) {
         const std::string source = "cache file '" + path + "'";
         std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source);
         auto fail = [&](const std::string& what) {
@@ -838,7 +831,7 @@ private:
             const LoadedCube<Texel>& c = loaded[it->second];
             if (!same_placement(c.bounds, e.bounds))
                 fail(object + "'s cube sits at " + raycache::describe(e.bounds) + ", in the file at " + raycache::describe(c.bounds));
-            const int here = (e.*cube)->face_size();
+            const int here = cube_of(e, Texel{})->face_size();
             if (!e.coverage && c.cube->face_size() != here)
                 fail(object + "'s cube has " + std::to_string(here) + "-texel faces (fixed), in the file " +
                      std::to_string(c.cube->face_size()));
@@ -848,24 +841,22 @@ private:
         if (!by_key.empty())
             fail("the file has a cube for " + key_text(by_key.begin()->first) + ", which has none here (" +
                  std::to_string(by_key.size()) + " such cubes)");
-        // The texels become visible (their tiles' origin boxes and doubtful marks came with them); depth
-        // pyramids, derived from the texels alone, are rebuilt for the entries that keep one.
-        std::vector<std::unique_ptr<DepthPyramid>> pyramids(entries_.size());
+        // The texels become visible (their tiles' origin boxes and doubtful marks came with them); a CDCT
+        // cube goes into a new CdctCache, which rebuilds its depth pyramid from the texels.
+        std::vector<std::unique_ptr<CdctCache>> caches(entries_.size());
         for (std::size_t i = 0; i < entries_.size(); ++i) {
-            CacheCube<Texel>& c = *loaded[source_of[i]].cube;
-            c.begin_frame();
-            if constexpr (std::is_same_v<Texel, CdctTexel>) {
-                if (entries_[i].pyramid) {
-                    pyramids[i] = std::make_unique<DepthPyramid>(c.face_size());
-                    pyramids[i]->rebuild(c);
-                }
-            }
+            loaded[source_of[i]].cube->begin_frame();
+            if constexpr (std::is_same_v<Texel, CdctTexel>)
+                caches[i] = std::make_unique<CdctCache>(std::move(loaded[source_of[i]].cube), entries_[i].bounds, relief_,
+                                                        use_pyramid_);
         }
         // Nothing below throws: every entry takes its new cube, or none does.
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
-            e.*cube = std::move(loaded[source_of[i]].cube);
-            e.pyramid = std::move(pyramids[i]);
+            if constexpr (std::is_same_v<Texel, CdctTexel>)
+                e.cdct = std::move(caches[i]);
+            else
+                e.cct = std::move(loaded[source_of[i]].cube);
             if (e.coverage) e.coverage->reset();
         }
     }

@@ -1,0 +1,277 @@
+// The example tracers' command line on CLI11 (rcx/command_line.hpp): the shared options, --help, and
+// CLI11's errors in the words of UsageError.
+#include "rcx/command_line.hpp"
+
+#include <cstdio>
+#include <limits>
+#include <utility>
+
+#include <CLI/CLI.hpp>
+
+#include "rcx/option_values.hpp"
+
+namespace rcx {
+
+namespace {
+
+// CLI11's layout with the usage line first and the description under it (CLI11 puts the description
+// above the usage line), and one blank line between sections (CLI11 puts two); the rest (sections
+// "Heading:", a 22-character name column) is CLI11's.
+class HelpLayout : public CLI::Formatter {
+public:
+    HelpLayout() { column_width(22); }
+    std::string make_description(const CLI::App*) const override { return ""; }
+    std::string make_usage(const CLI::App* app, std::string name) const override {
+        return CLI::Formatter::make_usage(app, std::move(name)) + app->get_description() + "\n\n";
+    }
+    std::string make_group(std::string group, bool is_positional, std::vector<const CLI::Option*> options) const override {
+        const std::string text = CLI::Formatter::make_group(std::move(group), is_positional, std::move(options));
+        return text.substr(text.find_first_not_of('\n'));
+    }
+};
+
+// A value from `names` for messages: its long name ("--quiet" for "-q,--quiet").
+std::string long_name(const CLI::Option& option) { return option.get_name(false, false); }
+
+// CLI11's argument-count errors begin with the option's name: "--frames: 1 required N missing" (no value)
+// and "compare was given a disallowed flag override" (a value for a flag; the name without dashes).
+// They become the messages this command line always gave; anything else keeps CLI11's words.
+UsageError in_our_words(const CLI::ArgumentMismatch& error, const CLI::App& app) {
+    const std::string what = error.what();
+    auto starts_with = [&](const std::string& prefix) { return what.rfind(prefix, 0) == 0; };
+    for (const CLI::Option* option : app.get_options()) {
+        const std::string name = long_name(*option);
+        if (starts_with(name + ": ") && what.find(" missing") != std::string::npos)
+            return UsageError(name + " needs a value (see --help)");
+        for (const std::string& spelling : option->get_lnames())
+            if (starts_with(spelling + " was given a disallowed flag override")) return UsageError(name + " takes no value");
+        for (const std::string& spelling : option->get_snames())
+            if (starts_with(spelling + " was given a disallowed flag override")) return UsageError(name + " takes no value");
+    }
+    return UsageError(what);
+}
+
+// Arguments CLI11 matched to no option (it is told to keep them, so that the first can be named).
+UsageError unexpected(const std::string& argument) {
+    if (argument.size() > 1 && argument[0] == '-') return UsageError("unknown option '" + argument + "' (see --help)");
+    return UsageError("unexpected argument '" + argument + "': the tracers take options only, each starting with -- (see --help)");
+}
+
+} // namespace
+
+std::string shown_default(const std::string& value) { return "[" + value + "]"; }
+
+std::string shown_default(float value) {
+    char digits[32];
+    std::snprintf(digits, sizeof digits, "%g", static_cast<double>(value));
+    return shown_default(std::string(digits));
+}
+
+CommandLine::CommandLine(const std::string& program)
+    : app_(std::make_unique<CLI::App>(
+          "Renders a scene's camera path frame by frame, one PNG per frame, caching the rays that leave\n"
+          "reflective and refractive objects in per-object caching cubes (Ruff 2013).",
+          program)) {
+    CLI::App& app = *app_;
+    app.formatter(std::make_shared<HelpLayout>());
+    app.set_help_flag(); // --help is an option like the others: parse() reports it in Options::help
+    app.allow_extras();  // unknown arguments are reported by parse(), by name
+    add_note(""); // the closing lines
+
+    Options& o = options_;
+    const Options d; // the defaults --help shows
+    auto integer = [](const char* option, int& target, long min, long max) {
+        return [option, &target, min, max](const std::string& text) {
+            target = static_cast<int>(parse_int_value(option, text, min, max));
+        };
+    };
+    auto number = [](const char* option, float& target, bool positive) {
+        return [option, &target, positive](const std::string& text) { target = parse_float_value(option, text, positive); };
+    };
+    auto file = [](const char* option, std::string& target, const char* what) {
+        return [option, &target, what](const std::string& text) {
+            if (text.empty()) throw UsageError(std::string(option) + ": the " + what + " name is empty");
+            target = text;
+        };
+    };
+
+    section("Scene and camera");
+    add_option("--scene", "NAME",
+               "behind-N (N = 0..32), grid-N (N = 1..32), diffuse-31, reflective-32,\n"
+               "cone-cylinder, concave, glass, mirrors-1000, dynamic-N (N = 1..256\n"
+               "moving spheres and a moving mesh among mirrors) " + shown_default(d.scene),
+               [&o](const std::string& text) { o.scene = text; });
+    add_option("--mesh", "FILE",
+               "the concave object of scene concave (any format Assimp reads)\n" +
+                   shown_default(SceneParams{}.mesh_path + ", Debian: assimp-testmodels"),
+               file("--mesh", o.mesh, "file"));
+    add_option("--size", "WxH",
+               "image size (or --width W --height H) " +
+                   shown_default(std::to_string(d.width) + "x" + std::to_string(d.height)),
+               [&o](const std::string& text) {
+                   const ImageSize size = parse_image_size("--size", text);
+                   o.width = size.width;
+                   o.height = size.height;
+               });
+    add_option("--width", "W", "image width, 1.." + std::to_string(max_image_side),
+               integer("--width", o.width, 1, max_image_side));
+    add_option("--height", "H", "image height, 1.." + std::to_string(max_image_side),
+               integer("--height", o.height, 1, max_image_side));
+    add_option("--frames", "N", "frames to render [the scene's path: 10]", [&o](const std::string& text) {
+        o.frames = static_cast<int>(parse_int_value("--frames", text, 1, 1000000));
+    });
+    add_option("--step", "DEGREES", "camera rotation per frame [the scene's path: 1]",
+               [&o](const std::string& text) { o.step_degrees = parse_float_value("--step", text, false); });
+    add_option("--path", "KIND", "orbit (eye around the target), pan (view around the eye), fixed",
+               [&o](const std::string& text) {
+                   try {
+                       o.path = parse_path_kind(text);
+                   } catch (const std::invalid_argument&) {
+                       throw UsageError("--path: unknown path '" + text + "'; use orbit, pan or fixed");
+                   }
+               });
+    add_option("--depth", "N", "maximum recursion depth (primary rays are depth 0) [5]",
+               [&o](const std::string& text) { o.depth = static_cast<int>(parse_int_value("--depth", text, 0, 64)); });
+
+    section("Cache");
+    add_option("--cache", "MODE",
+               "off, cct (colour), cdct (colour + depth), ceiling (constant colour,\n"
+               "no tracing: the best any cache could do) " + shown_default(to_string(d.cache)),
+               [&o](const std::string& text) { o.cache = parse_cache_mode(text); });
+    add_option("--face-size", "N|auto",
+               "texels per cube face side, 1..4096; auto: each cube's size follows\n"
+               "the rays its object receives (Vulkan: the largest up to 512 whose\n"
+               "cubes fit one storage buffer) [auto]",
+               [&o](const std::string& text) {
+                   o.face_size = text == "auto" ? 0 : static_cast<int>(parse_int_value("--face-size", text, 1, 4096));
+               });
+    add_option("--rays-per-texel", "F",
+               "auto: a frame's leaving rays per covered texel; smaller is sharper\n"
+               "and fills more slowly (Embree tracer) " + shown_default(d.rays_per_texel),
+               number("--rays-per-texel", o.rays_per_texel, true));
+    add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
+    add_option("--edge-threshold", "F",
+               "CCT: texels differing from a neighbour by more than F are traced,\n"
+               "not answered; negative: off (Embree tracer) " + shown_default(d.edge_threshold),
+               number("--edge-threshold", o.edge_threshold, false));
+    add_option("--origin-drift", "F",
+               "CCT: a tile met by a ray leaving further than F x the cube's\n"
+               "half-size from its stores' origins refills; negative: off\n"
+               "(Embree tracer) " + shown_default(d.origin_drift),
+               number("--origin-drift", o.origin_drift, false));
+    add_option("--origin-parallax", "F",
+               "CCT: ... or further than F x the distance to the nearest surface\n"
+               "its rays hit (radians); inf: off (Embree tracer) " + shown_default(d.origin_parallax),
+               [&o](const std::string& text) {
+                   o.origin_parallax = text == "inf" ? std::numeric_limits<float>::infinity()
+                                                     : parse_float_value("--origin-parallax", text, true);
+               });
+    add_option("--invalidate", "P",
+               "dynamic scenes (dynamic-N), when objects move: none (keep every\n"
+               "texel), all (empty every cube) or exact (only the texels the moves\n"
+               "can have changed; Embree tracer, CCT) " + shown_default(to_string(d.invalidate)),
+               [&o](const std::string& text) { o.invalidate = parse_invalidation(text); });
+    add_option("--cdct-search", "S",
+               "secant (a few texel reads, then a consistency test) or relief (the\n"
+               "thesis's walk, over a depth pyramid) " + shown_default(d.secant ? "secant" : "relief"),
+               [&o](const std::string& text) {
+                   if (text != "secant" && text != "relief")
+                       throw UsageError("--cdct-search: '" + text + "' is not secant or relief");
+                   o.secant = text == "secant";
+               });
+    add_option("--max-reads", "N", "CDCT secant: texel reads before a miss, 1..64 " + shown_default(std::to_string(d.max_reads)),
+               integer("--max-reads", o.max_reads, 1, 64));
+    add_option("--delta", "F", "CDCT relief search step, world units " + shown_default(d.delta),
+               number("--delta", o.delta, true));
+    add_option("--epsilon", "F", "CDCT: a hit lies within F of the cached surface " + shown_default(d.epsilon),
+               number("--epsilon", o.epsilon, true));
+    add_option("--max-steps", "N",
+               "CDCT relief: linear steps (or pyramid nodes) before a miss " + shown_default(std::to_string(d.max_steps)),
+               integer("--max-steps", o.max_steps, 1, 1 << 24));
+    add_flag("--no-pyramid", no_pyramid_, "CDCT relief: the thesis's fixed-step walk, no min-depth pyramid");
+    add_option("--max-gap", "F",
+               "CDCT: a crossing F behind the cached surface is a miss; 0: off " + shown_default(d.max_gap),
+               [&o](const std::string& text) {
+                   o.max_gap = parse_float_value("--max-gap", text, false);
+                   if (o.max_gap < 0.0f) throw UsageError("--max-gap: must be >= 0 (0 turns it off)");
+               });
+    add_flag("--prefill", o.prefill, "trace every cube texel once before the first frame");
+    add_option("--load-cache", "FILE",
+               "start warm: load the cubes saved in FILE before the first frame (the\n"
+               "scene, objects and technique must match; Embree tracer)",
+               file("--load-cache", o.load_cache, "file"));
+    add_option("--save-cache", "FILE", "save the cubes to FILE after the last frame (Embree tracer)",
+               file("--save-cache", o.save_cache, "file"));
+    add_option("--warm-up", "S",
+               "first frame: a pass over every S-th pixel in x and y first, whose\n"
+               "stores the full pass reads (for single images; Embree tracer);\n"
+               "0: off " + shown_default(std::to_string(d.warm_up)),
+               integer("--warm-up", o.warm_up, 0, 64));
+
+    section("Run");
+    add_option("--threads", "N", "worker threads, 0 = all cores " + shown_default(std::to_string(d.threads)),
+               integer("--threads", o.threads, 0, 4096));
+    add_option("--out", "DIR", "folder for the PNGs (created when missing) " + shown_default(d.out),
+               file("--out", o.out, "folder"));
+    add_flag("--compare", o.compare,
+             "also render every frame with the cache off: speed-up, PSNR, mean/max\n"
+             "error, and a difference PNG (blue = equal ... red = different)");
+    add_flag("-q,--quiet", o.quiet, "only the summary; no progress bar");
+    add_flag("--progress", o.progress, "draw the progress bar even when stderr is not a terminal");
+    add_flag("-h,--help", o.help, "this text");
+}
+
+CommandLine::~CommandLine() = default;
+
+void CommandLine::section(const std::string& heading) { section_ = heading; }
+
+void CommandLine::add_option(const std::string& names, const std::string& value, const std::string& description,
+                             std::function<void(const std::string& text)> store) {
+    app_->add_option_function<std::string>(names, std::move(store), description)
+        ->type_name(value)
+        ->group(section_)
+        ->trigger_on_parse() // stored as met, so "--size 8x8 --width 9" means what it says
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+void CommandLine::add_note(const std::string& paragraph) {
+    if (!paragraph.empty()) notes_ += paragraph + "\n\n";
+    app_->footer(notes_ + "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
+                          "(including a run that needs more memory than is available: MemAvailable, or the environment's\n"
+                          "RCX_AVAILABLE_MEMORY=BYTES).");
+}
+
+void CommandLine::add_flag(const std::string& names, bool& target, const std::string& description) {
+    app_->add_flag(names, target, description)->group(section_)->disable_flag_override();
+}
+
+Options CommandLine::parse(int argc, const char* const argv[]) {
+    // CLI11 reads "--name=" as "--name" and takes the next argument as the value; refuse it instead.
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg.size() > 3 && arg.rfind("--", 0) == 0 && arg.find('=') == arg.size() - 1)
+            throw UsageError(arg.substr(0, arg.size() - 1) + ": nothing after '='");
+    }
+    try {
+        app_->parse(argc, argv);
+    } catch (const CLI::ArgumentMismatch& e) {
+        throw in_our_words(e, *app_);
+    } catch (const CLI::ParseError& e) {
+        throw UsageError(e.what());
+    }
+    if (!app_->remaining().empty()) throw unexpected(app_->remaining().front());
+    Options& o = options_;
+    o.pyramid = !no_pyramid_;
+    if ((!o.load_cache.empty() || !o.save_cache.empty()) && !uses_caches(o.cache))
+        throw UsageError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") + " needs --cache cct or cdct, not " +
+                         to_string(o.cache));
+    return o;
+}
+
+std::string CommandLine::help() const { return app_->help(); }
+
+Options parse_options(int argc, const char* const argv[]) { return CommandLine("tracer").parse(argc, argv); }
+
+std::string help_text(const std::string& program) { return CommandLine(program).help(); }
+
+} // namespace rcx

@@ -1,0 +1,135 @@
+// raycache/gpu_buffers.hpp: the host side of RayCache's GPU buffers (raycache/shared/gpu_layout.h), with no
+// graphics API: where each cube's texels lie in a technique's texel buffer (and its pending twin), how big
+// the buffers are, the word they must be filled with, and a C++ cube's texels as GPU words and back.
+//
+// Every texel and pending buffer must hold gpu_clear_word in every 32-bit word before its first frame
+// (vkCmdFillBuffer(cmd, buffer, 0, VK_WHOLE_SIZE, raycache::gpu_clear_word), or fill_gpu_words on mapped
+// memory). Zeros are valid texels, black (CCT; the CDCT's at distance 0): a zero-filled cube answers every
+// lookup with black and refuses every store, without an error.
+#pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raycache/cache_cube.hpp"
+#include "raycache/cdct.hpp"
+#include "raycache/shared/gpu_layout.h"
+
+namespace raycache {
+
+// The 32-bit word that empties texel and pending buffers (an empty texel, larger than every stored word).
+inline constexpr std::uint32_t gpu_clear_word = RAYCACHE_GPU_CLEAR_WORD;
+
+// 32-bit words per texel in GPU buffers: 1 for the CCT (uint), 2 for the CDCT (uvec2: colour, distance).
+template <class Texel>
+inline constexpr std::size_t gpu_words_per_texel = sizeof(typename Texel::Word) / sizeof(std::uint32_t);
+
+// One cube to place in a buffer: its face size and (CDCT; the CCT ignores it) its box.
+struct GpuCubeShape {
+    int face_size = 1;
+    CubeBounds bounds{};
+};
+
+// Cubes of one technique in one texel buffer and its pending twin, one after another.
+struct GpuBufferLayout {
+    std::vector<shared::raycache_gpu_cube> cubes; // a descriptor per cube, in the order given: the shader's cube array
+    std::uint64_t texels = 0;                     // elements of each buffer: the sum of 6 N^2
+    std::uint64_t words = 0;                      // 32-bit words of each buffer
+    std::uint64_t bytes = 0;                      // bytes of each buffer (create both this size, fill with gpu_clear_word)
+};
+
+// Places the cubes: cube k's texels start at element sum_{j<k} 6 N_j^2. Throws std::invalid_argument for a
+// face size outside 1..4096 or more than 2^32 texels in all (a descriptor's first_texel is a uint).
+template <class Texel>
+GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes) {
+    GpuBufferLayout layout;
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+        const GpuCubeShape& s = shapes[k];
+        if (!is_valid_face_size(s.face_size))
+            throw std::invalid_argument("RayCache: GPU cube " + std::to_string(k) + " has face size " +
+                                        std::to_string(s.face_size) + "; it must be 1 to 4096");
+        const std::uint64_t count = shared::raycache_gpu_cube_texel_count(s.face_size);
+        if (layout.texels + count > (std::uint64_t{1} << 32))
+            throw std::invalid_argument("RayCache: GPU cubes 0 to " + std::to_string(k) +
+                                        " hold more than 2^32 texels, past what a descriptor's first_texel addresses");
+        layout.cubes.push_back(shared::raycache_make_gpu_cube(s.bounds.centre, s.bounds.half_size,
+                                                              static_cast<std::uint32_t>(layout.texels), s.face_size));
+        layout.texels += count;
+    }
+    layout.words = layout.texels * gpu_words_per_texel<Texel>;
+    layout.bytes = layout.words * sizeof(std::uint32_t);
+    return layout;
+}
+
+// Sets `count` words to gpu_clear_word (mapped or staging memory of a texel or pending buffer).
+inline void fill_gpu_words(std::uint32_t* words, std::size_t count) noexcept {
+    for (std::size_t i = 0; i < count; ++i) words[i] = gpu_clear_word;
+}
+
+// The contents of one of the layout's buffers before its first frame, ready to upload.
+inline std::vector<std::uint32_t> cleared_gpu_words(const GpuBufferLayout& layout) {
+    return std::vector<std::uint32_t>(static_cast<std::size_t>(layout.words), gpu_clear_word);
+}
+
+namespace detail {
+// Throws unless `at` describes `cube` and its texels fit in `word_count` words.
+template <class Texel>
+void check_gpu_cube(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::size_t word_count) {
+    if (at.face_size != cube.face_size())
+        throw std::invalid_argument("RayCache: a GPU cube of face size " + std::to_string(at.face_size) +
+                                    " cannot hold a cube of face size " + std::to_string(cube.face_size()));
+    const std::uint64_t end = (std::uint64_t{at.first_texel} + cube.texel_count()) * gpu_words_per_texel<Texel>;
+    if (end > word_count)
+        throw std::invalid_argument("RayCache: a GPU cube ending at word " + std::to_string(end) + " does not fit in " +
+                                    std::to_string(word_count) + " words");
+}
+} // namespace detail
+
+// Writes the texels of `cube` (visible or written this frame; empty ones as gpu_clear_word) into `words`, a
+// texel buffer's contents of `word_count` 32-bit words, where descriptor `at` places them. A CDCT texel is two
+// words, colour then distance (GLSL's uvec2). Throws std::invalid_argument when `at` has another face size
+// or the cube does not fit.
+template <class Texel>
+void write_gpu_words(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::uint32_t* words,
+                     std::size_t word_count) {
+    detail::check_gpu_cube(cube, at, word_count);
+    constexpr std::size_t per_texel = gpu_words_per_texel<Texel>;
+    const int n = cube.face_size();
+    std::size_t i = static_cast<std::size_t>(at.first_texel) * per_texel;
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column, i += per_texel) {
+                const typename Texel::Word word = cube.load_word(TexelAddress{face, column, row});
+                for (std::size_t k = 0; k < per_texel; ++k)
+                    words[i + k] = Texel::is_valid(word) ? static_cast<std::uint32_t>(word >> (32 * k)) : gpu_clear_word;
+            }
+}
+
+// Stores every valid texel found in `words` where descriptor `at` places them into the same texel of `cube`
+// (store_word_at: visible after the cube's next begin_frame(); texels the cube already holds are kept).
+// Returns how many words were valid. Throws as write_gpu_words.
+template <class Texel>
+std::size_t read_gpu_words(CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, const std::uint32_t* words,
+                           std::size_t word_count) {
+    detail::check_gpu_cube(cube, at, word_count);
+    constexpr std::size_t per_texel = gpu_words_per_texel<Texel>;
+    const int n = cube.face_size();
+    std::size_t valid = 0, i = static_cast<std::size_t>(at.first_texel) * per_texel;
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column, i += per_texel) {
+                typename Texel::Word word = 0;
+                for (std::size_t k = 0; k < per_texel; ++k) word |= typename Texel::Word{words[i + k]} << (32 * k);
+                if (!Texel::is_valid(word)) continue;
+                cube.store_word_at(TexelAddress{face, column, row}, word);
+                ++valid;
+            }
+    return valid;
+}
+
+} // namespace raycache

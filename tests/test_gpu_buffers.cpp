@@ -1,0 +1,156 @@
+// raycache/gpu_buffers.hpp: buffer sizes and cube offsets, the fill word, and cubes to GPU words and back,
+// against values worked out by hand:
+// - 6 N^2 texels a cube: N = 1, 2, 16 hold 6, 24 and 1536, so they start at elements 0, 6 and 30 and the
+//   buffer holds 1566 elements: 6264 bytes of CCT words (4 bytes), 12528 of CDCT words (8 bytes).
+// - Direction (0, 0, 1) lies on face +Z (4), sc = x = 0, tc = -y = 0, so tu = tv = 0.5 and, for N = 2,
+//   column = row = floor(0.5 * 2) = 1: linear index (4 * 2 + 1) * 2 + 1 = 19.
+// - RGB9E5 of (1, 0, 0): brightest 1 = 2^0, shared exponent 0 + 16 = 16 (bits 27..31), step 2^(16 - 24) =
+//   2^-8, red mantissa 1 / 2^-8 = 256: 16 << 27 | 256 = 0x80000100. Distance 2.5 = 1.25 * 2^1 as float
+//   bits: sign 0, exponent 128, mantissa 0.25 * 2^23: 0x40200000.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "raycache/raycache.hpp"
+
+using namespace raycache;
+
+namespace {
+
+const std::vector<GpuCubeShape> three_cubes = {{1, CubeBounds{glm::vec3(1.0f, 2.0f, 3.0f), 0.5f}}, {2, CubeBounds{}}, {16, CubeBounds{}}};
+
+constexpr std::uint32_t red = 0x80000100u;      // RGB9E5 of (1, 0, 0)
+constexpr std::uint32_t two_and_a_half = 0x40200000u; // float bits of 2.5
+constexpr std::uint32_t sentinel = 0x12345678u; // words outside a cube's range must keep it
+
+} // namespace
+
+TEST_CASE("gpu_buffer_layout places cubes one after another, 6 N^2 texels each, with 4- or 8-byte words") {
+    const GpuBufferLayout cct = gpu_buffer_layout<CctTexel>(three_cubes);
+    REQUIRE(cct.cubes.size() == 3);
+    CHECK(cct.cubes[0].first_texel == 0u);
+    CHECK(cct.cubes[1].first_texel == 6u);
+    CHECK(cct.cubes[2].first_texel == 30u);
+    CHECK(cct.cubes[2].face_size == 16);
+    CHECK(cct.texels == 1566u);
+    CHECK(cct.words == 1566u);
+    CHECK(cct.bytes == 6264u);
+    // The box travels into the descriptor (the CDCT's searches read it); padding is zero.
+    CHECK(cct.cubes[0].centre == glm::vec3(1.0f, 2.0f, 3.0f));
+    CHECK(cct.cubes[0].half_size == 0.5f);
+    CHECK(cct.cubes[0].reserved0 == 0u);
+    CHECK(cct.cubes[0].reserved1 == 0u);
+
+    const GpuBufferLayout cdct = gpu_buffer_layout<CdctTexel>(three_cubes);
+    CHECK(cdct.cubes[2].first_texel == 30u); // elements, not words: a uvec2 is one element
+    CHECK(cdct.texels == 1566u);
+    CHECK(cdct.words == 3132u);
+    CHECK(cdct.bytes == 12528u);
+    CHECK(gpu_buffer_layout<CctTexel>({}).bytes == 0u);
+}
+
+TEST_CASE("gpu_buffer_layout refuses face sizes outside 1..4096 and more texels than a uint addresses") {
+    CHECK_THROWS_WITH_AS(gpu_buffer_layout<CctTexel>({{4, {}}, {0, {}}}), doctest::Contains("GPU cube 1 has face size 0"),
+                         std::invalid_argument);
+    CHECK_THROWS_AS(gpu_buffer_layout<CctTexel>({{4097, {}}}), std::invalid_argument);
+    // 6 * 4096^2 = 100,663,296 texels a cube: 42 cubes hold 4,227,858,432 < 2^32 = 4,294,967,296; 43 do not.
+    const std::vector<GpuCubeShape> largest(42, GpuCubeShape{4096, {}});
+    const GpuBufferLayout fits = gpu_buffer_layout<CctTexel>(largest);
+    CHECK(fits.texels == 4227858432u);
+    CHECK(fits.cubes.back().first_texel == 4127195136u);
+    std::vector<GpuCubeShape> too_many = largest;
+    too_many.push_back({4096, {}});
+    CHECK_THROWS_WITH_AS(gpu_buffer_layout<CctTexel>(too_many), doctest::Contains("2^32"), std::invalid_argument);
+}
+
+TEST_CASE("the fill word reads as an empty texel in both techniques, and zeros read as valid black texels") {
+    const GpuBufferLayout layout = gpu_buffer_layout<CdctTexel>(three_cubes);
+    const std::vector<std::uint32_t> words = cleared_gpu_words(layout);
+    REQUIRE(words.size() == 3132u);
+    for (std::uint32_t w : words) REQUIRE(w == 0xFFFFFFFFu);
+    std::vector<std::uint32_t> filled(5, 0u);
+    fill_gpu_words(filled.data(), 4);
+    CHECK(filled == std::vector<std::uint32_t>{0xFFFFFFFFu, 0xFFFFFFFFu, 0xFFFFFFFFu, 0xFFFFFFFFu, 0u});
+
+    // The CCT marks empty texels with the all-ones word; a CDCT pair of all-ones words has a distance with
+    // its sign bit set (a negative NaN), which no store writes.
+    CHECK_FALSE(CctTexel::is_valid(gpu_clear_word));
+    CHECK_FALSE(CdctTexel::is_valid(std::uint64_t{gpu_clear_word} << 32 | gpu_clear_word));
+    // Why the fill cannot be skipped: zero is RGB9E5 black, and the CDCT's zero pair black at distance 0.
+    CHECK(CctTexel::is_valid(0u));
+    CHECK(CctTexel::decode(0u) == glm::vec3(0.0f));
+    CHECK(CdctTexel::is_valid(0u));
+    CHECK(CdctTexel::decode(0u).distance == 0.0f);
+}
+
+TEST_CASE("write_gpu_words puts a CCT cube's texels at its descriptor's place, empty ones as the fill word") {
+    CctCube cube(2);
+    REQUIRE(cube.store(glm::vec3(0.0f, 0.0f, 1.0f), glm::vec3(1.0f, 0.0f, 0.0f))); // written this frame: still written
+    const GpuBufferLayout layout = gpu_buffer_layout<CctTexel>(three_cubes);
+    std::vector<std::uint32_t> words(layout.words, sentinel);
+    write_gpu_words(cube, layout.cubes[1], words.data(), words.size());
+    for (std::size_t i = 0; i < words.size(); ++i) {
+        CAPTURE(i);
+        if (i < 6 || i >= 30)
+            CHECK(words[i] == sentinel); // other cubes' words untouched
+        else
+            CHECK(words[i] == (i == 6 + 19 ? red : 0xFFFFFFFFu));
+    }
+}
+
+TEST_CASE("write_gpu_words writes a CDCT texel as two words, colour then distance, and read_gpu_words reads it back") {
+    CdctCube cube(2);
+    REQUIRE(cube.store(glm::vec3(0.0f, 0.0f, 1.0f), DepthSample{glm::vec3(1.0f, 0.0f, 0.0f), 2.5f}));
+    const GpuBufferLayout layout = gpu_buffer_layout<CdctTexel>(three_cubes);
+    std::vector<std::uint32_t> words(layout.words, sentinel);
+    write_gpu_words(cube, layout.cubes[1], words.data(), words.size());
+    for (std::size_t i = 0; i < words.size(); ++i) {
+        CAPTURE(i);
+        if (i < 12 || i >= 60)
+            CHECK(words[i] == sentinel);
+        else if (i == 2 * (6 + 19))
+            CHECK(words[i] == red);
+        else if (i == 2 * (6 + 19) + 1)
+            CHECK(words[i] == two_and_a_half);
+        else
+            CHECK(words[i] == 0xFFFFFFFFu);
+    }
+
+    CdctCube back(2);
+    CHECK(read_gpu_words(back, layout.cubes[1], words.data(), words.size()) == 1u);
+    CHECK_FALSE(back.lookup(glm::vec3(0.0f, 0.0f, 1.0f))); // stored, visible next frame
+    back.begin_frame();
+    const std::optional<DepthSample> texel = back.lookup(glm::vec3(0.0f, 0.0f, 1.0f));
+    REQUIRE(texel);
+    CHECK(texel->color == glm::vec3(1.0f, 0.0f, 0.0f));
+    CHECK(texel->distance == 2.5f);
+    CHECK(back.valid_texels() == 1u);
+}
+
+TEST_CASE("read_gpu_words of a CCT buffer stores every valid word and skips fill words") {
+    const GpuBufferLayout layout = gpu_buffer_layout<CctTexel>(three_cubes);
+    std::vector<std::uint32_t> words = cleared_gpu_words(layout);
+    words[6 + 19] = red;
+    words[6 + 0] = 0u; // black: a valid word
+    CctCube cube(2);
+    CHECK(read_gpu_words(cube, layout.cubes[1], words.data(), words.size()) == 2u);
+    cube.begin_frame();
+    CHECK(cube.lookup(glm::vec3(0.0f, 0.0f, 1.0f)) == glm::vec3(1.0f, 0.0f, 0.0f));
+    CHECK(cube.load({0, 0, 0}) == glm::vec3(0.0f));
+    CHECK(cube.valid_texels() == 2u);
+}
+
+TEST_CASE("write_gpu_words and read_gpu_words refuse a descriptor of another face size or past the buffer's end") {
+    CctCube cube(2);
+    const GpuBufferLayout layout = gpu_buffer_layout<CctTexel>(three_cubes);
+    std::vector<std::uint32_t> words = cleared_gpu_words(layout);
+    CHECK_THROWS_WITH_AS(write_gpu_words(cube, layout.cubes[2], words.data(), words.size()),
+                         doctest::Contains("face size 16"), std::invalid_argument);
+    CHECK_THROWS_AS(read_gpu_words(cube, layout.cubes[0], words.data(), words.size()), std::invalid_argument);
+    // Cube 1 ends at element 30: 29 words are one short.
+    CHECK_THROWS_WITH_AS(write_gpu_words(cube, layout.cubes[1], words.data(), 29), doctest::Contains("does not fit"),
+                         std::invalid_argument);
+    CHECK_NOTHROW(write_gpu_words(cube, layout.cubes[1], words.data(), 30));
+}

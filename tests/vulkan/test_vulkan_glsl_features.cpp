@@ -1,0 +1,95 @@
+// What a shader that includes RayCache's GLSL asks of the device: a CCT-only shader through
+// raycache/raycache.glsl declares no 64-bit capability, is created on lavapipe without shaderInt64 with no
+// validation error, and behaves on buffers filled as raycache/gpu_buffers.hpp fills them (and shows, on
+// zero-filled ones, the trap that fill avoids).
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <raycache/raycache.hpp>
+
+#include "vulkan_test.hpp"
+
+namespace {
+
+// SPIR-V's OpCapability operands present in a module (the SPIR-V specification: a 5-word header, then
+// instructions whose first word is word count << 16 | opcode; OpCapability is opcode 17).
+std::set<std::uint32_t> capabilities_of(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    REQUIRE_MESSAGE(file, "cannot read " << path);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() % 4 == 0);
+    std::vector<std::uint32_t> words(bytes.size() / 4);
+    std::memcpy(words.data(), bytes.data(), bytes.size());
+    REQUIRE(words.size() > 5);
+    REQUIRE(words[0] == 0x07230203u); // the SPIR-V magic number
+    std::set<std::uint32_t> found;
+    for (std::size_t i = 5; i < words.size();) {
+        const std::uint32_t count = words[i] >> 16, opcode = words[i] & 0xFFFFu;
+        REQUIRE(count > 0);
+        if (opcode == 17 && i + 1 < words.size()) found.insert(words[i + 1]);
+        i += count;
+    }
+    return found;
+}
+
+constexpr std::uint32_t capability_shader = 1, capability_int64 = 11, capability_int64_atomics = 12;
+
+} // namespace
+
+TEST_CASE("a CCT-only shader through raycache.glsl declares no 64-bit capability, and one asking for the CDCT declares Int64") {
+    const std::set<std::uint32_t> cct_only = capabilities_of(rcx_test::spirv("cct_only"));
+    CHECK(cct_only.count(capability_shader) == 1);
+    CHECK(cct_only.count(capability_int64) == 0);
+    CHECK(cct_only.count(capability_int64_atomics) == 0);
+    const std::set<std::uint32_t> with_cdct = capabilities_of(rcx_test::spirv("with_cdct"));
+    CHECK(with_cdct.count(capability_int64) == 1);
+    CHECK(with_cdct.count(capability_int64_atomics) == 1);
+}
+
+TEST_CASE("a CCT-only shader runs without shaderInt64 and no validation error: filled buffers miss and store, "
+          "zero-filled ones hit black and store nothing") {
+    if (!rcx_test::context()) return; // no Vulkan device: skipped
+    rcx::vk::ContextOptions options;
+    options.enable_int64 = false;
+    rcx::vk::Context vk(options);
+    REQUIRE_MESSAGE(vk.validation_enabled(), "this test needs VK_LAYER_KHRONOS_validation to mean anything");
+    REQUIRE_FALSE(vk.int64_atomics());
+    const std::uint64_t errors_before = vk.validation_errors();
+
+    rcx::vk::ComputePipeline pipeline(vk, rcx_test::spirv("cct_only"),
+                                      std::vector<VkDescriptorType>(3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+                                      sizeof(raycache::shared::raycache_gpu_cube));
+    const raycache::GpuBufferLayout layout = raycache::gpu_buffer_layout<raycache::CctTexel>({{4, {}}});
+    rcx::vk::Buffer texels = rcx_test::buffer_of(vk, raycache::cleared_gpu_words(layout));
+    rcx::vk::Buffer pending = rcx_test::buffer_of(vk, raycache::cleared_gpu_words(layout));
+    rcx::vk::Buffer results(vk, 6 * 8);
+    auto run = [&] {
+        vk.dispatch(pipeline, {texels, pending, results}, &layout.cubes[0], sizeof(layout.cubes[0]), 1);
+        std::vector<std::uint32_t> r(results.as<std::uint32_t>(), results.as<std::uint32_t>() + 12);
+        return r;
+    };
+
+    const std::vector<std::uint32_t> filled = run();
+    for (int i = 0; i < 6; ++i) {
+        CAPTURE(i);
+        CHECK(filled[2 * i] == 0u);     // a miss
+        CHECK(filled[2 * i + 1] == 1u); // and a store
+    }
+    texels.fill(0u);
+    pending.fill(0u);
+    const std::vector<std::uint32_t> zeros = run();
+    for (int i = 0; i < 6; ++i) {
+        CAPTURE(i);
+        CHECK(zeros[2 * i] == 1u);     // black, from nothing
+        CHECK(zeros[2 * i + 1] == 0u); // and nothing stored
+    }
+    CHECK(vk.validation_errors() == errors_before);
+}
