@@ -326,9 +326,10 @@ public:
                         std::min(face_size_, (tile_column + 1) * tile_edge), std::min(face_size_, (tile_row + 1) * tile_edge),
                         tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
                         tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
-            for (int slot = 0; slot < tile_texels; ++slot)
-                t.unrecorded_texels += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) &&
-                                       !((tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u);
+            // Recorded bits are set only on texels holding a value (and cleared when one is emptied).
+            int recorded = 0;
+            for (const auto& bits : tile->recorded_bits) recorded += popcount(bits.load(std::memory_order_relaxed));
+            t.unrecorded_texels = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) - recorded;
             // record_path() widens all three axes at once, so one axis tells whether the box is empty.
             if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
                 for (int k = 0; k < 3; ++k) {
@@ -499,8 +500,10 @@ public:
         Tile* tile = tile_of(texel);
         if (!tile) return;
         const int slot = slot_of(texel);
-        if (Texel::is_valid(tile->texels[slot].exchange(Texel::invalid, std::memory_order_relaxed)))
+        if (Texel::is_valid(tile->texels[slot].exchange(Texel::invalid, std::memory_order_relaxed))) {
             state_->valid_texels.fetch_sub(1, std::memory_order_relaxed);
+            tile->valid.fetch_sub(1, std::memory_order_relaxed);
+        }
         const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
         if (tile->doubtful_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed) & bit)
             state_->doubtful_texels.fetch_sub(1, std::memory_order_relaxed);
@@ -660,6 +663,7 @@ private:
         std::atomic<std::uint64_t> path_objects{0};
         std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
         std::atomic<std::uint32_t> path_flags{0};
+        std::atomic<std::uint32_t> valid{0}; // texels holding a value (so passes over tiles need not read them)
     };
 
     struct State {
@@ -736,6 +740,12 @@ private:
         state_->allocated_tiles.store(0, std::memory_order_relaxed);
     }
 
+    static int popcount(std::uint64_t bits) noexcept {
+        int n = 0;
+        for (; bits; bits &= bits - 1) ++n;
+        return n;
+    }
+
     static bool written(const Tile& tile, int slot) noexcept {
         return (tile.written_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
     }
@@ -771,13 +781,9 @@ private:
             if (any_written)
                 for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
             if (tile->stale.load(std::memory_order_relaxed)) {
-                std::int64_t valid = 0;
                 std::size_t doubtful_count = 0;
-                for (int slot = 0; slot < tile_texels; ++slot) {
-                    valid += Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed));
-                    doubtful_count += doubtful(*tile, slot);
-                }
-                state_->valid_texels.fetch_sub(valid, std::memory_order_relaxed);
+                for (const auto& bits : tile->doubtful_bits) doubtful_count += static_cast<std::size_t>(popcount(bits.load(std::memory_order_relaxed)));
+                state_->valid_texels.fetch_sub(tile->valid.load(std::memory_order_relaxed), std::memory_order_relaxed);
                 state_->doubtful_texels.fetch_sub(doubtful_count, std::memory_order_relaxed);
                 state_->tiles[i].store(nullptr, std::memory_order_relaxed);
                 delete tile;
@@ -878,7 +884,10 @@ private:
         for (;;) {
             if (Texel::is_valid(old) && !(word < old)) return refuse(); // same frame: the smaller word wins
             if (texel.compare_exchange_weak(old, word, std::memory_order_acq_rel, std::memory_order_acquire)) {
-                if (!Texel::is_valid(old)) state_->valid_texels.fetch_add(1, std::memory_order_relaxed);
+                if (!Texel::is_valid(old)) {
+                    state_->valid_texels.fetch_add(1, std::memory_order_relaxed);
+                    tile->valid.fetch_add(1, std::memory_order_relaxed);
+                }
                 state_->counters.add(stores);
                 return true;
             }
