@@ -28,6 +28,10 @@ TEST_CASE("the frame buffer holds a header, four counters a cube and the store l
     CHECK(gpu_frame_list_capacity(3, 1000, 480) == 100u);
     CHECK(gpu_frame_list_capacity(3, 40, 480) == 40u);
     CHECK(gpu_frame_list_capacity(3, 1000, 60) == 0u);
+    // One dimension of 65535 groups of 256 covers 16,776,960 entries: no longer list.
+    CHECK(gpu_frame_list_capacity(3, 1ull << 30, 1ull << 32) == 16776960u);
+    CHECK_NOTHROW(gpu_frame_layout(3, 16776960u));
+    CHECK_THROWS_AS(gpu_frame_layout(3, 16776961u), std::invalid_argument);
 }
 
 TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1} and zero the counters") {

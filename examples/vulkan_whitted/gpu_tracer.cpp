@@ -593,7 +593,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         throw std::invalid_argument("Vulkan tracer: --face-size must be 1.." + std::to_string(RAYCACHE_MAX_FACE_SIZE));
     // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage buffer
     // (lavapipe: 128 MiB): raycache::fit_gpu_face_sizes lowers the faces to the largest size that fits, leaving
-    // room for the frame buffer's counters, so that its store list can hold every texel (no overflow).
+    // room for the frame buffer's counters, so that its store list can hold every texel (up to 16,776,960).
     const std::uint64_t word_bytes = t.cdct ? 8 : 4;
     const std::uint64_t range = context.properties().limits.maxStorageBufferRange;
     const std::uint32_t cached = caching ? static_cast<std::uint32_t>(scene.cached_object_count()) : 0u;
@@ -766,8 +766,11 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         end_ms = ms_since(start);
     }
     const raycache::GpuFrameStatistics gpu_stats = raycache::read_gpu_statistics(t.frame->as<std::uint32_t>(), t.frame_layout);
-    if (gpu_stats.overflow > 0) // the list holds every texel (see the constructor): cannot happen
-        throw std::logic_error("Vulkan tracer: RayCache's store list overflowed");
+    // The list holds every texel, or 16,776,960 of them for larger cubes: more stores in one frame would need
+    // the library's sweep, which this tracer does not run.
+    if (gpu_stats.overflow > 0)
+        throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
+                                 std::to_string(t.frame_layout.list_capacity) + ")");
 
     Image image(width, height);
     const float* out = t.output->as<float>();

@@ -20,11 +20,7 @@
 #include "raycache/shared/gpu_layout.h"
 #include "raycache/shared/ray_box.h"
 
-#ifndef RAYCACHE_SET
-#define RAYCACHE_SET 0
-#endif
-
-#include "raycache/frame.glsl"
+#include "raycache/frame.glsl" /* RAYCACHE_SET defaults to 0 in raycache/shared/gpu_layout.h */
 
 #if defined(RAYCACHE_READ_ONLY) && defined(RAYCACHE_END_FRAME)
 #error "RayCache: RAYCACHE_READ_ONLY and RAYCACHE_END_FRAME exclude each other"

@@ -36,17 +36,15 @@ void raycache_end_frame_entry(uint entry) {
     }
 }
 
-/* The pass's body, for a 1D dispatch of any number of groups: invocation g handles entries g, g + G, ...
- * (G: invocations dispatched) of the listed min(count, capacity). */
+/* The pass's body, for a 1D dispatch of raycache_end_frame_groups(listed) groups: invocation k publishes
+ * entry k. No loop: on lavapipe a grid-stride loop here made the pass about 50 times slower, so the list
+ * holds at most RAYCACHE_END_FRAME_MAX_ENTRIES (the host's capacity is capped there). */
 void raycache_end_frame_pass() {
     uint listed = min(raycache_frame[RAYCACHE_FRAME_LIST_COUNT], raycache_frame[RAYCACHE_FRAME_LIST_CAPACITY]);
-    uint cube_count = raycache_frame[RAYCACHE_FRAME_CUBE_COUNT];
-    uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    for (uint k = gl_GlobalInvocationID.x; k < listed; k += stride) {
-        uint word = raycache_frame_list_word(cube_count, k);
-        if (word >= uint(raycache_frame.length())) return;
-        raycache_end_frame_entry(raycache_frame[word]);
-    }
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= listed) return;
+    uint word = raycache_frame_list_word(raycache_frame[RAYCACHE_FRAME_CUBE_COUNT], k);
+    if (word < uint(raycache_frame.length())) raycache_end_frame_entry(raycache_frame[word]);
 }
 #endif
 

@@ -50,8 +50,9 @@ struct GpuFrameLayout {
 
 // Each texel is listed at most once a frame, so a capacity of the texel count (of both techniques' buffers
 // together) never overflows; a smaller one saves memory, and a frame that stores more texels overflows
-// (read_gpu_statistics tells: run the sweep). Throws std::invalid_argument when the buffer would pass
-// `max_bytes` (the device's maxStorageBufferRange) or 2^32 words.
+// (read_gpu_statistics tells: run the sweep). Throws std::invalid_argument when the capacity passes
+// RAYCACHE_END_FRAME_MAX_ENTRIES (16,776,960: what one dimension of groups covers) or the buffer would pass
+// `max_bytes` (the device's maxStorageBufferRange).
 inline GpuFrameLayout gpu_frame_layout(std::uint32_t cube_count, std::uint32_t list_capacity,
                                        std::uint64_t max_bytes = ~std::uint64_t{0}) {
     GpuFrameLayout f;
@@ -60,19 +61,19 @@ inline GpuFrameLayout gpu_frame_layout(std::uint32_t cube_count, std::uint32_t l
     f.words = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cube_count} * RAYCACHE_FRAME_CUBE_WORDS + list_capacity;
     f.bytes = f.words * 4;
     f.start_bytes = (f.words - list_capacity) * 4;
-    if (f.words > 0xFFFFFFFFull || f.bytes > max_bytes)
+    if (list_capacity > RAYCACHE_END_FRAME_MAX_ENTRIES || f.bytes > max_bytes)
         throw std::invalid_argument("RayCache: a frame buffer for " + std::to_string(cube_count) + " cubes and " +
                                     std::to_string(list_capacity) + " list entries needs " + std::to_string(f.bytes) +
                                     " bytes, more than " + std::to_string(max_bytes));
     return f;
 }
 
-// The largest list capacity that keeps the frame buffer within `max_bytes` for `cube_count` cubes, and no
-// larger than `texels` (more could never be used). 0 when not even the counters fit.
+// The largest list capacity that keeps the frame buffer within `max_bytes` for `cube_count` cubes, no larger
+// than `texels` (more could never be used) nor RAYCACHE_END_FRAME_MAX_ENTRIES. 0 when not even the counters fit.
 inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint64_t texels, std::uint64_t max_bytes) {
     const std::uint64_t fixed = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cube_count} * RAYCACHE_FRAME_CUBE_WORDS;
     const std::uint64_t room = max_bytes / 4 > fixed ? max_bytes / 4 - fixed : 0;
-    return static_cast<std::uint32_t>(std::min<std::uint64_t>({room, texels, 0xFFFFFFFFull - fixed}));
+    return static_cast<std::uint32_t>(std::min<std::uint64_t>({room, texels, RAYCACHE_END_FRAME_MAX_ENTRIES}));
 }
 
 // The frame buffer's first start_bytes before a frame: header (list empty, capacity, cube count, dispatch

@@ -40,8 +40,11 @@ namespace shared {
 /* The 32-bit word that empties texel and pending buffers. */
 #define RAYCACHE_GPU_CLEAR_WORD 0xFFFFFFFFu
 
-/* Binding numbers of RayCache's buffers (in set RAYCACHE_SET); define any of them before the first include
+/* Descriptor set and binding numbers of RayCache's buffers; define any of them before the first include
  * (GLSL, and C++ where the host must agree) to move it. */
+#ifndef RAYCACHE_SET
+#define RAYCACHE_SET 0
+#endif
 #ifndef RAYCACHE_CCT_BINDING
 #define RAYCACHE_CCT_BINDING 0
 #endif
@@ -73,10 +76,11 @@ namespace shared {
 #define RAYCACHE_FRAME_CUBE_WORDS 4u
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
 #define RAYCACHE_FRAME_CDCT_ENTRY 0x80000000u
-/* The end-of-frame pass: invocations per group, and at most this many groups (a grid-stride loop
- * covers longer lists). */
+/* The end-of-frame pass: invocations per group, at most this many groups (one dimension), so a store list
+ * of at most this many entries (a longer frame overflows: sweep). */
 #define RAYCACHE_END_FRAME_GROUP_SIZE 256u
 #define RAYCACHE_END_FRAME_MAX_GROUPS 65535u
+#define RAYCACHE_END_FRAME_MAX_ENTRIES (RAYCACHE_END_FRAME_GROUP_SIZE * RAYCACHE_END_FRAME_MAX_GROUPS)
 
 /* Where one cube sits in its buffers and in the world; 32 bytes, the same in C++ and in GLSL std430
  * and std140 (an array of these in a storage or uniform buffer reads the same from both languages). */
