@@ -2,7 +2,8 @@
 """Turns the benchmark outputs in docs/results/ into plots (PNG) and docs/RESULTS.md.
 
 Reads: walkthrough.md and walkthrough_frames.csv when present (raycache_walkthrough_bench: the headline, at
-the top), tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
+the top), table_5_2.md, tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
+rsh_frames.csv and rsh.md when present (raycache_rsh_bench; bench/rsh_results.py makes that section),
 vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench), dynamic.md when present
 (raycache_dynamic_bench) and micro.json
 (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
@@ -18,6 +19,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import rsh_results  # noqa: E402  (bench/rsh_results.py, beside this file)
+
 
 def rows(path):
     with open(path, newline="") as f:
@@ -32,10 +35,10 @@ def micro(path):
     return medians or {r["name"]: r for r in runs if r.get("run_type", "iteration") == "iteration"}
 
 
-def speedup_plot(ax, fig, title, path):
+def speedup_plot(ax, fig, title, path, xlabel="N reflective spheres behind the camera"):
     """The common frame of the speed-up plots: the 1x line, axes, legend, saved as PNG."""
     ax.axhline(1.0, color="lightgray", lw=1)
-    ax.set_xlabel("N reflective spheres behind the camera")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("speed-up over the cache off")
     ax.set_title(title)
     ax.legend(fontsize=7)
@@ -45,17 +48,25 @@ def speedup_plot(ax, fig, title, path):
 
 
 def plot_table_5_2(results, out):
+    """CCT speed-up against N on grid-N and behind-N (ceilings dashed) beside the thesis's Table 5.2."""
     data = rows(os.path.join(results, "table_5_2.csv"))
-    n = [int(r["n"]) for r in data]
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for key, label, style in [("ceiling_speedup", "ceiling (no cache can beat it)", "k--"),
-                              ("cct_speedup", "CCT", "o-"), ("cdct_speedup", "CDCT (filled by rendering)", "s-"),
-                              ("cdct_prefilled_speedup", "CDCT pre-filled", "^-")]:
-        ax.plot(n, [float(r[key]) for r in data], style, label=label)
-    thesis = [(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["thesis_cct_speedup"]]
+    for scene, color in [("grid", "tab:blue"), ("behind", "tab:orange")]:
+        part = [r for r in data if r.get("scene", "behind") == scene]
+        if not part:
+            continue
+        n = [int(r["n"]) for r in part]
+        ax.plot(n, [float(r["cct_speedup"]) for r in part], "o-", color=color, label=f"{scene}-N: CCT")
+        ax.plot(n, [float(r["ceiling_speedup"]) for r in part], "--", color=color, alpha=0.6,
+                label=f"{scene}-N: ceiling (no cache can beat it)")
+    thesis = sorted({(int(r["n"]), float(r["thesis_cct_speedup"])) for r in data if r["thesis_cct_speedup"]})
     if thesis:
-        ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis CCT (Table 5.2)")
-    speedup_plot(ax, fig, "Embree tracer, behind-N, warm caches (Table 5.2)", os.path.join(out, "table_5_2.png"))
+        ax.plot([t[0] for t in thesis], [t[1] for t in thesis], "x:", color="gray", label="thesis CCT (Table 5.2, grid, OptiX)")
+    ax.set_xscale("log", base=2)
+    ax.set_xticks([1, 2, 4, 8, 16, 32])
+    ax.set_xticklabels(["1", "2", "4", "8", "16", "32"])
+    speedup_plot(ax, fig, "Embree tracer, conventional ray tracing, warm caches (Table 5.2)",
+                 os.path.join(out, "table_5_2.png"), "N cached mirror spheres")
 
 
 def plot_table_5_1(results, out):
@@ -145,7 +156,7 @@ def walkthrough_section(results, rel, scenes):
 def targets(results):
     """One line per target of the benchmarks issue: (target, measured, met)."""
     lines = []
-    t52 = {int(r["n"]): r for r in rows(os.path.join(results, "table_5_2.csv"))}
+    t52 = {int(r["n"]): r for r in rows(os.path.join(results, "table_5_2.csv")) if r.get("scene", "behind") == "behind"}
     if 32 in t52:
         r = t52[32]
         s, ceiling_ratio, psnr = float(r["cct_speedup"]), float(r["cct_ms"]) / float(r["ceiling_ms"]), float(r["cct_psnr"])
@@ -212,15 +223,17 @@ def main():
     vulkan = plot_table_5_1(results, results)
     walk_scenes = plot_walkthrough(results, results)
     rel = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
-    with open(os.path.join(results, "tables.md")) as f:
-        tables = f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
+    with open(os.path.join(results, "table_5_2.md")) as f:  # raycache_bench's Table 5.2
+        tables = f.read().replace("`table_5_2.png`", f"![Table 5.2 speed-ups]({rel}/table_5_2.png)") + "\n"
+    with open(os.path.join(results, "tables.md")) as f:  # ... and its other experiments
+        tables += f.read().replace("`figure_5_9.png`", f"![update rate]({rel}/figure_5_9.png)")
     if vulkan:
         with open(os.path.join(results, "vulkan_tables.md")) as f:
             tables += "\n" + f.read() + f"![Vulkan behind-N speed-ups]({rel}/table_5_1.png)\n\n"
     else:
         tables += "\n## Table 5.1: the Vulkan tracer\n\nNot measured in this run (no Vulkan device or no Vulkan build).\n\n"
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 20 minutes on 2 cores). Every speed-up compares renders "
+          "Regenerate everything with `scripts/bench.sh` (about 25 minutes on 2 cores). Every speed-up compares renders "
           "interleaved in one process on the same frames: the walkthrough's are ratios of mean times over a camera path, "
           "the thesis tables' ratios of medians of repeated frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", ""]
@@ -229,10 +242,11 @@ def main():
     if os.path.exists(dynamic):  # raycache_dynamic_bench: invalidation in dynamic scenes
         with open(dynamic) as f:
             md += [f.read().rstrip("\n"), ""]
+    md += rsh_results.section(results, rel)  # raycache_rsh_bench: the ray-space hierarchy
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
-    md += ["", f"![behind-N speed-ups]({rel}/table_5_2.png)", "", tables, "## Micro-benchmarks (Google Benchmark)", "",
+    md += ["", tables, "## Micro-benchmarks (Google Benchmark)", "",
            "One operation on the reflected rays of behind-32's main sphere; CDCT searches on a cube filled by tracing every "
            "texel.", "", micro_table(results)]
     with open(output, "w") as f:

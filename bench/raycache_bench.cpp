@@ -1,13 +1,14 @@
-// raycache_bench: reproduces the thesis's experiments (Tables 5.1-5.3, Figure 5.9, the quality figures) on
-// the Embree Whitted tracer and writes docs/RESULTS.md's tables, CSV files for plotting and the
-// difference images. Every speed-up is a ratio of medians of renders interleaved in this one process
+// raycache_bench: reproduces the thesis's experiments (Tables 5.2-5.3, Figure 5.9, the quality figures) on
+// the Embree Whitted tracer and writes docs/RESULTS.md's tables (table_5_2.md, tables.md), CSV files for
+// plotting and the difference images. Every speed-up is a ratio of medians of renders interleaved in this one process
 // (off, CCT, CDCT, ceiling, off, ...), on the same frames, so machine noise hits all modes alike.
 //
-// Usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST]
+// Usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST] [--size S]
 //   --quick   small images, few rounds: a smoke test that every experiment runs and writes its files
-//   --rounds  interleaved rounds of Table 5.2 (default 5; Table 5.3's 1080p frames always take 3)
+//   --rounds  interleaved rounds of Table 5.2 (default 9; Table 5.3's 1080p frames always take 3)
 //   --only    comma-separated experiments: table_5_2, table_5_3, figure_5_9, quality, memory (default: all)
-//   --ns      comma-separated N for table_5_2 (default 0,1,2,4,8,16,32)
+//   --ns      comma-separated N for table_5_2 (default 1,2,4,8,16,32; grid-N skips 0)
+//   --size    Table 5.2's image side in pixels (default 1024, the thesis's)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -47,8 +49,9 @@ using rcx::bench::Variant;
 namespace {
 
 struct Config : rcx::bench::CommonOptions {
-    Config() { rounds = 5; }
+    Config() { rounds = 9; } // Table 5.2: medians that hold on a shared 2-core machine, in about 4 minutes
     std::string only; // empty: every experiment
+    int size = 0;     // Table 5.2's image side; 0: 1024 (128 with --quick)
     bool wants(const std::string& name) const { return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos; }
 };
 
@@ -75,71 +78,104 @@ void time_interleaved(const rcx::embree::Tracer& tracer, const std::vector<Varia
     for (int r = 0; r < rounds; ++r) rcx::bench::render_round(tracer, variants, camera, width, height, static_cast<std::size_t>(r));
 }
 
-// Table 5.2: conventional ray tracing of behind-N with warm caches.
-void table_5_2(const Config& c, Report& out) {
-    const int size = c.quick ? 128 : 1024, face = c.quick ? 64 : 512;
-    const std::vector<int> ns = !c.ns.empty() ? c.ns : c.quick ? std::vector<int>{0, 32} : std::vector<int>{0, 1, 2, 4, 8, 16, 32};
+// One row of Table 5.2: a scene's speed-ups over the cache off (for the side-by-side table).
+struct Speedups {
+    double cct = 0.0, cdct = 0.0, ceiling = 0.0;
+};
+
+// Table 5.2 on one family of scenes ("grid" or "behind"), N cached mirror spheres each, warm caches: its
+// CSV lines (the family in the first column), its markdown table into `md`, speed-ups by N.
+std::map<int, Speedups> table_5_2_family(const Config& c, const Report& out, std::ostream& csv, std::ostream& md,
+                                         const std::string& family, const std::vector<int>& ns, int size, int face) {
     const std::map<int, double> thesis = {{1, 1.02}, {2, 1.07}, {4, 1.15}, {8, 1.32}, {16, 1.95}, {32, 2.68}};
-    std::ofstream csv = out.csv("table_5_2.csv",
-                                "n,off_ms,cct_ms,cdct_ms,ceiling_ms,cct_speedup,cdct_speedup,ceiling_speedup,"
-                                "cct_psnr,cdct_psnr,cct_hit_rate,cdct_hit_rate,cdct_texels_per_lookup,thesis_cct_speedup,"
-                                "cdct_prefilled_ms,cdct_prefilled_speedup,cdct_prefilled_psnr,cdct_prefilled_hit_rate,"
-                                "cdct_prefilled_texels_per_lookup");
-    out.md << "## Table 5.2: conventional ray tracing, behind-N\n\n"
-           << size << "x" << size << " pixels, " << face << "-texel faces, every reflective sphere cached, warm caches "
-           << "(filled by rendering the same view first), recursion depth 5. Speed-up = median ms with the cache "
-           << "off / median ms of the technique, " << c.rounds << " interleaved rounds. Ceiling: every cached "
-           << "secondary ray answered by a constant (no cache can be faster). PSNR against the uncached frame.\n\n"
-           << "CDCT: pyramid search, max_gap 0.5, caches filled by rendering the view twice (as the thesis); "
-           << "CDCT pre: the same, pre-filled first (Tracer::prefill). Hit rates in `table_5_2.csv`.\n\n"
-           << "| N | off ms | CCT ms | CDCT ms | CDCT pre ms | ceiling ms | CCT speed-up | CDCT speed-up | "
-              "CDCT pre speed-up | ceiling | CCT ms / ceiling ms | CCT PSNR dB | CDCT PSNR dB | CDCT pre PSNR dB | "
-              "CDCT texels/lookup | CDCT pre texels/lookup | thesis CCT |\n"
-           << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    std::map<int, Speedups> result;
+    md << "| N | off ms | CCT ms | CDCT ms | ceiling ms | CCT speed-up | CDCT speed-up | "
+          "ceiling | CCT ms / ceiling ms | CCT PSNR dB | CDCT PSNR dB | CDCT texels/lookup | thesis CCT |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (int n : ns) {
-        progress("Table 5.2: behind-" + std::to_string(n));
-        const rcx::Scene scene = rcx::make_scene("behind-" + std::to_string(n));
+        const std::string name = family + "-" + std::to_string(n);
+        progress("Table 5.2: " + name);
+        const rcx::Scene scene = rcx::make_scene(name);
         rcx::embree::Tracer tracer(scene);
         Variant off = make_variant(tracer, "off", CacheMode::off, face);
         Variant cct = make_variant(tracer, "cct", CacheMode::cct, face);
         Variant cdct = make_variant(tracer, "cdct", CacheMode::cdct, face, our_relief);
-        Variant cdct_prefilled = make_variant(tracer, "cdct prefilled", CacheMode::cdct, face,
-                                              our_relief, true, true);
         Variant ceiling = make_variant(tracer, "ceiling", CacheMode::ceiling, face);
         const rcx::Camera camera = scene.camera_at(0);
         for (int warm = 0; warm < 2; ++warm) {
             render(tracer, cct, camera, size, size);
             render(tracer, cdct, camera, size, size);
-            render(tracer, cdct_prefilled, camera, size, size);
         }
-        time_interleaved(tracer, {&off, &cct, &cdct, &cdct_prefilled, &ceiling}, camera, size, size, c.rounds);
+        time_interleaved(tracer, {&off, &cct, &cdct, &ceiling}, camera, size, size, c.rounds);
         const double off_ms = median(off.ms), cct_ms = median(cct.ms), cdct_ms = median(cdct.ms), ceil_ms = median(ceiling.ms);
-        const double pre_ms = median(cdct_prefilled.ms);
         const double cct_psnr = rcx::compare(off.last, cct.last).psnr_db, cdct_psnr = rcx::compare(off.last, cdct.last).psnr_db;
-        const double pre_psnr = rcx::compare(off.last, cdct_prefilled.last).psnr_db;
         const double tpl = cdct.lookups ? double(cdct.texels_read) / cdct.lookups : 0.0;
-        const double pre_tpl = cdct_prefilled.lookups ? double(cdct_prefilled.texels_read) / cdct_prefilled.lookups : 0.0;
+        result[n] = {off_ms / cct_ms, off_ms / cdct_ms, off_ms / ceil_ms};
         const auto t = thesis.find(n);
-        csv << n << "," << off_ms << "," << cct_ms << "," << cdct_ms << "," << ceil_ms << "," << off_ms / cct_ms << ","
+        csv << family << "," << n << "," << off_ms << "," << cct_ms << "," << cdct_ms << "," << ceil_ms << "," << off_ms / cct_ms << ","
             << off_ms / cdct_ms << "," << off_ms / ceil_ms << "," << cct_psnr << "," << cdct_psnr << ","
             << cct.last_stats.hit_rate() << "," << cdct.last_stats.hit_rate() << "," << tpl << ","
-            << (t == thesis.end() ? std::string("") : fmt(t->second)) << "," << pre_ms << "," << off_ms / pre_ms << ","
-            << pre_psnr << "," << cdct_prefilled.last_stats.hit_rate() << "," << pre_tpl << "\n";
-        out.md << "| " << n << " | " << fmt(off_ms, 1) << " | " << fmt(cct_ms, 1) << " | " << fmt(cdct_ms, 1) << " | "
-               << fmt(pre_ms, 1) << " | " << fmt(ceil_ms, 1) << " | " << fmt(off_ms / cct_ms) << "x | "
-               << fmt(off_ms / cdct_ms) << "x | " << fmt(off_ms / pre_ms) << "x | " << fmt(off_ms / ceil_ms) << "x | "
-               << fmt(cct_ms / ceil_ms) << " | " << fmt(cct_psnr, 1) << " | " << fmt(cdct_psnr, 1) << " | "
-               << fmt(pre_psnr, 1) << " | " << fmt(tpl, 1) << " | " << fmt(pre_tpl, 1) << " | "
-               << (t == thesis.end() ? std::string("-") : fmt(t->second) + "x") << " |\n";
+            << (t == thesis.end() ? std::string("") : fmt(t->second)) << "\n";
+        md << "| " << n << " | " << fmt(off_ms, 1) << " | " << fmt(cct_ms, 1) << " | " << fmt(cdct_ms, 1) << " | "
+           << fmt(ceil_ms, 1) << " | " << fmt(off_ms / cct_ms) << "x | " << fmt(off_ms / cdct_ms) << "x | "
+           << fmt(off_ms / ceil_ms) << "x | " << fmt(cct_ms / ceil_ms) << " | " << fmt(cct_psnr, 1) << " | "
+           << fmt(cdct_psnr, 1) << " | " << fmt(tpl, 1) << " | "
+           << (t == thesis.end() ? std::string("-") : fmt(t->second) + "x") << " |\n";
         if (n == ns.back()) {
-            out.png("behind-" + std::to_string(n) + "_off.png", off.last);
-            out.png("behind-" + std::to_string(n) + "_cct.png", cct.last);
-            out.png("behind-" + std::to_string(n) + "_cct_diff.png", rcx::difference_image(off.last, cct.last));
-            out.png("behind-" + std::to_string(n) + "_cdct_diff.png", rcx::difference_image(off.last, cdct.last));
+            out.png(name + "_off.png", off.last);
+            out.png(name + "_cct.png", cct.last);
+            out.png(name + "_cct_diff.png", rcx::difference_image(off.last, cct.last));
+            out.png(name + "_cdct_diff.png", rcx::difference_image(off.last, cdct.last));
         }
     }
-    out.md << "\nImages of the last row: `behind-" << ns.back() << "_off.png`, `_cct.png`, and the difference images "
-           << "`_cct_diff.png`, `_cdct_diff.png` (blue = equal, red = completely different).\n\n";
+    md << "\nImages of the last row: `" << family << "-" << ns.back() << "_off.png`, `_cct.png`, and the difference images "
+       << "`_cct_diff.png`, `_cdct_diff.png` (blue = equal, red = completely different).\n\n";
+    return result;
+}
+
+// Table 5.2: conventional ray tracing with warm caches on grid-N, the thesis's scene (N cached mirror
+// spheres in front of the camera, Figure 1.1), and on behind-N (Table 5.1's scene), side by side.
+void table_5_2(const Config& c, Report& out) {
+    const int size = c.size > 0 ? c.size : c.quick ? 128 : 1024, face = c.quick ? 64 : 512;
+    const std::vector<int> ns = !c.ns.empty() ? c.ns : c.quick ? std::vector<int>{1, 32} : std::vector<int>{1, 2, 4, 8, 16, 32};
+    const std::map<int, double> thesis = {{1, 1.02}, {2, 1.07}, {4, 1.15}, {8, 1.32}, {16, 1.95}, {32, 2.68}};
+    std::ofstream csv = out.csv("table_5_2.csv",
+                                "scene,n,off_ms,cct_ms,cdct_ms,ceiling_ms,cct_speedup,cdct_speedup,ceiling_speedup,"
+                                "cct_psnr,cdct_psnr,cct_hit_rate,cdct_hit_rate,cdct_texels_per_lookup,thesis_cct_speedup");
+    std::ostringstream grid_md, behind_md;
+    std::vector<int> grid_ns;
+    std::copy_if(ns.begin(), ns.end(), std::back_inserter(grid_ns), [](int n) { return n >= 1; }); // no grid-0
+    const std::map<int, Speedups> grid = grid_ns.empty() ? std::map<int, Speedups>{}
+                                                         : table_5_2_family(c, out, csv, grid_md, "grid", grid_ns, size, face);
+    const std::map<int, Speedups> behind = table_5_2_family(c, out, csv, behind_md, "behind", ns, size, face);
+
+    out.md << "## Table 5.2: conventional ray tracing, grid-N (the thesis's scene) and behind-N\n\n"
+           << "The thesis's Table 5.2 times a conventional ray tracer (OptiX) with and without the CCT on \"a group of "
+           << "spheres with our technique, arranged like a grid in front of the camera\" (its section 5.1, Figure 1.1). "
+           << "Here: *grid-N*, N of grid-32's 8 x 4 cached mirror spheres, nearest the grid's centre first, seen by "
+           << "grid-32's camera; *behind-N*, Table 5.1's main mirror sphere facing the camera with N cached mirror spheres "
+           << "behind the camera. Embree tracer, " << size << "x" << size << " pixels, " << face
+           << "-texel faces, every reflective sphere cached, warm caches (filled by rendering the same view first), "
+           << "recursion depth 5. Speed-up = median ms with the cache off / median ms of the technique, " << c.rounds
+           << " interleaved rounds. Ceiling: every cached secondary ray answered by a constant (no cache can be faster). "
+           << "PSNR against the uncached frame. The thesis's speed-ups are its fps with the CCT / its fps without.\n\n"
+           << "| N | grid-N CCT | grid-N ceiling | grid-N CDCT | behind-N CCT | behind-N ceiling | behind-N CDCT | thesis CCT (grid, OptiX) |\n"
+           << "|---|---|---|---|---|---|---|---|\n";
+    const auto cell = [](const std::map<int, Speedups>& m, int n, double Speedups::*field) {
+        const auto it = m.find(n);
+        return it == m.end() ? std::string("-") : fmt(it->second.*field) + "x";
+    };
+    for (int n : ns) {
+        const auto t = thesis.find(n);
+        out.md << "| " << n << " | " << cell(grid, n, &Speedups::cct) << " | " << cell(grid, n, &Speedups::ceiling) << " | "
+               << cell(grid, n, &Speedups::cdct) << " | " << cell(behind, n, &Speedups::cct) << " | "
+               << cell(behind, n, &Speedups::ceiling) << " | " << cell(behind, n, &Speedups::cdct) << " | "
+               << (t == thesis.end() ? std::string("-") : fmt(t->second) + "x") << " |\n";
+    }
+    out.md << "\nPlot: `table_5_2.png`.\n\n"
+           << "CDCT: pyramid search, max_gap 0.5, caches filled by rendering the view twice (as the thesis; the CDCT "
+           << "pre-filled by tracing every texel is in Table 5.3 and the quality section). Hit rates in `table_5_2.csv`.\n\n"
+           << "### grid-N\n\n" << grid_md.str() << "### behind-N\n\n" << behind_md.str();
 }
 
 // Table 5.3: the CDCT's parameters on diffuse-31 and reflective-32.
@@ -322,30 +358,46 @@ int main(int argc, char** argv) {
         if (rcx::bench::parse_common_option(argc, argv, i, c)) continue;
         if (a == "--only" && i + 1 < argc) {
             c.only = argv[++i];
+        } else if (a == "--size" && i + 1 < argc) {
+            c.size = std::max(16, std::atoi(argv[++i]));
         } else {
-            std::fprintf(stderr, "usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST]\n");
+            std::fprintf(stderr, "usage: raycache_bench [--quick] [--out DIR] [--rounds N] [--only LIST] [--ns LIST] [--size S]\n");
             return a == "--help" ? 0 : 2;
         }
     }
     try {
         fs::create_directories(c.out);
+        // Table 5.2 goes to table_5_2.md, the rest to tables.md; a file is written only when one of its
+        // experiments ran, so `--only table_5_2` re-measures that table and keeps the others' files.
+        const auto write_md = [&](const std::string& file, const Report& report, double seconds) {
+            std::ofstream md(c.out + "/" + file);
+            md << "Machine: " << machine_name() << ", " << std::thread::hardware_concurrency() << " hardware threads. "
+               << (c.quick ? "QUICK MODE (small images, one round): smoke test, not results. " : "")
+               << "Generated by `raycache_bench` in " << fmt(seconds, 0) << " s.\n\n"
+               << report.md.str();
+            if (!md) throw std::runtime_error("cannot write " + c.out + "/" + file);
+            std::printf("%s", report.md.str().c_str());
+        };
+        const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        };
+        const auto started = std::chrono::steady_clock::now();
+        if (c.wants("table_5_2")) {
+            Report t52;
+            t52.dir = c.out;
+            table_5_2(c, t52);
+            write_md("table_5_2.md", t52, seconds_since(started));
+        }
+        const auto rest_started = std::chrono::steady_clock::now();
         Report out;
         out.dir = c.out;
-        const auto started = std::chrono::steady_clock::now();
-        if (c.wants("table_5_2")) table_5_2(c, out);
+        const bool rest = c.wants("table_5_3") || c.wants("figure_5_9") || c.wants("quality") || c.wants("memory");
         if (c.wants("table_5_3")) table_5_3(c, out);
         if (c.wants("figure_5_9")) figure_5_9(c, out);
         if (c.wants("quality")) quality(c, out);
         if (c.wants("memory")) memory(out);
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-        std::ofstream md(c.out + "/tables.md");
-        md << "Machine: " << machine_name() << ", " << std::thread::hardware_concurrency() << " hardware threads. "
-           << (c.quick ? "QUICK MODE (small images, one round): smoke test, not results. " : "")
-           << "Generated by `raycache_bench` in " << fmt(seconds, 0) << " s.\n\n"
-           << out.md.str();
-        if (!md) throw std::runtime_error("cannot write " + c.out + "/tables.md");
-        std::printf("%s", out.md.str().c_str());
-        std::fprintf(stderr, "[bench] done in %.0f s; tables in %s/tables.md\n", seconds, c.out.c_str());
+        if (rest) write_md("tables.md", out, seconds_since(rest_started));
+        std::fprintf(stderr, "[bench] done in %.0f s; tables in %s/table_5_2.md, tables.md\n", seconds_since(started), c.out.c_str());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "raycache_bench: %s\n", e.what());
         return 1;

@@ -1,5 +1,5 @@
 // The example scenes (examples/common, rcx/scene.hpp and rcx/meshes.hpp): every scene builds, names are
-// checked, behind-N has its spheres where the thesis puts them, and camera paths move as specified.
+// checked, behind-N and grid-N have their spheres where the thesis puts them, and camera paths move as specified.
 #include <doctest/doctest.h>
 
 #include <unistd.h>
@@ -9,10 +9,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "rcx/meshes.hpp"
 #include "rcx/scene.hpp"
 #include "rcx/scene_hash.hpp"
+#include "rcx/tessellate.hpp"
 
 namespace {
 
@@ -101,6 +103,102 @@ TEST_CASE("behind-N has a cached main sphere facing the camera and N cached mirr
     CHECK(rcx::make_scene("behind-8", thesis).cached_object_count() == 1);
 }
 
+namespace {
+
+// grid-32's slot (row, col) as the thesis's Figure 1.1 grid is laid out here: spheres of radius 0.5 on the
+// floor, 1.4 apart, columns centred on x = 0, row 0 at z = 0 (nearest the camera), rows going to -z.
+glm::vec3 grid_slot(int row, int col) { return {(col - 3.5f) * 1.4f, rcx::floor_height + 0.5f, -1.4f * row}; }
+
+// The slots a grid-N must hold, in row-major order: `cols_by_row[r]` lists the columns taken in row r.
+std::vector<glm::vec3> grid_slots(const std::vector<std::vector<int>>& cols_by_row) {
+    std::vector<glm::vec3> out;
+    for (int row = 0; row < static_cast<int>(cols_by_row.size()); ++row)
+        for (int col : cols_by_row[static_cast<std::size_t>(row)]) out.push_back(grid_slot(row, col));
+    return out;
+}
+
+void check_centres(const std::string& name, const std::vector<glm::vec3>& want) {
+    CAPTURE(name);
+    const rcx::Scene s = rcx::make_scene(name);
+    REQUIRE(s.spheres.size() == want.size());
+    for (std::size_t i = 0; i < want.size(); ++i) {
+        CAPTURE(i);
+        CHECK(s.spheres[i].centre.x == doctest::Approx(want[i].x).epsilon(1e-6));
+        CHECK(s.spheres[i].centre.y == doctest::Approx(want[i].y).epsilon(1e-6));
+        CHECK(s.spheres[i].centre.z == doctest::Approx(want[i].z).epsilon(1e-6));
+    }
+}
+
+} // namespace
+
+TEST_CASE("grid-32 is Figure 1.1's 8 x 4 grid of cached mirror spheres in front of the camera, row by row") {
+    const rcx::Scene s = rcx::make_scene("grid-32");
+    std::vector<std::vector<int>> all(4, {0, 1, 2, 3, 4, 5, 6, 7});
+    check_centres("grid-32", grid_slots(all));
+    const glm::vec3 f = forward(s.camera);
+    for (std::size_t i = 0; i < s.spheres.size(); ++i) {
+        CAPTURE(i);
+        const rcx::Sphere& sp = s.spheres[i];
+        CHECK(sp.radius == 0.5f);
+        CHECK(sp.material.cached);
+        CHECK(sp.material.reflectivity == doctest::Approx(0.8f));
+        CHECK(glm::dot(sp.centre - s.camera.eye, f) > sp.radius); // in front of the camera
+        // Tinted by column: the palette's 8 colours wrap at the row's end.
+        CHECK(sp.material.diffuse == s.spheres[i % 8].material.diffuse);
+        if (i % 8 != 0) CHECK(sp.material.diffuse != s.spheres[i - 1].material.diffuse);
+    }
+    CHECK(s.spheres[0].material.diffuse == glm::vec3(0.85f, 0.15f, 0.12f));
+    CHECK(s.camera.eye == glm::vec3(0.0f, 3.0f, 7.0f));
+    CHECK(s.camera.target == glm::vec3(0.0f, -0.6f, -2.1f));
+}
+
+TEST_CASE("grid-N fills grid-32's slots nearest the grid's centre first, across the rows before along them") {
+    // Hand-derived from the layout: the centre is between rows 1 and 2 and columns 3 and 4; in half-slot
+    // units a slot is (2 col - 7, 2 row - 3) from it, squared distance 2 for the middle four, 10 for the
+    // next eight (columns 2 and 5 of rows 1-2 taken before columns 3 and 4 of rows 0 and 3: nearer in
+    // rows), 18 for the corners of the middle 4 x 4 block, then outwards by column.
+    check_centres("grid-1", grid_slots({{}, {3}}));
+    check_centres("grid-2", grid_slots({{}, {3, 4}}));
+    check_centres("grid-3", grid_slots({{}, {3, 4}, {3}}));
+    check_centres("grid-4", grid_slots({{}, {3, 4}, {3, 4}}));
+    check_centres("grid-8", grid_slots({{}, {2, 3, 4, 5}, {2, 3, 4, 5}}));
+    check_centres("grid-12", grid_slots({{3, 4}, {2, 3, 4, 5}, {2, 3, 4, 5}, {3, 4}}));
+    check_centres("grid-16", grid_slots({{2, 3, 4, 5}, {2, 3, 4, 5}, {2, 3, 4, 5}, {2, 3, 4, 5}}));
+    check_centres("grid-20", grid_slots({{2, 3, 4, 5}, {1, 2, 3, 4, 5, 6}, {1, 2, 3, 4, 5, 6}, {2, 3, 4, 5}}));
+
+    const rcx::Scene full = rcx::make_scene("grid-32");
+    for (int n = 1; n <= rcx::max_grid_spheres; ++n) {
+        CAPTURE(n);
+        const rcx::Scene s = rcx::make_scene("grid-" + std::to_string(n));
+        CHECK(s.name == "grid-" + std::to_string(n));
+        REQUIRE(s.spheres.size() == static_cast<std::size_t>(n));
+        CHECK(s.cached_object_count() == n);
+        CHECK(s.camera.eye == full.camera.eye); // one view for the whole table
+        CHECK(s.camera.target == full.camera.target);
+        CHECK(s.camera.fov_y_degrees == full.camera.fov_y_degrees);
+        // Each sphere is grid-32's sphere of the same slot (position, size, material), kept in row-major order.
+        std::size_t j = 0;
+        for (const rcx::Sphere& sp : s.spheres) {
+            while (j < full.spheres.size() && full.spheres[j].centre != sp.centre) ++j;
+            REQUIRE(j < full.spheres.size());
+            CHECK(sp.radius == full.spheres[j].radius);
+            CHECK(sp.material.diffuse == full.spheres[j].material.diffuse);
+            CHECK(sp.material.reflectivity == full.spheres[j].material.reflectivity);
+        }
+        // Grows by one slot: grid-(N-1)'s spheres are all in grid-N.
+        if (n > 1)
+            for (const rcx::Sphere& prev : rcx::make_scene("grid-" + std::to_string(n - 1)).spheres) {
+                bool found = false;
+                for (const rcx::Sphere& sp : s.spheres) found = found || sp.centre == prev.centre;
+                CHECK(found);
+            }
+    }
+    for (const char* bad : {"grid-0", "grid-33", "grid-", "grid-x", "grid-1a", "grid--1"}) {
+        CAPTURE(bad);
+        CHECK_THROWS_WITH_AS(rcx::make_scene(bad), doctest::Contains("grid-N takes N = 1..32"), std::invalid_argument);
+    }
+}
+
 TEST_CASE("behind-32's main sphere fills a good part of a square image") {
     const rcx::Scene s = rcx::make_scene("behind-32");
     const float distance = glm::length(s.spheres[0].centre - s.camera.eye);
@@ -110,14 +208,14 @@ TEST_CASE("behind-32's main sphere fills a good part of a square image") {
 }
 
 TEST_CASE("unknown scene names throw invalid_argument listing the valid names") {
-    for (const char* bad : {"", "nope", "grid-31", "behind-33", "behind-", "behind--1", "behind-x", "behind-1a", "behind-1000"}) {
+    for (const char* bad : {"", "nope", "grid-33", "behind-33", "behind-", "behind--1", "behind-x", "behind-1a", "behind-1000"}) {
         CAPTURE(bad);
         try {
             rcx::make_scene(bad);
             FAIL("no exception");
         } catch (const std::invalid_argument& e) {
             const std::string what = e.what();
-            for (const char* valid : {"behind-N", "grid-32", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass",
+            for (const char* valid : {"behind-N", "grid-N", "diffuse-31", "reflective-32", "cone-cylinder", "concave", "glass",
                                       "mirrors-1000", "dynamic-N"})
                 CHECK(what.find(valid) != std::string::npos);
         }
@@ -292,6 +390,79 @@ TEST_CASE("procedural meshes have outward windings, unit normals and their analy
     CHECK(b.max.y == doctest::Approx(2.0f));
     CHECK_THROWS_AS(rcx::make_cone(1.0f, 1.0f, 2), std::invalid_argument);
     CHECK_THROWS_AS(rcx::make_torus(0.5f, 1.0f), std::invalid_argument);
+}
+
+TEST_CASE("a UV sphere mesh has outward windings, its vertices on the sphere and 2 segments (rings - 1) triangles") {
+    const rcx::Mesh m = rcx::make_sphere(2.0f, 8, 4);
+    check_mesh(m);
+    CHECK(m.triangles.size() == 48u);          // 8 + 8 at the poles, 2 x 8 x 2 between: 2 x 8 x 3
+    CHECK(m.positions.size() == 2u + 3u * 8u); // two poles, three rings of 8
+    for (const glm::vec3& p : m.positions) CHECK(glm::length(p) == doctest::Approx(2.0f).epsilon(1e-5));
+    const rcx::Bounds b = rcx::mesh_bounds(m);
+    CHECK(b.max.y == doctest::Approx(2.0f)); // the poles on the y axis
+    CHECK(b.min.y == doctest::Approx(-2.0f));
+    CHECK(b.max.x == doctest::Approx(2.0f)); // a vertex of the equator at +x
+    CHECK(rcx::make_sphere(1.0f, 3, 2).triangles.size() == 6u);
+    CHECK_THROWS_AS(rcx::make_sphere(1.0f, 2, 4), std::invalid_argument);
+    CHECK_THROWS_AS(rcx::make_sphere(1.0f, 8, 1), std::invalid_argument);
+    CHECK_THROWS_AS(rcx::make_sphere(0.0f, 8, 4), std::invalid_argument);
+}
+
+TEST_CASE("tessellating a scene's moving spheres makes them meshes that move the same way; the rest stays") {
+    rcx::Scene s;
+    s.meshes.push_back(rcx::checkerboard_floor());
+    rcx::Material red;
+    red.diffuse = {1.0f, 0.0f, 0.0f};
+    rcx::Material mirror;
+    mirror.reflectivity = 0.7f;
+    mirror.cached = true;
+    s.spheres.push_back({{0.0f, 0.0f, 0.0f}, 1.0f, red});     // stands still
+    s.spheres.push_back({{3.0f, 0.5f, 0.0f}, 0.5f, mirror});  // moves
+    s.spheres.push_back({{-3.0f, 0.25f, 1.0f}, 0.25f, red});  // moves
+    rcx::Motion a;
+    a.index = 1;
+    a.circle_radius = 1.0f;
+    a.degrees_per_frame = 90.0f;
+    rcx::Motion b = a;
+    b.index = 2;
+    b.bob = 0.5f;
+    s.motions = {a, b};
+
+    const rcx::Scene t = rcx::tessellate_moving_spheres(s, 4);
+    REQUIRE(t.spheres.size() == 1u);
+    CHECK(t.spheres[0].centre == s.spheres[0].centre);
+    REQUIRE(t.meshes.size() == 3u);
+    CHECK(t.meshes[0].positions == s.meshes[0].positions);
+    CHECK(rcx::sphere_mesh_triangles(4) == 48u); // 2L segments, L rings: 2 (2L)(L - 1)
+    for (std::size_t m = 1; m < 3; ++m) {
+        CAPTURE(m);
+        const rcx::Sphere& from = s.spheres[m];
+        CHECK(t.meshes[m].triangles.size() == 48u);
+        CHECK(t.meshes[m].material.cached == from.material.cached);
+        CHECK(t.meshes[m].material.diffuse == from.material.diffuse);
+        CHECK(t.meshes[m].material.reflectivity == from.material.reflectivity);
+        for (const glm::vec3& p : t.meshes[m].positions)
+            CHECK(glm::length(p - from.centre) == doctest::Approx(from.radius).epsilon(1e-5));
+        check_mesh(t.meshes[m]);
+    }
+    REQUIRE(t.motions.size() == 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        CHECK(t.motions[i].kind == rcx::Motion::Kind::mesh);
+        CHECK(t.motions[i].index == i + 1);
+    }
+    // Frame 2: a half turn of a circle of radius 1 from its +X point: 2 along -x; b also at the top of its bob.
+    const rcx::Scene later = t.at_frame(2);
+    CHECK(later.meshes[1].positions[0].x == doctest::Approx(t.meshes[1].positions[0].x - 2.0f));
+    CHECK(later.meshes[2].positions[0].y == doctest::Approx(t.meshes[2].positions[0].y + 0.5f));
+    CHECK(later.spheres[0].centre == s.spheres[0].centre);
+    CHECK_THROWS_AS(rcx::tessellate_moving_spheres(s, 1), std::invalid_argument);
+
+    if (!std::filesystem::exists(wuson)) return; // dynamic-N needs assimp-testmodels
+    const rcx::Scene dynamic = rcx::tessellate_moving_spheres(rcx::make_scene("dynamic-8"), 8);
+    std::size_t triangles = 0;
+    for (const rcx::Mesh& m : dynamic.meshes) triangles += m.triangles.size();
+    CHECK(dynamic.spheres.size() == 4u);                   // the static mirrors
+    CHECK(triangles == 2u + 3732u + 8u * 4u * 8u * 7u);     // floor, Wuson, 8 spheres of 4 L (L - 1)
 }
 
 namespace {

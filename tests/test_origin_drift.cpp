@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <limits>
+#include <optional>
 
 #include "raycache/raycache.hpp"
 
@@ -118,4 +119,24 @@ TEST_CASE("a store whose origin would stretch its tile's visible box beyond the 
     // The box is [0, 0.08] on x: 0.17 is 0.09 beyond it, within drift; 0.19 is not.
     CHECK(cube.lookup(plus_x, glm::vec3(0.17f, 0.0f, 0.0f), tolerance));
     CHECK_FALSE(cube.lookup(plus_x, glm::vec3(0.19f, 0.0f, 0.0f), tolerance));
+}
+
+TEST_CASE("texel_of, lookup_at and store_at act as lookup and store by direction, with the face found once") {
+    CctCube cube(64);
+    const std::optional<TexelAddress> t = cube.texel_of(plus_x);
+    REQUIRE(t);
+    CHECK(t->face == 0); // +X's centre: texel (32, 32), by hand from the face table
+    CHECK(t->column == 32);
+    CHECK(t->row == 32);
+    CHECK_FALSE(cube.texel_of(glm::vec3(0.0f)));
+    const raycache::OriginTolerance tolerance{0.1f, 0.05f};
+    CHECK(cube.store_at(*t, grey, glm::vec3(0.0f), 1.0f, tolerance));
+    CHECK_FALSE(cube.store_at(*t, grey, glm::vec3(0.0f), -1.0f, tolerance)); // a negative distance
+    cube.begin_frame();
+    CHECK(cube.lookup(plus_x, glm::vec3(0.04f, 0.0f, 0.0f), tolerance)); // allowed: min(0.1, 0.05 x 1)
+    CHECK(cube.lookup_at(*t, glm::vec3(0.04f, 0.0f, 0.0f), tolerance));
+    CHECK(cube.lookup_at(*t)); // no origin test
+    CHECK(cube.statistics().hits == 3u);
+    CHECK_FALSE(cube.lookup_at(*t, glm::vec3(0.06f, 0.0f, 0.0f), tolerance));
+    CHECK(cube.statistics().misses == 1u);
 }

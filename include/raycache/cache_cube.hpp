@@ -175,18 +175,41 @@ public:
     // rays met a surface at distance d answers origins within min(drift, parallax * d) of its box (drift
     // alone while none of its stores gave a finite distance).
     std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
-        const InFrame use = in_frame();
+        const std::optional<TexelAddress> t = texel_of(direction);
+        if (!t) {
+            record_lookup(false);
+            return std::nullopt;
+        }
+        return lookup_at(*t, origin, tolerance);
+    }
+
+    // The texel `direction` falls in (the face table of cube_face.hpp); std::nullopt when it is not a
+    // direction. With lookup_at() and store_at(), a ray that looks up and then stores computes it once.
+    std::optional<TexelAddress> texel_of(const glm::vec3& direction) const noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        std::optional<Value> value;
-        if (a.face != RAYCACHE_NO_FACE) {
-            const TexelAddress t{a.face, a.column, a.row};
-            value = visible_value(t);
-            if (value) {
-                Tile* tile = tile_of(t);
-                if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
-                    tile->stale.store(1u, std::memory_order_relaxed);
-                    value.reset();
-                }
+        if (a.face == RAYCACHE_NO_FACE) return std::nullopt;
+        return TexelAddress{a.face, a.column, a.row};
+    }
+
+    // lookup(direction) of texel `t` (from texel_of(); must lie on the cube, asserted): counted, no origin test.
+    std::optional<Value> lookup_at(const TexelAddress& t) noexcept {
+        const InFrame use = in_frame();
+        RAYCACHE_ASSERT(contains(t));
+        std::optional<Value> value = contains(t) ? visible_value(t) : std::nullopt;
+        record_lookup(value.has_value());
+        return value;
+    }
+
+    // lookup(direction, origin, tolerance) of texel `t` (from texel_of(); must lie on the cube, asserted).
+    std::optional<Value> lookup_at(const TexelAddress& t, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
+        const InFrame use = in_frame();
+        RAYCACHE_ASSERT(contains(t));
+        Tile* tile = contains(t) ? tile_of(t) : nullptr;
+        std::optional<Value> value = visible_value(tile, t);
+        if (value) {
+            if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
+                tile->stale.store(1u, std::memory_order_relaxed);
+                value.reset();
             }
         }
         record_lookup(value.has_value());
@@ -244,11 +267,8 @@ public:
     // its first values would answer rays from ever further away. Only frame-constant state decides.
     bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
                const OriginTolerance& tolerance) noexcept {
-        const InFrame use = in_frame();
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
-        const StoreOrigin from{origin, hit_distance, tolerance};
-        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value), &from);
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? store_at(*t, value, origin, hit_distance, tolerance) : refuse();
     }
 
     // store() of a traced ray with what its path saw (raycache/path_record.hpp): when the word is written, its
@@ -256,22 +276,24 @@ public:
     // raycache/invalidation.hpp. Texels stored without a record count as having seen anything.
     bool store(const glm::vec3& direction, const Value& value, const glm::vec3& origin, float hit_distance,
                const OriginTolerance& tolerance, const PathRecord& path) noexcept {
-        const InFrame use = in_frame();
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
-        const TexelAddress t{a.face, a.column, a.row};
-        const StoreOrigin from{origin, hit_distance, tolerance};
-        if (!store_word(t, Texel::encode(value), &from)) return false;
-        record_path(t, path);
-        return true;
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? store_at(*t, value, origin, hit_distance, tolerance, &path) : refuse();
     }
     bool store(const glm::vec3& direction, const Value& value, const PathRecord& path) noexcept {
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? store_at(*t, value, path) : refuse();
+    }
+
+    // store(direction, value, origin, hit_distance, tolerance[, path]) into texel `t` (from texel_of(); must
+    // lie on the cube, asserted); path null: stored without a record.
+    bool store_at(const TexelAddress& t, const Value& value, const glm::vec3& origin, float hit_distance,
+                  const OriginTolerance& tolerance, const PathRecord* path = nullptr) noexcept {
         const InFrame use = in_frame();
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE) return refuse();
-        const TexelAddress t{a.face, a.column, a.row};
-        if (!store_word(t, Texel::encode(value))) return false;
-        record_path(t, path);
+        RAYCACHE_ASSERT(contains(t));
+        if (!contains(t) || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
+        const StoreOrigin from{origin, hit_distance, tolerance};
+        if (!store_word(t, Texel::encode(value), &from)) return false;
+        if (path) record_path(t, *path);
         return true;
     }
 
@@ -376,6 +398,15 @@ public:
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return refuse();
         return store_word(texel, Texel::encode(value));
+    }
+    // store_at(texel, value) with what the stored ray's path saw (as store(direction, value, path)).
+    bool store_at(const TexelAddress& texel, const Value& value, const PathRecord& path) noexcept {
+        const InFrame use = in_frame();
+        RAYCACHE_ASSERT(contains(texel));
+        if (!contains(texel)) return refuse();
+        if (!store_word(texel, Texel::encode(value))) return false;
+        record_path(texel, path);
+        return true;
     }
 
     // The value in `texel` whether or not it is visible yet; std::nullopt when empty. No counting.
@@ -492,8 +523,7 @@ public:
     CubeStatistics begin_frame() noexcept {
         assert_between_frames();
         const CubeStatistics finished = statistics();
-        if (state_->written_this_frame.exchange(false, std::memory_order_relaxed)) clear_written_bits();
-        end_frame_origins();
+        end_frame_tiles(state_->written_this_frame.exchange(false, std::memory_order_relaxed));
         state_->counters.reset();
         return finished;
     }
@@ -732,11 +762,14 @@ private:
             }
     }
 
-    // Between frames: drops the tiles marked stale and makes pending origin boxes visible.
-    void end_frame_origins() noexcept {
+    // One pass over the tiles: clears the written bits (when anything was written), drops stale tiles and
+    // makes pending origin boxes and nearest distances visible.
+    void end_frame_tiles(bool any_written) noexcept {
         for (std::size_t i = 0; i < tile_count(); ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
+            if (any_written)
+                for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
             if (tile->stale.load(std::memory_order_relaxed)) {
                 std::int64_t valid = 0;
                 std::size_t doubtful_count = 0;
@@ -767,16 +800,9 @@ private:
         }
     }
 
-    void clear_written_bits() noexcept {
-        for (std::size_t i = 0; i < tile_count(); ++i) {
-            Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
-            if (!tile) continue;
-            for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
-        }
-    }
-
-    std::optional<Value> visible_value(const TexelAddress& t) const noexcept {
-        const Tile* tile = tile_of(t);
+    std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
+    // The same, for `t`'s tile already loaded (null: none).
+    std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t) const noexcept {
         if (!tile) return std::nullopt;
         // Acquire pairs with the store's release: a word written this frame comes with its written bit,
         // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.

@@ -3,6 +3,7 @@
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <optional>
 #include <type_traits>
 #include <utility>
 
@@ -10,6 +11,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/filtered_lookup.hpp"
+#include "raycache/path_record.hpp"
 
 namespace raycache {
 
@@ -76,21 +78,41 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, const
     return traced;
 }
 
-// cached_trace() and filtered_cached_trace() for a CCT ray leaving from `origin`, with the drift also bounded
-// by parallax (OriginTolerance): trace() returns the colour and the hit distance along the unit direction
-// (anything with members `color` and `distance`, as raycache::TracedRay; infinity when the ray escaped),
-// and the store keeps the distance for its tile, so tiles that see near surfaces refill sooner; a store that
-// would stretch its tile's origins beyond the tolerance is refused (CacheCube::store with a tolerance).
+// The CCT's whole ray path for a ray leaving from `origin`, as SceneCache runs it: a lookup with the origin
+// test (tolerance; null: none, the direction alone keys the texel), else trace() and a store of its colour
+// with the origin and the hit distance. trace() returns anything with members `color` and `distance` (as
+// raycache::TracedRay; infinity when the ray escaped) and is callable either as `trace()` or as
+// `trace(PathRecord&)`: the second form reports what the path hit after leaving (raycache/path_record.hpp),
+// and the colour is stored with that record, so raycache/invalidation.hpp can drop exactly the texels a
+// moved object can have changed. filtered: a hit answers with the bilinear mean of the visible texels
+// around `direction` instead of its own texel. The texel is found once for the lookup and the store.
+// Thread-safe as CacheCube::lookup/store.
 template <class Trace>
-glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance,
+glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance* tolerance,
                            bool filtered, Trace&& trace) {
+    constexpr bool records = std::is_invocable_v<Trace&, PathRecord&>;
+    static_assert(records || std::is_invocable_v<Trace&>,
+                  "RayCache cct_cached_trace: trace must be callable as `TracedRay trace()` or `TracedRay trace(raycache::PathRecord&)`");
     const auto use = cube.in_frame();
-    if (std::optional<glm::vec3> cached = cube.lookup(direction, origin, tolerance))
+    PathRecord path;
+    auto run = [&] {
+        if constexpr (records) return trace(path);
+        else return trace();
+    };
+    const std::optional<TexelAddress> texel = cube.texel_of(direction);
+    if (!texel) { // not a direction: a miss, nothing stored
+        cube.record_lookup(false);
+        return run().color;
+    }
+    const std::optional<glm::vec3> cached = tolerance ? cube.lookup_at(*texel, origin, *tolerance) : cube.lookup_at(*texel);
+    if (cached)
         return filtered ? *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); })
                         : *cached;
-    const auto traced = std::forward<Trace>(trace)();
+    const auto traced = run();
     const glm::vec3 colour = traced.color;
-    cube.store(direction, colour, origin, traced.distance, tolerance);
+    if (tolerance) cube.store_at(*texel, colour, origin, traced.distance, *tolerance, records ? &path : nullptr);
+    else if (records) cube.store_at(*texel, colour, path);
+    else cube.store_at(*texel, colour);
     return colour;
 }
 

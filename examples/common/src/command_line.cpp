@@ -97,9 +97,9 @@ CommandLine::CommandLine(const std::string& program)
 
     section("Scene and camera");
     add_option("--scene", "NAME",
-               "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder,\n"
-               "concave, glass, mirrors-1000, dynamic-N (N = 1..256 moving spheres and\n"
-               "a moving mesh among mirrors) " + shown_default(d.scene),
+               "behind-N (N = 0..32), grid-N (N = 1..32), diffuse-31, reflective-32,\n"
+               "cone-cylinder, concave, glass, mirrors-1000, dynamic-N (N = 1..256\n"
+               "moving spheres and a moving mesh among mirrors) " + shown_default(d.scene),
                [&o](const std::string& text) { o.scene = text; });
     add_option("--mesh", "FILE",
                "the concave object of scene concave (any format Assimp reads)\n" +

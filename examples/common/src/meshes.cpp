@@ -106,6 +106,40 @@ Mesh make_cylinder(float radius, float height, int segments) {
     return m;
 }
 
+Mesh make_sphere(float radius, int segments, int rings) {
+    check_segments("make_sphere", segments);
+    if (rings < 2 || !(radius > 0.0f))
+        throw std::invalid_argument("make_sphere: need radius > 0 and rings >= 2, got radius " + std::to_string(radius) +
+                                    ", rings " + std::to_string(rings));
+    Mesh m;
+    m.name = "sphere";
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    const unsigned north = add_vertex(m, radius * up, up);
+    // Ring k (1..rings-1) at polar angle pi k / rings; vertex (k, i) is ring_first + (k - 1) segments + i.
+    const unsigned ring_first = static_cast<unsigned>(m.positions.size());
+    for (int k = 1; k < rings; ++k) {
+        const float polar = 0.5f * two_pi * static_cast<float>(k) / static_cast<float>(rings);
+        for (int i = 0; i < segments; ++i) {
+            const glm::vec3 n = std::sin(polar) * radial(two_pi * static_cast<float>(i) / static_cast<float>(segments)) +
+                                std::cos(polar) * up;
+            add_vertex(m, radius * n, n);
+        }
+    }
+    const unsigned south = add_vertex(m, -radius * up, -up);
+    auto at = [&](int k, int i) {
+        return ring_first + static_cast<unsigned>((k - 1) * segments + (i % segments));
+    };
+    for (int i = 0; i < segments; ++i) {
+        add_triangle(m, north, at(1, i), at(1, i + 1));
+        for (int k = 1; k + 1 < rings; ++k) {
+            add_triangle(m, at(k, i), at(k, i + 1), at(k + 1, i));
+            add_triangle(m, at(k, i + 1), at(k + 1, i + 1), at(k + 1, i));
+        }
+        add_triangle(m, at(rings - 1, i), at(rings - 1, i + 1), south);
+    }
+    return m;
+}
+
 Mesh make_torus(float major, float minor, int major_segments, int minor_segments) {
     check_segments("make_torus", major_segments);
     check_segments("make_torus", minor_segments);

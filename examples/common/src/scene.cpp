@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 
@@ -98,15 +99,30 @@ Scene behind(int n, const SceneParams& params) {
     return s;
 }
 
-// Figure 1.1 / 3.4 / Table 5.2: an 8 x 4 grid of tinted mirror spheres on the floor, in front of the camera.
-Scene grid32() {
-    Scene s = base_scene("grid-32");
+// Figure 1.1 / 3.4 / Table 5.2: an 8 x 4 grid of tinted mirror spheres on the floor, in front of the camera
+// (grid-32); grid-N keeps N of its slots, nearest the grid's centre first. Distances are exact integers in
+// half-slot units, (2 col - 7, 2 row - 3); ties go to the slot nearer the centre across the rows (so that
+// grid-8 is the middle 4 x 2 block), then row-major. The kept spheres stay in row-major order with their
+// grid-32 colours, so grid-32 is the full grid, and every N uses grid-32's camera.
+Scene grid(int n) {
+    Scene s = base_scene("grid-" + std::to_string(n));
+    struct Slot { int row, col, distance2, across; };
+    std::vector<Slot> slots;
     for (int row = 0; row < 4; ++row)
         for (int col = 0; col < 8; ++col) {
-            const float x = (static_cast<float>(col) - 3.5f) * 1.4f;
-            const float z = -1.4f * static_cast<float>(row);
-            s.spheres.push_back(on_floor(x, z, 0.5f, mirror(0.8f, palette(static_cast<std::size_t>(row * 8 + col)))));
+            const int dx = 2 * col - 7, dz = 2 * row - 3;
+            slots.push_back({row, col, dx * dx + dz * dz, std::abs(dz)});
         }
+    std::stable_sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
+        return a.distance2 != b.distance2 ? a.distance2 < b.distance2 : a.across < b.across;
+    });
+    slots.resize(static_cast<std::size_t>(n));
+    std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) { return a.row * 8 + a.col < b.row * 8 + b.col; });
+    for (const Slot& slot : slots) {
+        const float x = (static_cast<float>(slot.col) - 3.5f) * 1.4f;
+        const float z = -1.4f * static_cast<float>(slot.row);
+        s.spheres.push_back(on_floor(x, z, 0.5f, mirror(0.8f, palette(static_cast<std::size_t>(slot.row * 8 + slot.col)))));
+    }
     s.camera.eye = {0.0f, 3.0f, 7.0f};
     s.camera.target = {0.0f, -0.6f, -2.1f};
     s.camera.fov_y_degrees = 50.0f;
@@ -278,7 +294,7 @@ Scene dynamic_scene(int n, const SceneParams& params) {
     return s;
 }
 
-const char* const valid_names = "behind-N (N = 0..32), grid-32, diffuse-31, reflective-32, cone-cylinder, concave, "
+const char* const valid_names = "behind-N (N = 0..32), grid-N (N = 1..32; grid-32 is the full grid), diffuse-31, reflective-32, cone-cylinder, concave, "
                                 "glass, mirrors-1000, dynamic-N (N = 1..256)";
 
 // N of "<prefix>N" for N in [low, high]; -1 when the name does not start with prefix; throws
@@ -396,7 +412,7 @@ Mesh checkerboard_floor(float height, float half_extent) {
 Scene make_scene(const std::string& name, const SceneParams& params) {
     if (const int n = numbered(name, "behind-", 0, max_behind_spheres); n >= 0) return behind(n, params);
     if (const int n = numbered(name, "dynamic-", 1, max_dynamic_spheres); n >= 0) return dynamic_scene(n, params);
-    if (name == "grid-32") return grid32();
+    if (const int n = numbered(name, "grid-", 1, max_grid_spheres); n >= 0) return grid(n);
     if (name == "diffuse-31") return ring_scene(name, false);
     if (name == "reflective-32") return ring_scene(name, true);
     if (name == "cone-cylinder") return cone_cylinder();

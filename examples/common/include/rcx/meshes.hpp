@@ -1,4 +1,4 @@
-// rcx/meshes.hpp: procedural triangle meshes (cone, cylinder, torus) and mesh files read with Assimp.
+// rcx/meshes.hpp: procedural triangle meshes (cone, cylinder, sphere, torus) and mesh files read with Assimp.
 // Every mesh has one smooth normal per vertex; hard edges (caps, the cone's rim) duplicate vertices.
 #pragma once
 
@@ -16,6 +16,11 @@ Mesh make_cone(float radius, float height, int segments = 64);
 
 // A cylinder from y = 0 to y = height, with both caps. segments >= 3.
 Mesh make_cylinder(float radius, float height, int segments = 64);
+
+// A UV sphere centred on the origin: poles on the Y axis, `rings` bands of latitude (>= 2), `segments`
+// around (>= 3), 2 segments (rings - 1) triangles, every vertex on the sphere (so the mesh lies inside it).
+// Throws std::invalid_argument for radius <= 0 or too few segments or rings.
+Mesh make_sphere(float radius, int segments, int rings);
 
 // A torus around the +Y axis through the origin: `major` from the axis to the tube's centre, tube radius
 // `minor` (< major). major_segments, minor_segments >= 3.

@@ -131,10 +131,12 @@ struct SceneParams {
 };
 
 inline constexpr int max_behind_spheres = 32;
+inline constexpr int max_grid_spheres = 32;
 inline constexpr int max_dynamic_spheres = 256;
 inline constexpr float floor_height = -1.0f;
 
-// Builds a scene by name: "behind-N" (N = 0..32), "grid-32", "diffuse-31", "reflective-32",
+// Builds a scene by name: "behind-N" (N = 0..32), "grid-N" (N = 1..32 of grid-32's spheres, nearest its
+// centre first; grid-32 is the thesis's Figure 1.1 grid), "diffuse-31", "reflective-32",
 // "cone-cylinder", "concave", "glass", "mirrors-1000" (1000 small cached mirror spheres), "dynamic-N"
 // (N = 1..256 moving spheres and a moving Wuson among four static cached mirrors). Throws std::invalid_argument listing the valid names for an
 // unknown name, std::runtime_error when a mesh file cannot be read (naming the Debian package).

@@ -49,7 +49,6 @@
 
 #include "raycache/raycache.hpp"
 #include "raycache/invalidation.hpp"
-#include "raycache/recorded_trace.hpp"
 
 namespace raycache {
 
@@ -420,7 +419,9 @@ public:
     // Algorithm 1 around the caller's trace: the colour brought back by the ray leaving object `id` at
     // `origin` in `direction` (the reflected ray; for refraction the ray that finally leaves the object).
     // trace: callable `TracedRay trace()` (colour, and distance along the unit direction to its hit,
-    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax). It runs on a miss; its colour is returned
+    // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax), or `TracedRay
+    // trace(PathRecord&)`, which also reports what the path hit (raycache/path_record.hpp) so that
+    // scene_changed() can keep what a move cannot have changed. It runs on a miss; its colour is returned
     // unchanged. Objects without a cube: returns trace().color. Thread-safe.
     template <class Trace>
     glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
@@ -428,35 +429,28 @@ public:
         static_assert(std::is_invocable_r_v<TracedRay, Trace&> || records,
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
-        if constexpr (records) {
-            // The form that reports what the path saw: texels it fills can be invalidated exactly.
-            const int index = find(id);
-            PathRecord unused;
-            if (index < 0) return trace(unused).color;
-            Entry& e = entries_[static_cast<std::size_t>(index)];
-            if (technique_ == Technique::cct) {
-                if (e.coverage) e.coverage->mark(direction);
-                const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
-                return cct_cached_trace_recorded(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr,
-                                                 filtered_, trace);
-            }
-            return leaving_ray(id, origin, direction, [&] { return trace(unused); }); // the CDCT keeps no records
-        } else {
         const int index = find(id);
-        if (index < 0) return std::forward<Trace>(trace)().color;
+        if (index < 0) {
+            PathRecord unused;
+            if constexpr (records) return trace(unused).color;
+            else return trace().color;
+        }
         Entry& e = entries_[static_cast<std::size_t>(index)];
         if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
-            auto colour = [&] { return trace().color; };
-            if (origin_drift_ >= 0.0f)
-                return cct_cached_trace(*e.cct, direction, origin,
-                                        OriginTolerance{origin_drift_ * e.bounds.half_size, origin_parallax_}, filtered_,
-                                        trace);
-            return filtered_ ? filtered_cached_trace(*e.cct, direction, colour) : cached_trace(*e.cct, direction, colour);
+            // The recording form lets exact invalidation keep what a move cannot have changed.
+            const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
+            return cct_cached_trace(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
         }
         int read = 0;
-        const glm::vec3 color =
-            e.cdct->cached_trace(origin, direction, trace, &read);
+        PathRecord unused; // the CDCT keeps no path records
+        const glm::vec3 color = e.cdct->cached_trace(
+            origin, direction,
+            [&] {
+                if constexpr (records) return trace(unused);
+                else return trace();
+            },
+            &read);
         texels_read_.add(0, static_cast<std::uint64_t>(read));
         // A rarely-taken CAS: only a search that reads more than every one before it writes.
         std::uint64_t most = max_texels_read_.load(std::memory_order_relaxed);
@@ -464,7 +458,6 @@ public:
                !max_texels_read_.compare_exchange_weak(most, static_cast<std::uint64_t>(read), std::memory_order_relaxed)) {
         }
         return color;
-        }
     }
 
     // Between frames, after objects (or lights) moved: cubes of moved objects move with them, emptied
