@@ -37,6 +37,7 @@ struct CdctScene {
         bounds.push_back(b);
         descriptors.push_back(
             raycache::shared::raycache_make_gpu_cube(b.centre, b.half_size, static_cast<std::uint32_t>(elements), n));
+        descriptors.back().index = static_cast<std::uint32_t>(cubes.size() - 1); // its GPU counters
         elements += cubes.back().texel_count();
     }
     // Every cube's words, in buffer order.

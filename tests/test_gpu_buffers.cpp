@@ -40,8 +40,11 @@ TEST_CASE("gpu_buffer_layout places cubes one after another, 6 N^2 texels each, 
     // The box travels into the descriptor (the CDCT's searches read it); padding is zero.
     CHECK(cct.cubes[0].centre == glm::vec3(1.0f, 2.0f, 3.0f));
     CHECK(cct.cubes[0].half_size == 0.5f);
-    CHECK(cct.cubes[0].reserved0 == 0u);
     CHECK(cct.cubes[0].reserved1 == 0u);
+    // Counters: cube k is number k, or first_index + k.
+    CHECK(cct.cubes[0].index == 0u);
+    CHECK(cct.cubes[2].index == 2u);
+    CHECK(gpu_buffer_layout<CctTexel>(three_cubes, 7).cubes[1].index == 8u);
 
     const GpuBufferLayout cdct = gpu_buffer_layout<CdctTexel>(three_cubes);
     CHECK(cdct.cubes[2].first_texel == 30u); // elements, not words: a uvec2 is one element

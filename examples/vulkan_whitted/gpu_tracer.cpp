@@ -12,6 +12,7 @@
 #include <embree3/rtcore.h>
 #include <glm/glm.hpp>
 #include <raycache/shared/depth_secant.h>
+#include <raycache/gpu_buffers.hpp>
 #include <raycache/shared/gpu_layout.h>
 
 #include "rcx/meshes.hpp"
@@ -543,13 +544,14 @@ struct Tracer::Impl {
     TracerSettings settings;
     FlatBvh bvh;
     std::unique_ptr<vk::ComputePipeline> whitted, end_frame;
-    std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, counters, dummy, texels, pending;
-    std::unique_ptr<vk::Buffer> output, dirty, blocks, gbuffer;
+    std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, dummy, texels, pending;
+    std::unique_ptr<vk::Buffer> output, frame, gbuffer;
+    raycache::GpuFrameLayout frame_layout;          // RayCache's frame buffer: counters, store list
+    std::vector<std::uint32_t> frame_start;         // its words before every frame
     std::unique_ptr<Raster> raster;
     std::unique_ptr<RshFrame> rsh;          // --secondary rsh: every ray through the ray-space hierarchy
     std::unique_ptr<vk::Buffer> rsh_prims;  // ... its primitives (raycache_rsh_primitive, scene order)
     double update_ms = 0.0;                 // the last set_scene
-    std::uint32_t block_count = 0;
     std::uint32_t texel_count = 0;
     bool cdct = false;
 };
@@ -562,12 +564,12 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         throw std::invalid_argument("Vulkan tracer: --cache cdct needs a device with shaderInt64 and shaderBufferInt64Atomics");
     // Shaders first: a missing or rejected SPIR-V file is the first thing to report.
     const std::string suffix = t.cdct ? "_cdct" : "";
-    std::vector<VkDescriptorType> bindings(13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    std::vector<VkDescriptorType> bindings(12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     t.whitted = std::make_unique<vk::ComputePipeline>(context, spirv_dir + "/whitted" + suffix + ".spv", bindings, 0);
     if (uses_caches(settings.mode))
         t.end_frame = std::make_unique<vk::ComputePipeline>(
             context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
-            4);
+            0);
     const bool rsh = settings.secondary == Secondary::rsh;
     if (rsh && settings.mode != CacheMode::off)
         throw std::invalid_argument("Vulkan tracer: --secondary rsh traces every ray, without caching cubes: use --cache off");
@@ -589,17 +591,20 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     const bool caching = uses_caches(settings.mode);
     if (caching && (settings.face_size < 1 || settings.face_size > RAYCACHE_MAX_FACE_SIZE))
         throw std::invalid_argument("Vulkan tracer: --face-size must be 1.." + std::to_string(RAYCACHE_MAX_FACE_SIZE));
-    // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage
-    // buffer (lavapipe: 128 MiB): a face size that does not fit is lowered to the largest that does.
+    // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage buffer
+    // (lavapipe: 128 MiB): raycache::fit_gpu_face_sizes lowers the faces to the largest size that fits, leaving
+    // room for the frame buffer's counters, so that its store list can hold every texel (up to 16,776,960).
     const std::uint64_t word_bytes = t.cdct ? 8 : 4;
     const std::uint64_t range = context.properties().limits.maxStorageBufferRange;
-    if (caching) {
-        const std::uint64_t cached = static_cast<std::uint64_t>(scene.cached_object_count());
-        while (t.settings.face_size > 1 &&
-               cached * raycache::shared::raycache_gpu_cube_texel_count(t.settings.face_size) * word_bytes > range)
-            --t.settings.face_size;
+    const std::uint32_t cached = caching ? static_cast<std::uint32_t>(scene.cached_object_count()) : 0u;
+    const std::uint64_t counter_bytes = 4 * (std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cached} * RAYCACHE_FRAME_CUBE_WORDS);
+    if (cached > 0) {
+        if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
+        t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, t.settings.face_size), word_bytes,
+                                                            range - counter_bytes)[0];
     }
-    std::uint64_t texels = 0;
+    std::vector<raycache::GpuCubeShape> shapes; // the cached objects' cubes, in object order
+    std::vector<int> shape_of;                  // per object: its cube in shapes, or -1
     auto add_object = [&](const Material& m, bool sphere, glm::vec3 centre, float radius, glm::vec3 lo, glm::vec3 hi) {
         GpuObject o{};
         set4(o.m[0], m.diffuse, m.specular);
@@ -608,15 +613,12 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         o.m[3][0] = m.checker ? 1.0f : 0.0f, o.m[3][1] = m.cached ? 1.0f : 0.0f, o.m[3][2] = sphere ? 1.0f : 0.0f;
         set4(o.m[4], centre, radius);
         objects.push_back(o);
-        raycache::shared::raycache_gpu_cube cube{};
-        cube.face_size = 0; // no texels: lookups miss, stores are refused
+        shape_of.push_back(-1);
         if (caching && m.cached) {
             const glm::vec3 half = 0.5f * (hi - lo);
-            cube = raycache::shared::raycache_make_gpu_cube(0.5f * (lo + hi), std::max(half.x, std::max(half.y, half.z)),
-                                                            static_cast<std::uint32_t>(texels), t.settings.face_size);
-            texels += raycache::shared::raycache_gpu_cube_texel_count(t.settings.face_size);
+            shapes.push_back({t.settings.face_size, raycache::CubeBounds{0.5f * (lo + hi), std::max(half.x, std::max(half.y, half.z))}});
+            shape_of.back() = static_cast<int>(shapes.size() - 1);
         }
-        cubes.push_back(cube);
     };
     for (const Sphere& s : scene.spheres)
         add_object(s.material, true, s.centre, s.radius, s.centre - glm::vec3(s.radius), s.centre + glm::vec3(s.radius));
@@ -624,12 +626,21 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         const Bounds b = mesh_bounds(m);
         add_object(m.material, false, glm::vec3(0.0f), 0.0f, b.min, b.max);
     }
-
-    if (texels * word_bytes > range || texels > std::numeric_limits<std::uint32_t>::max())
-        throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(texels * word_bytes) +
+    const raycache::GpuBufferLayout layout =
+        t.cdct ? raycache::gpu_buffer_layout<raycache::CdctTexel>(shapes) : raycache::gpu_buffer_layout<raycache::CctTexel>(shapes);
+    for (const int k : shape_of) {
+        raycache::shared::raycache_gpu_cube none{};
+        none.face_size = 0; // no texels: lookups miss, stores are refused (counted nowhere: index 0 of face size 0)
+        cubes.push_back(k >= 0 ? layout.cubes[static_cast<std::size_t>(k)] : none);
+    }
+    const std::uint64_t texels = layout.texels;
+    if (layout.bytes > range)
+        throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(layout.bytes) +
                                     " bytes, more than one storage buffer may hold on this device (" +
                                     std::to_string(range) + "); use a smaller --face-size");
     t.texel_count = static_cast<std::uint32_t>(texels);
+    t.frame_layout = raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, texels, range), range);
+    t.frame_start = raycache::gpu_frame_start_words(t.frame_layout);
 
     // Room for any binary BVH over these primitives (2n - 1 nodes), so set_scene uploads in place.
     t.nodes = std::make_unique<vk::Buffer>(context, std::max(t.bvh.nodes.size(), 2 * t.bvh.primitives.size()) * sizeof(BvhNode));
@@ -638,7 +649,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
     t.cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, cubes, 16));
     t.params = std::make_unique<vk::Buffer>(context, sizeof(GpuParams));
-    t.counters = std::make_unique<vk::Buffer>(context, 16);
+    t.frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(t.frame_layout.bytes, 16));
     t.dummy = std::make_unique<vk::Buffer>(context, 16);
     t.dummy->fill(RAYCACHE_GPU_CLEAR_WORD);
     if (texels > 0) {
@@ -647,10 +658,6 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
         t.pending->fill(RAYCACHE_GPU_CLEAR_WORD);
     }
-    t.block_count = static_cast<std::uint32_t>((texels + 1023) / 1024);
-    t.dirty = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(t.block_count, 4) * 4);
-    t.dirty->fill(0u);
-    t.blocks = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(t.block_count, 4) * 4);
     if (settings.hybrid)
         t.raster = std::make_unique<Raster>(
             context, spirv_dir,
@@ -715,7 +722,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.relief_i[1] = t.settings.secant ? RAYCACHE_DEPTH_SEARCH_SECANT : RAYCACHE_DEPTH_SEARCH_RELIEF;
     p.relief_i[2] = t.settings.max_reads;
     t.params->upload(&p, sizeof p);
-    t.counters->fill(0u);
+    t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); // RayCache's frame buffer, started
 
     const vk::Buffer& cct_texels = (!t.cdct && t.texels) ? *t.texels : *t.dummy;
     const vk::Buffer& cct_pending = (!t.cdct && t.pending) ? *t.pending : *t.dummy;
@@ -740,31 +747,30 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
             commands.barrier(); // the copy's writes, visible to the tracing shader
         }
         commands.dispatch(*t.whitted,
-                          {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.cubes, *t.nodes, *t.primitives, *t.objects,
-                           *t.params, *t.output, *t.counters, *t.dirty, gbuffer},
+                          {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame, *t.nodes, *t.primitives, *t.objects,
+                           *t.params, *t.output, *t.cubes, gbuffer},
                           nullptr, 0, vk::group_count(static_cast<std::uint64_t>(width), 8),
                           vk::group_count(static_cast<std::uint64_t>(height), 8));
     });
     const double ms = ms_since(start);
 
+    // RayCache's end-of-frame pass over the texels stored this frame, dispatched from the frame buffer's own
+    // group count (the frame's submission has completed, so its writes are visible to this one).
     double end_ms = 0.0;
-    std::uint32_t dirty_blocks = 0;
     if (t.end_frame && t.texel_count > 0) {
-        // The blocks stored into this frame, listed on the host (the flags are host-visible), then the pass.
         start = std::chrono::steady_clock::now();
-        std::uint32_t* flags = t.dirty->as<std::uint32_t>();
-        std::uint32_t* list = t.blocks->as<std::uint32_t>();
-        for (std::uint32_t b = 0; b < t.block_count; ++b)
-            if (flags[b] != 0u) list[dirty_blocks++] = b, flags[b] = 0u;
-        if (dirty_blocks > 0) {
-            const std::uint32_t count = dirty_blocks * 1024u;
-            const std::uint32_t groups = vk::group_count(count, 256);
-            const std::uint32_t gx = std::min<std::uint32_t>(groups, 65535u);
-            const std::uint32_t gy = (groups + 65534u) / 65535u;
-            t.context.dispatch(*t.end_frame, {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.blocks}, &count, 4, gx, gy);
-        }
+        t.context.submit([&](vk::Commands& commands) {
+            commands.dispatch_indirect(*t.end_frame, {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame}, nullptr, 0,
+                                       *t.frame, raycache::gpu_end_frame_dispatch_offset);
+        });
         end_ms = ms_since(start);
     }
+    const raycache::GpuFrameStatistics gpu_stats = raycache::read_gpu_statistics(t.frame->as<std::uint32_t>(), t.frame_layout);
+    // The list holds every texel, or 16,776,960 of them for larger cubes: more stores in one frame would need
+    // the library's sweep, which this tracer does not run.
+    if (gpu_stats.overflow > 0)
+        throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
+                                 std::to_string(t.frame_layout.list_capacity) + ")");
 
     Image image(width, height);
     const float* out = t.output->as<float>();
@@ -772,9 +778,9 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     if (stats) {
         stats->milliseconds = ms;
         stats->end_frame_milliseconds = end_ms;
-        stats->dirty_fraction = t.block_count ? static_cast<double>(dirty_blocks) / t.block_count : 0.0;
-        stats->lookups = t.counters->as<std::uint32_t>()[0];
-        stats->hits = t.counters->as<std::uint32_t>()[1];
+        stats->stored_texels = gpu_stats.listed;
+        stats->lookups = gpu_stats.total.lookups;
+        stats->hits = gpu_stats.total.hits;
         stats->update_ms = t.update_ms;
     }
     t.update_ms = 0.0;

@@ -69,9 +69,9 @@ struct TracerSettings {
 
 struct FrameStats {
     double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for
-    double end_frame_milliseconds = 0.0; // the end-frame pass (cct, cdct), over the blocks stored into
-    double dirty_fraction = 0.0;         // of the texel blocks (1024 elements), visited by that pass
-    std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube
+    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame pass (cct, cdct), over the texels stored
+    std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
+    std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces
@@ -83,7 +83,8 @@ public:
     // is missing or rejected); allocates and clears the cubes of cached objects for cct/cdct.
     // cdct needs a context with int64_atomics() (std::invalid_argument otherwise). All cubes live in one
     // storage buffer (the GLSL include binds one per technique): a face size whose cubes exceed the
-    // device's maxStorageBufferRange is lowered to the largest that fits (face_size() tells).
+    // device's maxStorageBufferRange is lowered to the largest that fits (raycache::fit_gpu_face_sizes;
+    // face_size() tells).
     Tracer(vk::Context& context, const Scene& scene, const std::string& spirv_dir, const TracerSettings& settings);
     ~Tracer();
     Tracer(const Tracer&) = delete;

@@ -5,6 +5,7 @@
  * Buffers (std430, set RAYCACHE_CDCT_SET = RAYCACHE_SET):
  *   binding RAYCACHE_CDCT_BINDING (2)          uvec2 raycache_cdct_texels[]      what searches read
  *   binding RAYCACHE_CDCT_PENDING_BINDING (3)  uint64_t raycache_cdct_pending[]  this frame's stores
+ *   binding RAYCACHE_FRAME_BINDING (4)         uint raycache_frame[]             counters, store list (frame.glsl)
  * A texel is x = RGB9E5 colour, y = float bits of the distance from the cube's centre (C++'s 64-bit
  * word, x low). Stores take the 64-bit atomicMin, so the nearest surface wins, then the smaller colour
  * word, exactly as in C++: the device needs shaderInt64 and shaderBufferInt64Atomics (lavapipe has
@@ -32,12 +33,6 @@
 
 #ifndef RAYCACHE_CDCT_SET
 #define RAYCACHE_CDCT_SET RAYCACHE_SET
-#endif
-#ifndef RAYCACHE_CDCT_BINDING
-#define RAYCACHE_CDCT_BINDING 2
-#endif
-#ifndef RAYCACHE_CDCT_PENDING_BINDING
-#define RAYCACHE_CDCT_PENDING_BINDING 3
 #endif
 
 layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_BINDING) RAYCACHE_TEXEL_ACCESS buffer raycache_cdct_texel_buffer {
@@ -82,7 +77,9 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
         w = raycache_relief_step(w, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
                                  raycache_cdct_color(texel));
     }
-    return raycache_relief_walk_result(w);
+    raycache_relief_result result = raycache_relief_walk_result(w);
+    raycache_count_lookup(cube, result.hit);
+    return result;
 }
 
 /* The CDCT's cheap search, as raycache::secant_search (raycache/shared/depth_secant.h drives it; this
@@ -102,7 +99,9 @@ raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 
         s = raycache_secant_step(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
                                  raycache_cdct_color(texel));
     }
-    return raycache_secant_result(s, origin);
+    raycache_relief_result result = raycache_secant_result(s, origin);
+    raycache_count_lookup(cube, result.hit);
+    return result;
 }
 
 /* The search p.search names, as raycache::depth_search without a pyramid: RAYCACHE_DEPTH_SEARCH_SECANT
@@ -120,12 +119,17 @@ raycache_relief_result raycache_cdct_search(raycache_gpu_cube cube, vec3 origin,
  * distance, then the smaller colour word. Visible from the next frame. */
 bool raycache_cdct_store(raycache_gpu_cube cube, vec3 key, vec3 color, float distance) {
     uint i = raycache_cube_texel(cube, key);
-    if (i >= uint(raycache_cdct_texels.length()) || i >= uint(raycache_cdct_pending.length())) return false;
     uvec2 texel = raycache_cdct_store_texel(color, distance);
-    if (!raycache_cdct_is_valid(texel)) return false;
-    if (raycache_cdct_is_valid(raycache_cdct_texels[i])) return false; /* visible: kept */
+    if (i >= uint(raycache_cdct_texels.length()) || i >= uint(raycache_cdct_pending.length()) ||
+        !raycache_cdct_is_valid(texel) || raycache_cdct_is_valid(raycache_cdct_texels[i]) /* visible: kept */) {
+        raycache_frame_count(cube.index, RAYCACHE_FRAME_REFUSED);
+        return false;
+    }
+    raycache_frame_count(cube.index, RAYCACHE_FRAME_STORES);
     uint64_t word = packUint2x32(texel);
-    return atomicMin(raycache_cdct_pending[i], word) > word;
+    uint64_t old = atomicMin(raycache_cdct_pending[i], word);
+    if (old == 0xFFFFFFFFFFFFFFFFul) raycache_frame_list_append(i | RAYCACHE_FRAME_CDCT_ENTRY);
+    return old > word;
 }
 
 /* Stores what a traced ray hit at hit_point: key hit_point - centre, distance |hit_point - centre|
@@ -154,8 +158,9 @@ bool raycache_cdct_store_traced(raycache_gpu_cube cube, vec3 origin, vec3 direct
 #endif
 
 #ifdef RAYCACHE_END_FRAME
-/* End of frame for one element of the buffers (call for every element, 0 .. length - 1, in a pass
- * between frames): a pending word moves into an empty texel; the pending word is emptied. */
+/* End of frame for one element of the buffers: a pending word moves into an empty texel; the pending word
+ * is emptied. The end-of-frame pass (raycache/end_frame.glsl) calls it for the listed elements; calling it
+ * for every element, 0 .. length - 1, is the sweep needed after a list overflow. */
 void raycache_cdct_end_frame(uint element) {
     if (element >= uint(raycache_cdct_texels.length()) || element >= uint(raycache_cdct_pending.length())) return;
     uvec2 pending = unpackUint2x32(raycache_cdct_pending[element]);

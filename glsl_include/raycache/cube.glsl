@@ -6,7 +6,8 @@
  *
  * Options (define before the first RayCache include):
  *   RAYCACHE_SET         descriptor set of RayCache's buffers (default 0)
- *   RAYCACHE_READ_ONLY   lookups only: no pending buffers, no store functions (no atomics needed)
+ *   RAYCACHE_READ_ONLY   lookups only: no pending or frame buffer, no store functions, no counters
+ *                        (no atomics needed)
  *   RAYCACHE_END_FRAME   texel buffers writable, and the end-frame functions defined (for the pass
  *                        that runs between frames); otherwise texel buffers are readonly
  * Stores from a fragment shader need the device feature fragmentStoresAndAtomics.
@@ -19,9 +20,7 @@
 #include "raycache/shared/gpu_layout.h"
 #include "raycache/shared/ray_box.h"
 
-#ifndef RAYCACHE_SET
-#define RAYCACHE_SET 0
-#endif
+#include "raycache/frame.glsl" /* RAYCACHE_SET defaults to 0 in raycache/shared/gpu_layout.h */
 
 #if defined(RAYCACHE_READ_ONLY) && defined(RAYCACHE_END_FRAME)
 #error "RayCache: RAYCACHE_READ_ONLY and RAYCACHE_END_FRAME exclude each other"
@@ -50,6 +49,13 @@ uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
     raycache_texel_address a = raycache_texel_of(s, cube.face_size);
     if (a.face == RAYCACHE_NO_FACE) return RAYCACHE_NO_TEXEL;
     return cube.first_texel + raycache_texel_linear_index(a, cube.face_size);
+}
+
+/* Counts a lookup of `cube` as a hit or a miss in the frame buffer (nothing under RAYCACHE_READ_ONLY). */
+void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
+#ifndef RAYCACHE_READ_ONLY
+    raycache_frame_count(cube.index, hit ? RAYCACHE_FRAME_HITS : RAYCACHE_FRAME_MISSES);
+#endif
 }
 
 #endif /* RAYCACHE_CUBE_GLSL */

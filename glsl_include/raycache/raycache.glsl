@@ -22,8 +22,11 @@
  * fragmentStoresAndAtomics). The CDCT (raycache/cdct.glsl, included here only when RAYCACHE_CDCT is defined)
  * stores with 64-bit atomics: its shaders declare the Int64 capability and the device must enable
  * shaderInt64 and shaderBufferInt64Atomics (RAYCACHE_READ_ONLY: neither).
- * Between frames, one pass compiled with RAYCACHE_END_FRAME calls raycache_cct_end_frame(i) (and
- * raycache_cdct_end_frame(i)) for every buffer element i, which makes the frame's stores visible.
+ * Buffers (set RAYCACHE_SET, bindings from raycache/shared/gpu_layout.h): CCT texels 0, pending 1, CDCT
+ * texels 2, pending 3, frame buffer 4 (counters and the store list, raycache/frame.glsl; host side:
+ * raycache/gpu_frame.hpp, which also gives the words to write into it before every frame).
+ * Between frames, the end-of-frame pass (raycache/end_frame.glsl, five lines, dispatched indirectly from
+ * the frame buffer) makes the frame's stores visible, visiting only the texels stored.
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
  */
 #ifndef RAYCACHE_RAYCACHE_GLSL

@@ -1,6 +1,7 @@
 // raycache/gpu_buffers.hpp: the host side of RayCache's GPU buffers (raycache/shared/gpu_layout.h), with no
 // graphics API: where each cube's texels lie in a technique's texel buffer (and its pending twin), how big
-// the buffers are, the word they must be filled with, and a C++ cube's texels as GPU words and back.
+// the buffers are, the word they must be filled with, and a C++ cube's texels as GPU words and back. The
+// frame buffer, statistics and end-of-frame pass: raycache/gpu_frame.hpp (included).
 //
 // Every texel and pending buffer must hold gpu_clear_word in every 32-bit word before its first frame
 // (vkCmdFillBuffer(cmd, buffer, 0, VK_WHOLE_SIZE, raycache::gpu_clear_word), or fill_gpu_words on mapped
@@ -18,6 +19,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/cdct.hpp"
+#include "raycache/gpu_frame.hpp"
 #include "raycache/shared/gpu_layout.h"
 
 namespace raycache {
@@ -43,10 +45,11 @@ struct GpuBufferLayout {
     std::uint64_t bytes = 0;                      // bytes of each buffer (create both this size, fill with gpu_clear_word)
 };
 
-// Places the cubes: cube k's texels start at element sum_{j<k} 6 N_j^2. Throws std::invalid_argument for a
-// face size outside 1..4096 or more than 2^32 texels in all (a descriptor's first_texel is a uint).
+// Places the cubes: cube k's texels start at element sum_{j<k} 6 N_j^2, and its counters in the frame buffer
+// are number first_index + k (give the other technique's cubes other numbers). Throws std::invalid_argument
+// for a face size outside 1..4096 or more than 2^32 texels in all (a descriptor's first_texel is a uint).
 template <class Texel>
-GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes) {
+GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes, std::uint32_t first_index = 0) {
     GpuBufferLayout layout;
     for (std::size_t k = 0; k < shapes.size(); ++k) {
         const GpuCubeShape& s = shapes[k];
@@ -59,6 +62,7 @@ GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes) {
                                         " hold more than 2^32 texels, past what a descriptor's first_texel addresses");
         layout.cubes.push_back(shared::raycache_make_gpu_cube(s.bounds.centre, s.bounds.half_size,
                                                               static_cast<std::uint32_t>(layout.texels), s.face_size));
+        layout.cubes.back().index = first_index + static_cast<std::uint32_t>(k);
         layout.texels += count;
     }
     layout.words = layout.texels * gpu_words_per_texel<Texel>;

@@ -71,6 +71,7 @@ Setup make_cubes(std::mt19937& rng, double fill) {
     for (int n : {1, 4, 16, 37}) {
         s.cubes.emplace_back(n);
         s.descriptors.push_back(gpu::raycache_make_gpu_cube(glm::vec3(0.0f), 1.0f, static_cast<std::uint32_t>(s.elements), n));
+        s.descriptors.back().index = static_cast<std::uint32_t>(s.cubes.size() - 1); // its counters in the frame buffer
         s.elements += s.cubes.back().texel_count();
     }
     for (CctCube& cube : s.cubes) {
@@ -108,8 +109,9 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
     rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
     rcx::vk::Buffer results(*vk, queries.size() * 16);
+    rcx_test::Frame frame(*vk, static_cast<std::uint32_t>(s.cubes.size()), static_cast<std::uint32_t>(s.elements));
     const std::uint32_t count = static_cast<std::uint32_t>(queries.size());
-    vk->dispatch(cross, {texels, pending, cubes, query_buffer, results}, &count, 4, rcx::vk::group_count(count, 64));
+    vk->dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
 
     const std::uint32_t* r = results.as<std::uint32_t>();
     std::size_t same = 0, hits = 0;
@@ -125,13 +127,27 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     CHECK(same == queries.size());
     CHECK(hits > queries.size() / 10);
     CHECK(hits < queries.size() * 9 / 10);
+
+    // The GPU's counters, per cube, equal the C++ cubes' own for the same lookups (made just above).
+    const raycache::GpuFrameStatistics gpu_stats = frame.statistics();
+    for (std::size_t k = 0; k < s.cubes.size(); ++k) {
+        CAPTURE(k);
+        const raycache::CubeStatistics cpu = s.cubes[k].statistics();
+        CHECK(gpu_stats.cubes[k].lookups == cpu.lookups);
+        CHECK(gpu_stats.cubes[k].hits == cpu.hits);
+        CHECK(gpu_stats.cubes[k].misses == cpu.misses);
+        CHECK(gpu_stats.cubes[k].stores == 0u);
+        CHECK(gpu_stats.cubes[k].refused_stores == 0u);
+    }
+    CHECK(gpu_stats.total.lookups == queries.size());
+    CHECK(gpu_stats.listed == 0u);
 }
 
 TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word wins, and C++ reads the result") {
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
     rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), rcx_test::cross_bindings, 4);
-    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cct"), rcx_test::end_frame_bindings, 0);
+    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_listed"), rcx_test::listed_end_frame_bindings, 0);
     std::mt19937 rng(12);
     Setup s = make_cubes(rng, 0.2); // some texels visible already: stores into them are refused
 
@@ -162,27 +178,63 @@ TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word w
     std::vector<Query> lookups = queries;
     for (Query& q : lookups) q.store = 0u;
     rcx::vk::Buffer lookup_buffer = rcx_test::buffer_of(*vk, lookups);
+    rcx::vk::Buffer dummy(*vk, 16);
+    rcx_test::Frame frame(*vk, static_cast<std::uint32_t>(s.cubes.size()), static_cast<std::uint32_t>(s.elements));
     const std::uint32_t count = static_cast<std::uint32_t>(queries.size());
     vk->submit([&](rcx::vk::Commands& c) {
-        c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results}, &count, 4, rcx::vk::group_count(count, 64));
+        c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
         c.barrier();
-        rcx_test::record_end_frame(c, end_frame, texels, pending, s.elements);
-        c.barrier();
-        c.dispatch(cross, {texels, pending, cubes, lookup_buffer, next_results}, &count, 4, rcx::vk::group_count(count, 64));
+        rcx_test::record_listed_end_frame(c, end_frame, texels, pending, dummy, dummy, frame);
     });
+    // The frame's statistics and store list, read back before the next frame starts the frame buffer again.
+    const raycache::GpuFrameStatistics gpu_stats = frame.statistics();
+    const std::vector<std::uint32_t> listed = frame.listed();
+    const std::uint32_t dispatched = frame.buffer.as<std::uint32_t>()[RAYCACHE_FRAME_DISPATCH];
+    frame.start();
+    vk->dispatch(cross, {texels, pending, cubes, lookup_buffer, next_results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
 
     // The same stores in C++, in order, then the end of the frame; count the texels that several
     // different words competed for.
     std::map<std::pair<std::uint32_t, std::size_t>, std::set<std::uint32_t>> competing;
-    for (const Query& q : queries) {
+    std::vector<std::uint64_t> certain_refusals(s.cubes.size(), 0), store_calls(s.cubes.size(), 0);
+    for (std::size_t i = 0; i < queries.size(); ++i) {
+        const Query& q = queries[i];
         if (!q.store) continue;
         CctCube& cube = s.cubes[q.cube];
+        ++store_calls[q.cube];
+        certain_refusals[q.cube] += refused_for_sure[i];
         if (s.cubes[q.cube].store(q.direction, q.color))
             competing[{q.cube, raycache::texel_linear_index(*raycache::texel_of(q.direction, cube.face_size()), cube.face_size())}]
                 .insert(CctTexel::encode(q.color));
     }
     std::size_t contended = 0;
     for (const auto& texel : competing) contended += texel.second.size() > 1;
+    // The texels C++ wrote this frame, as buffer elements: what the store list must hold, once each.
+    std::set<std::uint32_t> written;
+    for (std::size_t k = 0; k < s.cubes.size(); ++k)
+        s.cubes[k].for_each_written_texel([&](const raycache::TexelAddress& t) {
+            written.insert(s.descriptors[k].first_texel +
+                           static_cast<std::uint32_t>(raycache::texel_linear_index(t, s.cubes[k].face_size())));
+        });
+    // Counters: stores refused before the pending word are exactly the certain refusals (not a direction, or
+    // a visible texel); the others reached it, whether or not they won (C++'s stores plus its same-frame losers).
+    for (std::size_t k = 0; k < s.cubes.size(); ++k) {
+        CAPTURE(k);
+        const raycache::CubeStatistics cpu = s.cubes[k].statistics();
+        CHECK(gpu_stats.cubes[k].refused_stores == certain_refusals[k]);
+        CHECK(gpu_stats.cubes[k].stores + gpu_stats.cubes[k].refused_stores == store_calls[k]);
+        CHECK(cpu.stores + cpu.refused_stores == store_calls[k]);
+        CHECK(gpu_stats.cubes[k].stores >= cpu.stores);
+        std::uint64_t lookups_made = 0, hits_made = 0; // C++'s answers to the frame's lookup queries
+        for (std::size_t i = 0; i < queries.size(); ++i)
+            if (!queries[i].store && queries[i].cube == k) ++lookups_made, hits_made += expected_lookups[i].has_value();
+        CHECK(gpu_stats.cubes[k].lookups == lookups_made);
+        CHECK(gpu_stats.cubes[k].hits == hits_made);
+    }
+    CHECK(gpu_stats.overflow == 0u);
+    CHECK(std::set<std::uint32_t>(listed.begin(), listed.end()) == written);
+    CHECK(listed.size() == written.size()); // each texel listed once
+    CHECK(dispatched == raycache::gpu_end_frame_groups(listed.size()));
     for (CctCube& cube : s.cubes) cube.begin_frame();
 
     // During the frame: lookups answered from the frame's start, stores refused where C++ must refuse.
@@ -241,4 +293,80 @@ TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word w
     }
     CHECK(next_same == lookups.size());
     CHECK(next_hits > lookups.size() / 2);
+}
+
+TEST_CASE("the end-of-frame pass publishes the listed texels only, and a list that overflows is made good by the sweep") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    rcx::vk::ComputePipeline cross(*vk, rcx_test::spirv("cct_cross"), rcx_test::cross_bindings, 4);
+    rcx::vk::ComputePipeline listed_pass(*vk, rcx_test::spirv("end_frame_listed"), rcx_test::listed_end_frame_bindings, 0);
+    rcx::vk::ComputePipeline sweep(*vk, rcx_test::spirv("end_frame_cct"), rcx_test::end_frame_bindings, 0);
+    for (const std::uint32_t capacity : {100000u, 40u}) {
+        CAPTURE(capacity);
+        std::mt19937 rng(13);
+        Setup s = make_cubes(rng, 0.1);
+        std::vector<Query> queries;
+        for (int i = 0; i < 3000; ++i)
+            queries.push_back({any_direction(rng), static_cast<std::uint32_t>(i % s.cubes.size()), any_color(rng), 1u});
+        const std::vector<std::uint32_t> before = buffer_words(s); // visible words, before this frame's stores
+        for (const Query& q : queries) s.cubes[q.cube].store(q.direction, q.color); // the oracle
+        std::set<std::uint32_t> written;
+        for (std::size_t k = 0; k < s.cubes.size(); ++k)
+            s.cubes[k].for_each_written_texel([&](const raycache::TexelAddress& t) {
+                written.insert(s.descriptors[k].first_texel + static_cast<std::uint32_t>(raycache::texel_linear_index(t, s.cubes[k].face_size())));
+            });
+        for (CctCube& cube : s.cubes) cube.begin_frame();
+        const std::vector<std::uint32_t> after = buffer_words(s);
+
+        rcx::vk::Buffer texels = rcx_test::buffer_of(*vk, before);
+        rcx::vk::Buffer pending(*vk, s.elements * 4);
+        pending.fill(RAYCACHE_GPU_CLEAR_WORD);
+        rcx::vk::Buffer cubes = rcx_test::buffer_of(*vk, s.descriptors);
+        rcx::vk::Buffer query_buffer = rcx_test::buffer_of(*vk, queries);
+        rcx::vk::Buffer results(*vk, queries.size() * 16);
+        rcx::vk::Buffer dummy(*vk, 16);
+        rcx_test::Frame frame(*vk, static_cast<std::uint32_t>(s.cubes.size()), capacity);
+        const std::uint32_t count = static_cast<std::uint32_t>(queries.size());
+        vk->dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
+
+        // A planted pending word in an empty texel no store reached: the pass must not visit it.
+        std::uint32_t planted = 0;
+        while (planted < s.elements && (written.count(planted) || CctTexel::is_valid(before[planted]))) ++planted;
+        REQUIRE(planted < s.elements);
+        pending.as<std::uint32_t>()[planted] = 0x1234u;
+
+        const raycache::GpuFrameStatistics stats = frame.statistics();
+        vk->submit([&](rcx::vk::Commands& c) { rcx_test::record_listed_end_frame(c, listed_pass, texels, pending, dummy, dummy, frame); });
+        const std::uint32_t* words = texels.as<std::uint32_t>();
+        CHECK(stats.listed + stats.overflow == written.size());
+        CHECK(words[planted] == RAYCACHE_GPU_CLEAR_WORD);
+        CHECK(pending.as<std::uint32_t>()[planted] == 0x1234u);
+        std::size_t published = 0, unchanged = 0;
+        for (std::uint32_t i = 0; i < s.elements; ++i) {
+            if (words[i] == after[i] && words[i] != before[i]) ++published;
+            if (words[i] == before[i]) ++unchanged;
+        }
+        if (capacity >= written.size()) {
+            CHECK(stats.overflow == 0u);
+            CHECK(published == written.size());
+            CHECK(unchanged == s.elements - written.size());
+        } else {
+            // Only `capacity` texels were listed and published; the sweep publishes the rest (and the planted word).
+            CHECK(stats.listed == capacity);
+            CHECK(stats.overflow == written.size() - capacity);
+            CHECK(published == capacity);
+            pending.as<std::uint32_t>()[planted] = RAYCACHE_GPU_CLEAR_WORD;
+            vk->submit([&](rcx::vk::Commands& c) {
+                const raycache::GpuGroups g = raycache::gpu_sweep_groups(s.elements);
+                c.dispatch(sweep, {texels, pending}, nullptr, 0, g.x, g.y);
+            });
+        }
+        std::size_t same = 0;
+        for (std::uint32_t i = 0; i < s.elements; ++i) same += i == planted || words[i] == after[i];
+        CHECK(same == s.elements);
+        std::printf("end-of-frame pass, list of %u: %zu texels stored, %llu listed, %llu overflowed; %zu of %zu words "
+                    "equal to C++'s after the frame\n",
+                    capacity, written.size(), static_cast<unsigned long long>(stats.listed),
+                    static_cast<unsigned long long>(stats.overflow), same, s.elements);
+    }
 }

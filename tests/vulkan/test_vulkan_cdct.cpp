@@ -125,18 +125,30 @@ struct GpuSearches {
     Scene& s;
     std::vector<Query> queries;
     rcx::vk::Buffer texels, pending, cubes, query_buffer, results;
+    rcx_test::Frame frame;
 
     GpuSearches(rcx::vk::Context& context, const rcx::vk::ComputePipeline& pipeline, Scene& scene, std::vector<Query> q)
         : vk(context), cross(pipeline), s(scene), queries(std::move(q)), texels(rcx_test::buffer_of(vk, s.words())),
           pending(vk, s.elements * 8), cubes(rcx_test::buffer_of(vk, s.descriptors)),
-          query_buffer(rcx_test::buffer_of(vk, queries)), results(vk, queries.size() * sizeof(Result)) {
+          query_buffer(rcx_test::buffer_of(vk, queries)), results(vk, queries.size() * sizeof(Result)),
+          frame(vk, static_cast<std::uint32_t>(s.cubes.size()), 16) {
         pending.fill(RAYCACHE_GPU_CLEAR_WORD);
     }
     Comparison run(const ReliefParameters& p) {
         const Push push(p, queries.size());
-        vk.dispatch(cross, {texels, pending, cubes, query_buffer, results}, &push, sizeof(push),
+        frame.start();
+        vk.dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &push, sizeof(push),
                     rcx::vk::group_count(queries.size(), 64));
-        return compare_searches(s, queries, results.as<Result>(), p);
+        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        // Every search is one lookup of its cube, a hit when it answered.
+        const raycache::GpuFrameStatistics stats = frame.statistics();
+        std::vector<std::uint64_t> lookups(s.cubes.size(), 0), hits(s.cubes.size(), 0);
+        for (std::size_t i = 0; i < queries.size(); ++i) ++lookups[queries[i].cube], hits[queries[i].cube] += results.as<Result>()[i].hit != 0u;
+        for (std::size_t k = 0; k < s.cubes.size(); ++k) {
+            CHECK(stats.cubes[k].lookups == lookups[k]);
+            CHECK(stats.cubes[k].hits == hits[k]);
+        }
+        return c;
     }
 };
 
@@ -210,7 +222,7 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Context* vk = rcx_test::context();
     if (!vk) return;
     const rcx::vk::ComputePipeline cross = cross_pipeline(*vk);
-    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_cdct"), rcx_test::end_frame_bindings, 0);
+    rcx::vk::ComputePipeline end_frame(*vk, rcx_test::spirv("end_frame_listed_cdct"), rcx_test::listed_end_frame_bindings, 0);
     std::mt19937 rng(22);
     // The scene filled, then 3 of every 4 texels emptied: stores into the rest are refused.
     Scene s = make_scene(rng, true);
@@ -287,15 +299,21 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
     rcx::vk::Buffer next_secant_results(*vk, next_queries.size() * sizeof(Result));
     const Push push(p, queries.size());
     const Push next_push(p, next_queries.size());
+    rcx::vk::Buffer dummy(*vk, 16);
+    rcx_test::Frame frame(*vk, static_cast<std::uint32_t>(s.cubes.size()), static_cast<std::uint32_t>(s.elements));
     vk->submit([&](rcx::vk::Commands& c) {
-        c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results}, &push, sizeof(push),
+        c.dispatch(cross, {texels, pending, cubes, query_buffer, frame_results, frame.buffer}, &push, sizeof(push),
                    rcx::vk::group_count(queries.size(), 64));
         c.barrier();
-        rcx_test::record_end_frame(c, end_frame, texels, pending, s.elements);
-        c.barrier();
-        c.dispatch(cross, {texels, pending, cubes, next_buffer, next_results}, &next_push, sizeof(next_push),
+        rcx_test::record_listed_end_frame(c, end_frame, dummy, dummy, texels, pending, frame);
+    });
+    const raycache::GpuFrameStatistics gpu_stats = frame.statistics();
+    const std::vector<std::uint32_t> listed = frame.listed();
+    frame.start();
+    vk->submit([&](rcx::vk::Commands& c) {
+        c.dispatch(cross, {texels, pending, cubes, next_buffer, next_results, frame.buffer}, &next_push, sizeof(next_push),
                    rcx::vk::group_count(next_queries.size(), 64));
-        c.dispatch(cross, {texels, pending, cubes, next_secant_buffer, next_secant_results}, &next_push,
+        c.dispatch(cross, {texels, pending, cubes, next_secant_buffer, next_secant_results, frame.buffer}, &next_push,
                    sizeof(next_push), rcx::vk::group_count(next_queries.size(), 64));
     });
 
@@ -324,6 +342,22 @@ TEST_CASE("CDCT stores made in GLSL are invisible that frame, the nearest then s
             competing[{q.cube, texel_linear_index(*texel_of(key, cube.face_size()), cube.face_size())}].insert(
                 CdctTexel::encode(sample));
     }
+    // The store list holds the texels C++ wrote this frame, once each, tagged as CDCT entries; refusals
+    // before the pending word are the certain ones, the other stores reached it.
+    std::set<std::uint32_t> written;
+    for (std::size_t k = 0; k < s.cubes.size(); ++k)
+        s.cubes[k].for_each_written_texel([&](const TexelAddress& t) {
+            written.insert((s.descriptors[k].first_texel + static_cast<std::uint32_t>(texel_linear_index(t, s.cubes[k].face_size()))) |
+                           RAYCACHE_FRAME_CDCT_ENTRY);
+        });
+    CHECK(std::set<std::uint32_t>(listed.begin(), listed.end()) == written);
+    CHECK(listed.size() == written.size());
+    CHECK(gpu_stats.overflow == 0u);
+    std::uint64_t certain = 0, store_calls = 0;
+    for (std::size_t i = 0; i < queries.size(); ++i)
+        if (queries[i].mode != 0) ++store_calls, certain += refused_for_sure[i];
+    CHECK(gpu_stats.total.refused_stores == certain);
+    CHECK(gpu_stats.total.stores + gpu_stats.total.refused_stores == store_calls);
     for (CdctCube& cube : s.cubes) cube.begin_frame();
     std::size_t contended = 0;
     for (const auto& texel : competing) contended += texel.second.size() > 1;

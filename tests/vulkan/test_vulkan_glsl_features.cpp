@@ -65,14 +65,18 @@ TEST_CASE("a CCT-only shader runs without shaderInt64 and no validation error: f
     const std::uint64_t errors_before = vk.validation_errors();
 
     rcx::vk::ComputePipeline pipeline(vk, rcx_test::spirv("cct_only"),
-                                      std::vector<VkDescriptorType>(3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+                                      std::vector<VkDescriptorType>(4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
                                       sizeof(raycache::shared::raycache_gpu_cube));
     const raycache::GpuBufferLayout layout = raycache::gpu_buffer_layout<raycache::CctTexel>({{4, {}}});
     rcx::vk::Buffer texels = rcx_test::buffer_of(vk, raycache::cleared_gpu_words(layout));
     rcx::vk::Buffer pending = rcx_test::buffer_of(vk, raycache::cleared_gpu_words(layout));
     rcx::vk::Buffer results(vk, 6 * 8);
+    const raycache::GpuFrameLayout frame_layout = raycache::gpu_frame_layout(1, 6);
+    rcx::vk::Buffer frame(vk, frame_layout.bytes);
     auto run = [&] {
-        vk.dispatch(pipeline, {texels, pending, results}, &layout.cubes[0], sizeof(layout.cubes[0]), 1);
+        frame.fill(0u);
+        frame.upload(raycache::gpu_frame_start_words(frame_layout).data(), frame_layout.start_bytes);
+        vk.dispatch(pipeline, {texels, pending, results, frame}, &layout.cubes[0], sizeof(layout.cubes[0]), 1);
         std::vector<std::uint32_t> r(results.as<std::uint32_t>(), results.as<std::uint32_t>() + 12);
         return r;
     };

@@ -15,6 +15,7 @@
 #include <doctest/doctest.h>
 
 #include <raycache/cache_cube.hpp>
+#include <raycache/gpu_frame.hpp>
 #include <raycache/shared/gpu_layout.h>
 #include <rcx/vulkan.hpp>
 
@@ -45,10 +46,39 @@ void for_face_sizes(const std::string& shader, const std::vector<VkDescriptorTyp
     }
 }
 
-// Bindings of the cross-check shaders (shaders/*_cross.comp: five storage buffers) and of the
-// end-frame pass (texels and pending).
-inline const std::vector<VkDescriptorType> cross_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+// Bindings of the cross-check shaders (shaders/*_cross.comp: six storage buffers, the frame buffer last), of
+// the sweep (shaders/end_frame.comp: texels and pending) and of the library's end-of-frame pass
+// (shaders/end_frame_listed.comp: CCT texels and pending, CDCT texels and pending, frame).
+inline const std::vector<VkDescriptorType> cross_bindings(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 inline const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+inline const std::vector<VkDescriptorType> listed_end_frame_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+
+// A frame buffer (raycache/gpu_frame.hpp) and its layout, started for a frame (start()).
+struct Frame {
+    Frame(rcx::vk::Context& vk, std::uint32_t cube_count, std::uint32_t list_capacity)
+        : layout(raycache::gpu_frame_layout(cube_count, list_capacity)), buffer(vk, layout.bytes) {
+        buffer.fill(0xDEADBEEFu); // list entries are never read before they are written
+        start();
+    }
+    void start() { buffer.upload(raycache::gpu_frame_start_words(layout).data(), layout.start_bytes); }
+    raycache::GpuFrameStatistics statistics() const { return raycache::read_gpu_statistics(buffer.as<std::uint32_t>(), layout); }
+    // The entries listed this frame.
+    std::vector<std::uint32_t> listed() const {
+        const std::uint32_t* w = buffer.as<std::uint32_t>() + raycache::shared::raycache_frame_list_word(layout.cube_count, 0);
+        return std::vector<std::uint32_t>(w, w + statistics().listed);
+    }
+    raycache::GpuFrameLayout layout;
+    rcx::vk::Buffer buffer;
+};
+
+// Records the library's end-of-frame pass, dispatched indirectly from the frame buffer's own count.
+inline void record_listed_end_frame(rcx::vk::Commands& commands, const rcx::vk::ComputePipeline& end_frame,
+                                    const rcx::vk::Buffer& cct_texels, const rcx::vk::Buffer& cct_pending,
+                                    const rcx::vk::Buffer& cdct_texels, const rcx::vk::Buffer& cdct_pending,
+                                    const Frame& frame) {
+    commands.dispatch_indirect(end_frame, {cct_texels, cct_pending, cdct_texels, cdct_pending, frame.buffer}, nullptr, 0,
+                               frame.buffer, raycache::gpu_end_frame_dispatch_offset);
+}
 
 // Records the end-frame pass (shaders/end_frame.comp) over `elements` elements of texels and pending.
 inline void record_end_frame(rcx::vk::Commands& commands, const rcx::vk::ComputePipeline& end_frame,

@@ -5,10 +5,9 @@
 // throughput weights (colour is linear in the children's colours, so the sum is the same).
 //
 // Caching (Params.mode: 0 off, 1 cct, 2 cdct, 3 ceiling): a ray leaving a cached object, met on the way
-// of a primary ray's tree, goes through the object's cube (RayCache's GLSL include); on a miss its
-// subtree is traced with trace_subtree(), which does not consult caches again (GLSL has no recursion),
-// and the result is stored, with the store's block of texels flagged dirty for the end-frame pass
-// (end_frame.comp visits only those). Hybrid (mode + 16): the primary ray's hit is read from the G-buffer
+// of a primary ray's tree, goes through the object's cube (RayCache's GLSL include, which counts the
+// lookups and lists the stored texels for the end-of-frame pass, end_frame.comp); on a miss its subtree is
+// traced with trace_subtree(), which does not consult caches again (GLSL has no recursion), and stored. Hybrid (mode + 16): the primary ray's hit is read from the G-buffer
 // that the raster pass wrote (gbuffer.vert/.frag) instead of traced. Compiled twice: without
 // WHITTED_CDCT (off, cct, ceiling: no 64-bit atomics needed) and with it (cdct).
 #extension GL_GOOGLE_include_directive : require
@@ -22,21 +21,13 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"
 
-layout(std430, binding = 4) readonly buffer Cubes { raycache_gpu_cube cubes[]; };
+// RayCache's buffers take bindings 0..4 (raycache/shared/gpu_layout.h: CCT texels and pending, CDCT texels
+// and pending, the frame buffer with its counters and store list); the scene's 5..8 (scene.glsl).
 layout(std430, binding = 9) writeonly buffer Output { vec4 pixels[]; };
-layout(std430, binding = 10) buffer Counters { uint counters[]; }; // 0: lookups, 1: hits
+layout(std430, binding = 10) readonly buffer Cubes { raycache_gpu_cube cubes[]; };
 // Hybrid (Params.frame.z >= 16 adds it to the mode): the primary hit of each pixel from the raster pass,
 // (t bits, primitive or ~0u for none, u bits, v bits).
-layout(std430, binding = 12) readonly buffer GBuffer { uvec4 gbuffer[]; };
-// One flag per block of 1024 texel-buffer elements that a store went to this frame: the end-frame pass
-// visits only those blocks (every other pending word is still empty).
-layout(std430, binding = 11) buffer Dirty { uint dirty[]; };
-const uint BLOCK_SHIFT = 10u;
-
-void mark_dirty(raycache_gpu_cube cube, vec3 key) {
-    uint i = raycache_cube_texel(cube, key);
-    if (i != RAYCACHE_NO_TEXEL && (i >> BLOCK_SHIFT) < uint(dirty.length())) dirty[i >> BLOCK_SHIFT] = 1u;
-}
+layout(std430, binding = 11) readonly buffer GBuffer { uvec4 gbuffer[]; };
 
 const int MODE_OFF = 0, MODE_CCT = 1, MODE_CDCT = 2, MODE_CEILING = 3;
 
@@ -86,37 +77,33 @@ vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
 }
 
 // The colour of a ray leaving cached object `object` from o in unit direction d (tracer.cpp's leaving()).
-vec3 leaving(uint object, vec3 o, vec3 d, int depth, inout uint lookups, inout uint hits) {
+vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
     raycache_gpu_cube cube = cubes[object];
-    ++lookups;
 #ifdef WHITTED_CDCT
     raycache_relief_parameters rp = raycache_relief_parameters(relief.x, relief.y, relief_i.x, relief.z, relief.w,
                                                                relief_i.y, relief_i.z);
     raycache_relief_result f = raycache_cdct_search(cube, o, d, rp); // secant or relief walk, as rp.search says
-    if (f.hit) { ++hits; return f.color; }
+    if (f.hit) return f.color;
     vec4 r = trace_subtree(o, d, depth + 1);
-    // Only a store that lowered the pending word flags its block: one that lost to a smaller word
-    // finds the block flagged by the store that beat it.
     if (isinf(r.w)) {
-        if (raycache_cdct_store_escape(cube, d, r.rgb, rp)) mark_dirty(cube, d);
+        raycache_cdct_store_escape(cube, d, r.rgb, rp);
     } else {
         precise vec3 hit_point = o + r.w * d;
-        precise vec3 from_centre = hit_point - cube.centre; // the key raycache_cdct_store_hit uses
-        if (raycache_cdct_store_hit(cube, hit_point, r.rgb, rp)) mark_dirty(cube, from_centre);
+        raycache_cdct_store_hit(cube, hit_point, r.rgb, rp);
     }
     return r.rgb;
 #else
     raycache_cct_result c = raycache_cct_lookup(cube, d);
-    if (c.hit) { ++hits; return c.color; }
+    if (c.hit) return c.color;
     vec4 r = trace_subtree(o, d, depth + 1);
-    if (raycache_cct_store(cube, d, r.rgb)) mark_dirty(cube, d);
+    raycache_cct_store(cube, d, r.rgb);
     return r.rgb;
 #endif
 }
 
 // A primary ray's tree: as trace_subtree, but rays leaving cached objects go through their cubes (and
 // their subtrees are summed separately in every mode).
-vec3 trace_primary(vec3 o0, vec3 d0, uint pixel, inout uint lookups, inout uint hits) {
+vec3 trace_primary(vec3 o0, vec3 d0, uint pixel) {
     vec3 so[STACK], sd[STACK], sw[STACK];
     int sdepth[STACK];
     int top = 0;
@@ -155,7 +142,7 @@ vec3 trace_primary(vec3 o0, vec3 d0, uint pixel, inout uint lookups, inout uint 
 #else
                 else if (mode == MODE_CCT)
 #endif
-                    sum += w * c[i].w * leaving(object, c[i].o, c[i].d, depth, lookups, hits);
+                    sum += w * c[i].w * leaving(object, c[i].o, c[i].d, depth);
                 continue;
             }
             if (top < STACK) { so[top] = c[i].o; sd[top] = c[i].d; sw[top] = w * c[i].w; sdepth[top] = depth + 1; ++top; }
@@ -169,9 +156,6 @@ void main() {
     int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
     if (x >= width || y >= height) return;
     vec3 d = primary_direction(x, y);
-    uint lookups = 0u, hits = 0u;
-    vec3 color = trace_primary(eye.xyz, d, uint(y * width + x), lookups, hits);
+    vec3 color = trace_primary(eye.xyz, d, uint(y * width + x));
     pixels[y * width + x] = vec4(color, 1.0);
-    if (lookups != 0u) atomicAdd(counters[0], lookups);
-    if (hits != 0u) atomicAdd(counters[1], hits);
 }

@@ -7,8 +7,21 @@
  *
  * Frames. Each texel buffer has a pending twin of the same size. During a frame, lookups read the texel
  * buffer only and stores go to the pending buffer (atomicMin: the smallest word wins, as in C++), so a
- * store is never visible in the frame it was made in. Between frames an end-frame pass moves each valid
- * pending word into its texel, unless that texel already holds a value, and empties the pending word.
+ * store is never visible in the frame it was made in. The first store into a texel in a frame (the one
+ * that finds its pending word empty) appends the texel's element to the frame buffer's store list. Between
+ * frames the end-of-frame pass visits only the listed elements: it moves each valid pending word into its
+ * texel, unless that texel already holds a value, and empties the pending word. So its cost follows the
+ * frame's stores, not the buffers' size.
+ *
+ * Frame buffer (binding RAYCACHE_FRAME_BINDING, uint words), shared by both techniques:
+ *   header (RAYCACHE_FRAME_HEADER_WORDS): list count, list capacity, cube count, overflow, the end-of-frame
+ *   pass's VkDispatchIndirectCommand; then RAYCACHE_FRAME_CUBE_WORDS counters per cube (indexed by the
+ *   descriptor's `index`); then the store list (list capacity entries: a texel element, with
+ *   RAYCACHE_FRAME_CDCT_ENTRY set for a CDCT texel). The host writes the header and zeroes the counters
+ *   before every frame (raycache/gpu_frame.hpp: gpu_frame_start_words). Counters are order-independent:
+ *   hits and misses per lookup (a CDCT search is one lookup), `stores` = stores that reached the pending
+ *   word (C++'s stores plus its same-frame losers), `refused` = stores refused before it (not a direction,
+ *   a value that cannot be stored, a texel already visible or outside the buffers).
  *
  * Clearing: fill both buffers with RAYCACHE_GPU_CLEAR_WORD (vkCmdFillBuffer). Every all-ones word is
  * invalid, in the CDCT too (negative distance bits), and is larger than every valid word.
@@ -27,6 +40,48 @@ namespace shared {
 /* The 32-bit word that empties texel and pending buffers. */
 #define RAYCACHE_GPU_CLEAR_WORD 0xFFFFFFFFu
 
+/* Descriptor set and binding numbers of RayCache's buffers; define any of them before the first include
+ * (GLSL, and C++ where the host must agree) to move it. */
+#ifndef RAYCACHE_SET
+#define RAYCACHE_SET 0
+#endif
+#ifndef RAYCACHE_CCT_BINDING
+#define RAYCACHE_CCT_BINDING 0
+#endif
+#ifndef RAYCACHE_CCT_PENDING_BINDING
+#define RAYCACHE_CCT_PENDING_BINDING 1
+#endif
+#ifndef RAYCACHE_CDCT_BINDING
+#define RAYCACHE_CDCT_BINDING 2
+#endif
+#ifndef RAYCACHE_CDCT_PENDING_BINDING
+#define RAYCACHE_CDCT_PENDING_BINDING 3
+#endif
+#ifndef RAYCACHE_FRAME_BINDING
+#define RAYCACHE_FRAME_BINDING 4
+#endif
+
+/* Frame buffer: header words. */
+#define RAYCACHE_FRAME_LIST_COUNT 0u    /* texels appended this frame (may pass the capacity: see OVERFLOW) */
+#define RAYCACHE_FRAME_LIST_CAPACITY 1u /* entries the list holds (written by the host) */
+#define RAYCACHE_FRAME_CUBE_COUNT 2u    /* cubes with counters (written by the host) */
+#define RAYCACHE_FRAME_OVERFLOW 3u      /* texels stored that found the list full: sweep the buffers this frame */
+#define RAYCACHE_FRAME_DISPATCH 4u      /* 3 words: groups of the end-of-frame pass, 1, 1 (vkCmdDispatchIndirect) */
+#define RAYCACHE_FRAME_HEADER_WORDS 8u
+/* Counters of one cube, after the header. */
+#define RAYCACHE_FRAME_HITS 0u
+#define RAYCACHE_FRAME_MISSES 1u
+#define RAYCACHE_FRAME_STORES 2u
+#define RAYCACHE_FRAME_REFUSED 3u
+#define RAYCACHE_FRAME_CUBE_WORDS 4u
+/* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
+#define RAYCACHE_FRAME_CDCT_ENTRY 0x80000000u
+/* The end-of-frame pass: invocations per group, at most this many groups (one dimension), so a store list
+ * of at most this many entries (a longer frame overflows: sweep). */
+#define RAYCACHE_END_FRAME_GROUP_SIZE 256u
+#define RAYCACHE_END_FRAME_MAX_GROUPS 65535u
+#define RAYCACHE_END_FRAME_MAX_ENTRIES (RAYCACHE_END_FRAME_GROUP_SIZE * RAYCACHE_END_FRAME_MAX_GROUPS)
+
 /* Where one cube sits in its buffers and in the world; 32 bytes, the same in C++ and in GLSL std430
  * and std140 (an array of these in a storage or uniform buffer reads the same from both languages). */
 struct raycache_gpu_cube {
@@ -34,8 +89,8 @@ struct raycache_gpu_cube {
     float half_size;  /* CDCT: half the box's edge, > 0; CCT: unused */
     uint first_texel; /* index of the cube's texel 0 in its texel and pending buffers */
     int face_size;    /* N, texels along a face's edge, 1..4096 */
-    uint reserved0;   /* padding to 32 bytes; write 0 */
-    uint reserved1;
+    uint index;       /* the cube's counters in the frame buffer (cubes of both techniques number apart) */
+    uint reserved1;   /* padding to 32 bytes; write 0 */
 };
 
 /* A descriptor for a cube of face_size texels per edge whose texels start at element first_texel. */
@@ -45,7 +100,7 @@ RAYCACHE_FN raycache_gpu_cube raycache_make_gpu_cube(vec3 centre, float half_siz
     cube.half_size = half_size;
     cube.first_texel = first_texel;
     cube.face_size = face_size;
-    cube.reserved0 = 0u;
+    cube.index = 0u;
     cube.reserved1 = 0u;
     return cube;
 }
@@ -55,11 +110,27 @@ RAYCACHE_FN uint raycache_gpu_cube_texel_count(int face_size) {
     return 6u * uint(face_size) * uint(face_size);
 }
 
+/* Word of the frame buffer holding counter `which` (RAYCACHE_FRAME_HITS...) of cube `index`. */
+RAYCACHE_FN uint raycache_frame_counter_word(uint index, uint which) {
+    return RAYCACHE_FRAME_HEADER_WORDS + index * RAYCACHE_FRAME_CUBE_WORDS + which;
+}
+
+/* Word of the frame buffer holding store-list entry k, with cube_count cubes' counters before the list. */
+RAYCACHE_FN uint raycache_frame_list_word(uint cube_count, uint k) {
+    return RAYCACHE_FRAME_HEADER_WORDS + cube_count * RAYCACHE_FRAME_CUBE_WORDS + k;
+}
+
+/* Groups of the end-of-frame pass for `entries` listed texels: one per RAYCACHE_END_FRAME_GROUP_SIZE, at
+ * most RAYCACHE_END_FRAME_MAX_GROUPS. A store that appends entry k adds a group exactly when this grows. */
+RAYCACHE_FN uint raycache_end_frame_groups(uint entries) {
+    return min((entries + RAYCACHE_END_FRAME_GROUP_SIZE - 1u) / RAYCACHE_END_FRAME_GROUP_SIZE, RAYCACHE_END_FRAME_MAX_GROUPS);
+}
+
 #ifdef __cplusplus
 static_assert(sizeof(raycache_gpu_cube) == 32, "raycache_gpu_cube must be 32 bytes, as in GLSL std430/std140");
 static_assert(offsetof(raycache_gpu_cube, centre) == 0 && offsetof(raycache_gpu_cube, half_size) == 12 &&
                   offsetof(raycache_gpu_cube, first_texel) == 16 && offsetof(raycache_gpu_cube, face_size) == 20 &&
-                  offsetof(raycache_gpu_cube, reserved0) == 24 && offsetof(raycache_gpu_cube, reserved1) == 28,
+                  offsetof(raycache_gpu_cube, index) == 24 && offsetof(raycache_gpu_cube, reserved1) == 28,
               "raycache_gpu_cube offsets must match GLSL std430/std140");
 } // namespace shared
 } // namespace raycache

@@ -3,6 +3,7 @@
 #extension GL_GOOGLE_include_directive : require
 #define RAYCACHE_CCT_BINDING 0
 #define RAYCACHE_CCT_PENDING_BINDING 1
+#define RAYCACHE_FRAME_BINDING 5 // counters and store list (raycache/frame.glsl)
 #include "raycache/cct.glsl"
 
 layout(local_size_x = 64) in;

@@ -7,10 +7,11 @@
 #extension GL_GOOGLE_include_directive : require
 #define RAYCACHE_CCT_BINDING 0
 #define RAYCACHE_CCT_PENDING_BINDING 1
+#define RAYCACHE_FRAME_BINDING 3
 #ifdef WITH_CDCT
 #define RAYCACHE_CDCT
-#define RAYCACHE_CDCT_BINDING 3
-#define RAYCACHE_CDCT_PENDING_BINDING 4
+#define RAYCACHE_CDCT_BINDING 4
+#define RAYCACHE_CDCT_PENDING_BINDING 5
 #endif
 #include "raycache/raycache.glsl"
 

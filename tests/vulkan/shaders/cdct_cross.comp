@@ -4,6 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #define RAYCACHE_CDCT_BINDING 0
 #define RAYCACHE_CDCT_PENDING_BINDING 1
+#define RAYCACHE_FRAME_BINDING 5 // counters and store list (raycache/frame.glsl)
 #include "raycache/cdct.glsl"
 
 layout(local_size_x = 64) in;

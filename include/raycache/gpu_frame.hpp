@@ -1,0 +1,167 @@
+// raycache/gpu_frame.hpp: the host side of RayCache's GPU frame protocol (raycache/shared/gpu_layout.h), with
+// no graphics API: the binding numbers, the frame buffer's size and its contents before each frame, the
+// end-of-frame pass's dispatch size, the GPU statistics read back after a frame, and face sizes that fit
+// a device's largest storage buffer.
+//
+// A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
+//   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy);
+//   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
+//   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
+//      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset;
+//   4. read the frame buffer back: read_gpu_statistics(); when its overflow is non-zero, run the sweep
+//      (gpu_sweep_groups) before the next frame.
+#pragma once
+
+#include "raycache/requires_cpp17.hpp"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raycache/cube_face.hpp"
+#include "raycache/statistics.hpp"
+#include "raycache/shared/gpu_layout.h"
+
+namespace raycache {
+
+// The binding numbers the GLSL include uses (set RAYCACHE_SET), as the shaders see them when the macros
+// are left at their defaults (or defined the same way before this header).
+struct GpuBindings {
+    std::uint32_t cct_texels = RAYCACHE_CCT_BINDING;
+    std::uint32_t cct_pending = RAYCACHE_CCT_PENDING_BINDING;
+    std::uint32_t cdct_texels = RAYCACHE_CDCT_BINDING;
+    std::uint32_t cdct_pending = RAYCACHE_CDCT_PENDING_BINDING;
+    std::uint32_t frame = RAYCACHE_FRAME_BINDING;
+};
+inline constexpr GpuBindings gpu_bindings{};
+
+// The frame buffer: counters for `cube_count` cubes (descriptor indices 0 .. cube_count - 1) and a store list
+// of `list_capacity` entries.
+struct GpuFrameLayout {
+    std::uint32_t cube_count = 0;
+    std::uint32_t list_capacity = 0;
+    std::uint64_t words = 0; // 32-bit words of the frame buffer
+    std::uint64_t bytes = 0; // create it this size (usage: storage, indirect, transfer destination)
+    std::uint64_t start_bytes = 0; // the part to rewrite before every frame (header and counters)
+};
+
+// Each texel is listed at most once a frame, so a capacity of the texel count (of both techniques' buffers
+// together) never overflows; a smaller one saves memory, and a frame that stores more texels overflows
+// (read_gpu_statistics tells: run the sweep). Throws std::invalid_argument when the capacity passes
+// RAYCACHE_END_FRAME_MAX_ENTRIES (16,776,960: what one dimension of groups covers) or the buffer would pass
+// `max_bytes` (the device's maxStorageBufferRange).
+inline GpuFrameLayout gpu_frame_layout(std::uint32_t cube_count, std::uint32_t list_capacity,
+                                       std::uint64_t max_bytes = ~std::uint64_t{0}) {
+    GpuFrameLayout f;
+    f.cube_count = cube_count;
+    f.list_capacity = list_capacity;
+    f.words = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cube_count} * RAYCACHE_FRAME_CUBE_WORDS + list_capacity;
+    f.bytes = f.words * 4;
+    f.start_bytes = (f.words - list_capacity) * 4;
+    if (list_capacity > RAYCACHE_END_FRAME_MAX_ENTRIES || f.bytes > max_bytes)
+        throw std::invalid_argument("RayCache: a frame buffer for " + std::to_string(cube_count) + " cubes and " +
+                                    std::to_string(list_capacity) + " list entries needs " + std::to_string(f.bytes) +
+                                    " bytes, more than " + std::to_string(max_bytes));
+    return f;
+}
+
+// The largest list capacity that keeps the frame buffer within `max_bytes` for `cube_count` cubes, no larger
+// than `texels` (more could never be used) nor RAYCACHE_END_FRAME_MAX_ENTRIES. 0 when not even the counters fit.
+inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint64_t texels, std::uint64_t max_bytes) {
+    const std::uint64_t fixed = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cube_count} * RAYCACHE_FRAME_CUBE_WORDS;
+    const std::uint64_t room = max_bytes / 4 > fixed ? max_bytes / 4 - fixed : 0;
+    return static_cast<std::uint32_t>(std::min<std::uint64_t>({room, texels, RAYCACHE_END_FRAME_MAX_ENTRIES}));
+}
+
+// The frame buffer's first start_bytes before a frame: header (list empty, capacity, cube count, dispatch
+// {0, 1, 1}) and zeroed counters. Upload them before every frame.
+inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f) {
+    std::vector<std::uint32_t> words(static_cast<std::size_t>(f.start_bytes / 4), 0u);
+    words[RAYCACHE_FRAME_LIST_CAPACITY] = f.list_capacity;
+    words[RAYCACHE_FRAME_CUBE_COUNT] = f.cube_count;
+    words[RAYCACHE_FRAME_DISPATCH + 1] = 1u;
+    words[RAYCACHE_FRAME_DISPATCH + 2] = 1u;
+    return words;
+}
+
+// Byte offset of the end-of-frame pass's VkDispatchIndirectCommand in the frame buffer.
+inline constexpr std::uint64_t gpu_end_frame_dispatch_offset = 4 * RAYCACHE_FRAME_DISPATCH;
+
+// Groups of the end-of-frame pass for `listed` texels (a direct dispatch after reading the count back).
+inline std::uint32_t gpu_end_frame_groups(std::uint64_t listed) noexcept {
+    return shared::raycache_end_frame_groups(static_cast<std::uint32_t>(std::min<std::uint64_t>(listed, 0xFFFFFF00ull)));
+}
+
+// A 2D grid of groups of `group_size` invocations covering `elements` (the sweep after a list overflow:
+// invocation (x, y) handles element (y * groups_x + x) * group_size + local index).
+struct GpuGroups {
+    std::uint32_t x = 0, y = 0;
+};
+inline GpuGroups gpu_sweep_groups(std::uint64_t elements, std::uint32_t group_size = 64) noexcept {
+    const std::uint64_t groups = (elements + group_size - 1) / group_size;
+    GpuGroups g;
+    g.x = static_cast<std::uint32_t>(std::min<std::uint64_t>(groups, 65535));
+    g.y = g.x ? static_cast<std::uint32_t>((groups + g.x - 1) / g.x) : 0;
+    return g;
+}
+
+// What one frame's frame buffer says: per cube (descriptor index) and in all.
+struct GpuFrameStatistics {
+    std::vector<CubeStatistics> cubes; // lookups, hits, misses, stores (reached the pending word), refused_stores
+    CubeStatistics total;
+    std::uint64_t listed = 0;   // texels the end-of-frame pass publishes
+    std::uint64_t overflow = 0; // texels stored that found the list full: sweep the buffers before the next frame
+};
+
+// Reads the counters and the list's state from the frame buffer's first start_bytes (`words`, read back
+// after the frame). valid_texels and texel_count are left 0 (the GPU does not count them).
+inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const GpuFrameLayout& f) {
+    GpuFrameStatistics s;
+    s.cubes.resize(f.cube_count);
+    for (std::uint32_t k = 0; k < f.cube_count; ++k) {
+        CubeStatistics& c = s.cubes[k];
+        c.hits = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)];
+        c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)];
+        c.lookups = c.hits + c.misses;
+        c.stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_STORES)];
+        c.refused_stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_REFUSED)];
+        s.total.hits += c.hits, s.total.misses += c.misses, s.total.lookups += c.lookups;
+        s.total.stores += c.stores, s.total.refused_stores += c.refused_stores;
+    }
+    s.listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);
+    s.overflow = words[RAYCACHE_FRAME_OVERFLOW];
+    return s;
+}
+
+// Face sizes that fit one storage buffer of `max_bytes`: each cube keeps min(requested, cap) for the largest
+// cap (1..4096) whose cubes' texels, `bytes_per_texel` each, fit; cubes below the cap keep their size, so
+// small cubes are not lowered for large ones. Throws std::invalid_argument for a requested size outside
+// 1..4096, or when even a cap of 1 does not fit.
+inline std::vector<int> fit_gpu_face_sizes(const std::vector<int>& requested, std::uint64_t bytes_per_texel,
+                                           std::uint64_t max_bytes) {
+    auto bytes_at = [&](int cap) {
+        std::uint64_t total = 0;
+        for (int n : requested) total += shared::raycache_gpu_cube_texel_count(std::min(n, cap)) * bytes_per_texel;
+        return total;
+    };
+    for (int n : requested)
+        if (!is_valid_face_size(n))
+            throw std::invalid_argument("RayCache: a GPU cube's face size must be 1 to 4096, got " + std::to_string(n));
+    if (bytes_at(1) > max_bytes)
+        throw std::invalid_argument("RayCache: " + std::to_string(requested.size()) + " cubes do not fit in " +
+                                    std::to_string(max_bytes) + " bytes even at one texel a face");
+    int lo = 1, hi = RAYCACHE_MAX_FACE_SIZE; // bytes_at(lo) fits; find the largest cap that does
+    while (lo < hi) {
+        const int mid = lo + (hi - lo + 1) / 2;
+        if (bytes_at(mid) <= max_bytes) lo = mid;
+        else hi = mid - 1;
+    }
+    std::vector<int> fitted;
+    for (int n : requested) fitted.push_back(std::min(n, lo));
+    return fitted;
+}
+
+} // namespace raycache

@@ -1,0 +1,99 @@
+// raycache/gpu_frame.hpp: the frame buffer's layout and start words, the end-of-frame pass's group counts,
+// the statistics read back and the face sizes fitted to a storage buffer, against values worked out by hand:
+// - header 8 words, 4 counters a cube: 3 cubes and 100 list entries take 8 + 12 + 100 = 120 words (480 bytes),
+//   of which the first 20 (80 bytes) are rewritten before each frame; entry 0 is word 20.
+// - groups of 256: 1 entry -> 1 group, 256 -> 1, 257 -> 2, 65535 * 256 -> 65535, one more -> still 65535.
+// - fitting: faces 8, 100, 100 of CCT texels (4 bytes) into 6 * (64 + 2 * 50^2) * 4 = 121,536 bytes gives a
+//   cap of 50 (51 would need 6 * (64 + 2 * 2601) * 4 = 126,384): 8, 50, 50.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "raycache/gpu_buffers.hpp"
+
+using namespace raycache;
+
+TEST_CASE("the frame buffer holds a header, four counters a cube and the store list") {
+    const GpuFrameLayout f = gpu_frame_layout(3, 100);
+    CHECK(f.words == 120u);
+    CHECK(f.bytes == 480u);
+    CHECK(f.start_bytes == 80u);
+    CHECK(shared::raycache_frame_list_word(3, 0) == 20u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_REFUSED) == 8u + 8u + 3u);
+    CHECK_THROWS_AS(gpu_frame_layout(3, 100, 479), std::invalid_argument);
+    CHECK_NOTHROW(gpu_frame_layout(3, 100, 480));
+    // The largest list that fits 480 bytes with 3 cubes is 100 entries; never more than the texels.
+    CHECK(gpu_frame_list_capacity(3, 1000, 480) == 100u);
+    CHECK(gpu_frame_list_capacity(3, 40, 480) == 40u);
+    CHECK(gpu_frame_list_capacity(3, 1000, 60) == 0u);
+    // One dimension of 65535 groups of 256 covers 16,776,960 entries: no longer list.
+    CHECK(gpu_frame_list_capacity(3, 1ull << 30, 1ull << 32) == 16776960u);
+    CHECK_NOTHROW(gpu_frame_layout(3, 16776960u));
+    CHECK_THROWS_AS(gpu_frame_layout(3, 16776961u), std::invalid_argument);
+}
+
+TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1} and zero the counters") {
+    const GpuFrameLayout f = gpu_frame_layout(2, 10);
+    const std::vector<std::uint32_t> w = gpu_frame_start_words(f);
+    REQUIRE(w.size() == 16u);
+    const std::vector<std::uint32_t> expected = {0, 10, 2, 0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+    CHECK(w == expected);
+    CHECK(gpu_end_frame_dispatch_offset == 16u);
+    CHECK(gpu_bindings.cct_texels == 0u);
+    CHECK(gpu_bindings.cdct_pending == 3u);
+    CHECK(gpu_bindings.frame == 4u);
+}
+
+TEST_CASE("the end-of-frame pass gets one group per 256 listed texels, at most 65535") {
+    CHECK(gpu_end_frame_groups(0) == 0u);
+    CHECK(gpu_end_frame_groups(1) == 1u);
+    CHECK(gpu_end_frame_groups(256) == 1u);
+    CHECK(gpu_end_frame_groups(257) == 2u);
+    CHECK(gpu_end_frame_groups(65535u * 256u) == 65535u);
+    CHECK(gpu_end_frame_groups(65535u * 256u + 1u) == 65535u);
+    CHECK(gpu_end_frame_groups(0xFFFFFFFFull) == 65535u);
+    // A store that appends entry k adds a group exactly when entries k + 1 need one more than k.
+    std::uint32_t added = 0;
+    for (std::uint32_t k = 0; k < 1000; ++k) added += shared::raycache_end_frame_groups(k + 1) > shared::raycache_end_frame_groups(k);
+    CHECK(added == 4u); // entries 0, 256, 512, 768
+    const GpuGroups g = gpu_sweep_groups(65535u * 64u + 1u);
+    CHECK(g.x == 65535u);
+    CHECK(g.y == 2u);
+    CHECK(gpu_sweep_groups(0).x == 0u);
+}
+
+TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the list clamped to its capacity") {
+    const GpuFrameLayout f = gpu_frame_layout(2, 5);
+    std::vector<std::uint32_t> w = gpu_frame_start_words(f);
+    w[RAYCACHE_FRAME_LIST_COUNT] = 7; // two past the capacity
+    w[RAYCACHE_FRAME_OVERFLOW] = 2;
+    const std::uint32_t cube0[] = {10, 5, 4, 1}, cube1[] = {0, 3, 2, 6}; // hits, misses, stores, refused
+    for (std::uint32_t k = 0; k < 4; ++k) w[8 + k] = cube0[k], w[12 + k] = cube1[k];
+    const GpuFrameStatistics s = read_gpu_statistics(w.data(), f);
+    REQUIRE(s.cubes.size() == 2u);
+    CHECK(s.cubes[0].lookups == 15u);
+    CHECK(s.cubes[0].hits == 10u);
+    CHECK(s.cubes[0].misses == 5u);
+    CHECK(s.cubes[1].stores == 2u);
+    CHECK(s.cubes[1].refused_stores == 6u);
+    CHECK(s.total.lookups == 18u);
+    CHECK(s.total.stores == 6u);
+    CHECK(s.total.refused_stores == 7u);
+    CHECK(s.listed == 5u);
+    CHECK(s.overflow == 2u);
+}
+
+TEST_CASE("face sizes fitted to a storage buffer lower only the cubes above the largest cap that fits") {
+    const std::vector<int> requested = {8, 100, 100};
+    CHECK(fit_gpu_face_sizes(requested, 4, 121536) == std::vector<int>{8, 50, 50});
+    CHECK(fit_gpu_face_sizes(requested, 4, 126383) == std::vector<int>{8, 50, 50});
+    CHECK(fit_gpu_face_sizes(requested, 4, 126384) == std::vector<int>{8, 51, 51});
+    CHECK(fit_gpu_face_sizes(requested, 4, 1u << 30) == requested);
+    // Uniform sizes: the largest uniform size that fits (what the Vulkan example did by lowering one at a time).
+    CHECK(fit_gpu_face_sizes({512, 512}, 4, 128u << 20) == std::vector<int>{512, 512});
+    CHECK(fit_gpu_face_sizes(std::vector<int>(33, 512), 4, 128u << 20) == std::vector<int>(33, 411));
+    CHECK_THROWS_AS(fit_gpu_face_sizes({8, 8}, 4, 47), std::invalid_argument); // 2 * 6 * 4 = 48 bytes at N = 1
+    CHECK_THROWS_AS(fit_gpu_face_sizes({0}, 4, 100), std::invalid_argument);
+}
