@@ -1,5 +1,6 @@
 // gpu_tracer.hpp: the core of the Vulkan compute Whitted example: an rcx::Scene flattened into GPU
-// buffers (a BVH over spheres and triangles built on the CPU with Embree's BVH builder, rtcBuildBVH),
+// buffers (gpu_scene.hpp; a BVH over spheres and triangles built on the CPU with Embree's BVH builder,
+// rtcBuildBVH: bvh_builder.hpp; the hybrid raster pass: raster_pass.hpp),
 // traversed and shaded in a compute shader (shaders/whitted.comp) as examples/embree_whitted/tracer.cpp
 // shades, one invocation per pixel; caching cubes in storage buffers, used through RayCache's GLSL
 // include, with the end-frame pass (shaders/end_frame.comp) between frames.
@@ -12,40 +13,14 @@
 
 #include <rcx/vulkan.hpp>
 
+#include "bvh_builder.hpp"
+#include "gpu_scene.hpp"
 #include "rcx/image.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
 #include "rsh_frame.hpp"
 
 namespace rcx::gpu {
-
-// A flattened BVH, as the shader reads it (layouts documented in shaders/whitted.comp).
-struct BvhNode {
-    float lo[3];
-    std::int32_t a;  // inner: first child (the second is a + 1); leaf: first primitive
-    float hi[3];
-    std::int32_t b;  // inner: 0; leaf: primitive count
-};
-struct GpuPrimitive {
-    float p[3][4];   // sphere: p[0] = centre, radius; triangle: vertices
-    float n[3][4];   // triangle: vertex normals
-    std::uint32_t info[4]; // kind (0 sphere, 1 triangle), object (Embree geometry id order), triangle, 0
-};
-static_assert(sizeof(BvhNode) == 32 && sizeof(GpuPrimitive) == 112, "GPU layouts");
-
-struct FlatBvh {
-    std::vector<BvhNode> nodes;
-    std::vector<GpuPrimitive> primitives; // in leaf order
-};
-
-// The scene's primitives in its own order: spheres, then each mesh's triangles (objects numbered as the
-// Embree tracer numbers its geometries). Throws std::invalid_argument for a malformed mesh.
-std::vector<GpuPrimitive> gather_primitives(const Scene& scene);
-
-// Builds the BVH with Embree's BVH builder (binary, up to 4 primitives a leaf, SAH) and flattens it.
-// Objects are numbered as the Embree tracer numbers its geometries: spheres, then meshes.
-// Throws std::runtime_error when Embree fails or the scene has nothing in it.
-FlatBvh build_bvh(const Scene& scene);
 
 // How rays after the primary hit are traced: the BVH (built on the CPU, every frame for a dynamic scene)
 // or the ray-space hierarchy (rsh_frame.hpp: built on the GPU over the rays each frame, no scene

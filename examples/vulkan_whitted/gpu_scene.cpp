@@ -1,0 +1,81 @@
+// The Vulkan tracer's scene layout; see gpu_scene.hpp.
+#include "gpu_scene.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "rcx/meshes.hpp"
+
+namespace rcx::gpu {
+
+std::vector<GpuPrimitive> gather_primitives(const Scene& scene) {
+    std::vector<GpuPrimitive> all;
+    std::uint32_t object = 0;
+    for (const Sphere& s : scene.spheres) {
+        GpuPrimitive p{};
+        set4(p.p[0], s.centre, s.radius);
+        p.info[0] = 0, p.info[1] = object, p.info[2] = 0;
+        all.push_back(p);
+        ++object;
+    }
+    for (const Mesh& m : scene.meshes) {
+        if (m.normals.size() != m.positions.size())
+            throw std::invalid_argument("Vulkan tracer: mesh '" + m.name + "' needs one normal per vertex");
+        for (std::size_t k = 0; k < m.triangles.size(); ++k) {
+            const glm::uvec3 t = m.triangles[k];
+            if (t.x >= m.positions.size() || t.y >= m.positions.size() || t.z >= m.positions.size())
+                throw std::invalid_argument("Vulkan tracer: mesh '" + m.name + "' has a vertex index out of range");
+            GpuPrimitive p{};
+            for (int c = 0; c < 3; ++c) {
+                set4(p.p[c], m.positions[t[c]], 0.0f);
+                set4(p.n[c], m.normals[t[c]], 0.0f);
+            }
+            p.info[0] = 1, p.info[1] = object, p.info[2] = static_cast<std::uint32_t>(k);
+            all.push_back(p);
+        }
+        ++object;
+    }
+    return all;
+}
+
+int mode_number(CacheMode mode) {
+    switch (mode) {
+    case CacheMode::off: return 0;
+    case CacheMode::cct: return 1;
+    case CacheMode::cdct: return 2;
+    case CacheMode::ceiling: return 3;
+    }
+    return 0;
+}
+
+GpuObjects pack_objects(const Scene& scene, bool caching, int face_size) {
+    GpuObjects out;
+    std::vector<GpuObject>& objects = out.objects;
+    std::vector<raycache::GpuCubeShape>& shapes = out.shapes;
+    std::vector<int>& shape_of = out.shape_of;
+    auto add_object = [&](const Material& m, bool sphere, glm::vec3 centre, float radius, glm::vec3 lo, glm::vec3 hi) {
+        GpuObject o{};
+        set4(o.m[0], m.diffuse, m.specular);
+        set4(o.m[1], m.checker_color, m.shininess);
+        o.m[2][0] = m.reflectivity, o.m[2][1] = m.transparency, o.m[2][2] = m.ior, o.m[2][3] = m.checker_scale;
+        o.m[3][0] = m.checker ? 1.0f : 0.0f, o.m[3][1] = m.cached ? 1.0f : 0.0f, o.m[3][2] = sphere ? 1.0f : 0.0f;
+        set4(o.m[4], centre, radius);
+        objects.push_back(o);
+        shape_of.push_back(-1);
+        if (caching && m.cached) {
+            const glm::vec3 half = 0.5f * (hi - lo);
+            shapes.push_back({face_size, raycache::CubeBounds{0.5f * (lo + hi), std::max(half.x, std::max(half.y, half.z))}});
+            shape_of.back() = static_cast<int>(shapes.size() - 1);
+        }
+    };
+    for (const Sphere& s : scene.spheres)
+        add_object(s.material, true, s.centre, s.radius, s.centre - glm::vec3(s.radius), s.centre + glm::vec3(s.radius));
+    for (const Mesh& m : scene.meshes) {
+        const Bounds b = mesh_bounds(m);
+        add_object(m.material, false, glm::vec3(0.0f), 0.0f, b.min, b.max);
+    }
+    return out;
+}
+
+} // namespace rcx::gpu
