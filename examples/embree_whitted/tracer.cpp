@@ -16,6 +16,8 @@
 
 #include <raycache/embree/scene_cache.hpp>
 
+#include "rcx/meshes.hpp"
+
 namespace rcx::embree {
 
 namespace {
@@ -303,11 +305,7 @@ Tracer::Tracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     }
     for (std::size_t i = 0; i < t.scene.meshes.size(); ++i) {
         const Mesh& m = t.scene.meshes[i];
-        if (m.normals.size() != m.positions.size())
-            throw std::invalid_argument("Embree tracer: mesh '" + m.name + "' needs one normal per vertex");
-        for (const glm::uvec3& tri : m.triangles)
-            if (tri.x >= m.positions.size() || tri.y >= m.positions.size() || tri.z >= m.positions.size())
-                throw std::invalid_argument("Embree tracer: mesh '" + m.name + "' has a vertex index out of range");
+        validate_mesh(m, "Embree tracer");
         RTCGeometry g = rtcNewGeometry(t.device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                               3 * sizeof(float), m.positions.size()));

@@ -20,12 +20,9 @@ std::vector<GpuPrimitive> gather_primitives(const Scene& scene) {
         ++object;
     }
     for (const Mesh& m : scene.meshes) {
-        if (m.normals.size() != m.positions.size())
-            throw std::invalid_argument("Vulkan tracer: mesh '" + m.name + "' needs one normal per vertex");
+        validate_mesh(m, "Vulkan tracer");
         for (std::size_t k = 0; k < m.triangles.size(); ++k) {
             const glm::uvec3 t = m.triangles[k];
-            if (t.x >= m.positions.size() || t.y >= m.positions.size() || t.z >= m.positions.size())
-                throw std::invalid_argument("Vulkan tracer: mesh '" + m.name + "' has a vertex index out of range");
             GpuPrimitive p{};
             for (int c = 0; c < 3; ++c) {
                 set4(p.p[c], m.positions[t[c]], 0.0f);

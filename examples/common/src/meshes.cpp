@@ -417,6 +417,14 @@ Bounds mesh_bounds(const Mesh& mesh) {
     return b;
 }
 
+void validate_mesh(const Mesh& m, const std::string& who) {
+    if (m.normals.size() != m.positions.size())
+        throw std::invalid_argument(who + ": mesh '" + m.name + "' needs one normal per vertex");
+    for (const glm::uvec3& tri : m.triangles)
+        if (tri.x >= m.positions.size() || tri.y >= m.positions.size() || tri.z >= m.positions.size())
+            throw std::invalid_argument(who + ": mesh '" + m.name + "' has a vertex index out of range");
+}
+
 void fit_mesh(Mesh& mesh, const glm::vec3& centre, float size) {
     const Bounds b = mesh_bounds(mesh);
     const glm::vec3 extent = b.max - b.min;

@@ -48,4 +48,9 @@ struct Bounds {
 };
 Bounds mesh_bounds(const Mesh& mesh);
 
+// What a tracer needs of a mesh: one normal per vertex, every triangle's indices in range. Throws
+// std::invalid_argument "<who>: mesh '<name>' needs one normal per vertex" (or "... has a vertex index out
+// of range") otherwise; `who` names the tracer ("Embree tracer", "Vulkan tracer").
+void validate_mesh(const Mesh& mesh, const std::string& who);
+
 } // namespace rcx
