@@ -24,15 +24,13 @@
 #include "rcx/progress.hpp"
 #include "rcx/scene.hpp"
 #include "rcx/scene_hash.hpp"
+#include "rcx/tracer_main.hpp"
 #include "tracer.hpp"
 
 
 namespace {
 
-// Bad input: message on stderr, exit status 2.
-struct InputError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
+using rcx::InputError; // bad input: message on stderr, exit status 2 (rcx::tracer_main)
 
 struct FrameRecord {
     double cached_ms = 0.0;
@@ -279,25 +277,8 @@ int run(const rcx::Options& o) {
 } // namespace
 
 int main(int argc, char** argv) {
-    const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_embree_whitted").filename().string();
-    rcx::Options options;
-    try {
-        options = rcx::parse_options(argc, argv);
-    } catch (const rcx::UsageError& e) {
-        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
-        return 2;
-    }
-    if (options.help) {
-        std::fputs(rcx::help_text(program).c_str(), stdout);
-        return 0;
-    }
-    try {
-        return run(options);
-    } catch (const InputError& e) {
-        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
-        return 2;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "%s: error: %s\n", program.c_str(), e.what());
-        return 1;
-    }
+    const std::string program = rcx::program_name(argc, argv, "raycache_embree_whitted");
+    return rcx::tracer_main(
+        program, [&] { return rcx::parse_options(argc, argv); }, [&] { return rcx::help_text(program); },
+        [](const rcx::Options& options) { return run(options); });
 }

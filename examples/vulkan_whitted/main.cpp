@@ -33,12 +33,11 @@
 #include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
+#include "rcx/tracer_main.hpp"
 
 namespace {
 
-struct InputError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
+using rcx::InputError; // bad input: message on stderr, exit status 2 (rcx::tracer_main)
 
 std::string frame_path(const rcx::Options& o, const std::string& scene, const std::string& what, int frame, bool hybrid) {
     char name[256];
@@ -238,7 +237,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
 } // namespace
 
 int main(int argc, char** argv) {
-    const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "raycache_vulkan_whitted").filename().string();
+    const std::string program = rcx::program_name(argc, argv, "raycache_vulkan_whitted");
     // --hybrid, --secondary and --pair-capacity are this tracer's own options, declared beside the shared ones.
     VulkanOptions vulkan;
     rcx::CommandLine command_line(program);
@@ -267,24 +266,7 @@ int main(int argc, char** argv) {
                           "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"
                           "the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv\n"
                           "files are looked for.");
-    rcx::Options options;
-    try {
-        options = command_line.parse(argc, argv);
-    } catch (const rcx::UsageError& e) {
-        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
-        return 2;
-    }
-    if (options.help) {
-        std::fputs(command_line.help().c_str(), stdout);
-        return 0;
-    }
-    try {
-        return run(options, vulkan);
-    } catch (const InputError& e) {
-        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
-        return 2;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "%s: error: %s\n", program.c_str(), e.what());
-        return 1;
-    }
+    return rcx::tracer_main(
+        program, [&] { return command_line.parse(argc, argv); }, [&] { return command_line.help(); },
+        [&vulkan](const rcx::Options& options) { return run(options, vulkan); });
 }
