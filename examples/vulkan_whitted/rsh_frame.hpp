@@ -45,7 +45,7 @@ public:
     RshFrame& operator=(const RshFrame&) = delete;
 
     // Renders width x height pixels into `image` (vec4 a pixel); the params buffer holds this frame's
-    // camera and image size (gpu_tracer.cpp's GpuParams), max_depth the scene's.
+    // camera and image size (gpu_scene.hpp's GpuParams), max_depth the scene's.
     void render(int width, int height, int max_depth, const RshSceneBuffers& scene, const vk::Buffer& image,
                 RshFrameStats* stats = nullptr);
 
