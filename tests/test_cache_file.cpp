@@ -7,8 +7,10 @@
 #include <chrono>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
@@ -70,7 +72,9 @@ void check_round_trip(int face_size, unsigned per_mille, std::uint64_t seed) {
         typename Texel::Value value{};
         if constexpr (std::is_same_v<Texel, CctTexel>) value = glm::vec3(0.5f);
         else value = raycache::DepthSample{glm::vec3(0.5f), 3.0f};
-        visible += cube.store(d, value, glm::vec3(rng.signed_uniform(), 2.0f, rng.signed_uniform()));
+        const glm::vec3 origin(rng.signed_uniform(), 2.0f, rng.signed_uniform());
+        // Half of them with the distance to what they hit: their tiles keep the nearest (format 2).
+        visible += k % 2 ? cube.store(d, value, origin) : cube.store(d, value, origin, 0.5f + 0.25f * static_cast<float>(k));
     }
     cube.begin_frame();
     cube.for_each_valid_texel([&](const TexelAddress& t) {
@@ -203,12 +207,38 @@ TEST_CASE("a file of a newer or unknown format version is refused, saying which"
         for (int i = 0; i < 4; ++i) b[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
         return b;
     };
-    CHECK(decode<CdctTexel>(with_version(1)).size() == 1u);
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(2)); }), "format version 2 is newer than this RayCache reads (1)"));
+    CHECK(decode<CdctTexel>(with_version(2)).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(3)); }), "format version 3 is newer than this RayCache reads (2)"));
+    // A format-2 file relabelled as format 1 does not parse as one (its tiles are 4 bytes longer).
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(1)); }), "tiles need"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(0)); }), "unknown format version 0"));
     std::vector<std::uint8_t> not_ours = bytes;
     not_ours[0] = 'X';
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(not_ours); }), "not a RayCache cache file"));
+}
+
+TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
+    // Written by raycache_fuzz_make_seeds at format 1 and checked in as a fuzz seed: one byte choosing the
+    // technique (1: CDCT), then a CDCT file whose tiles, in format 1, have no nearest distance.
+    const std::string path = std::string(RAYCACHE_SOURCE_DIR) + "/fuzz/corpus/cache_file/cdct-edge-tiles";
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    REQUIRE(f);
+    std::vector<std::uint8_t> bytes;
+    for (int c; (c = std::fgetc(f)) != EOF;) bytes.push_back(static_cast<std::uint8_t>(c));
+    std::fclose(f);
+    REQUIRE(bytes.size() > 17);
+    CHECK(bytes[0] == 1);
+    bytes.erase(bytes.begin());
+    CHECK(bytes[8] == 1); // the format version, little-endian
+    const std::vector<raycache::LoadedCube<CdctTexel>> cubes = decode<CdctTexel>(bytes, SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"});
+    REQUIRE_FALSE(cubes.empty());
+    std::size_t texels = 0;
+    for (const auto& c : cubes)
+        c.cube->for_each_valid_texel([&](const TexelAddress& t) {
+            ++texels;
+            CHECK(c.cube->nearest_hit(t) == std::numeric_limits<float>::infinity());
+        });
+    CHECK(texels > 0u);
 }
 
 TEST_CASE("every truncation of a small cache file is refused") {

@@ -74,7 +74,8 @@ template <class Texel>
 bool same_marks_and_origins(const raycache::CacheCube<Texel>& a, const raycache::CacheCube<Texel>& b) {
     bool same = true;
     a.for_each_valid_texel([&](const raycache::TexelAddress& t) {
-        same = same && a.is_doubtful(t) == b.is_doubtful(t) && a.origin_box(t) == b.origin_box(t);
+        same = same && a.is_doubtful(t) == b.is_doubtful(t) && a.origin_box(t) == b.origin_box(t) &&
+               a.nearest_hit(t) == b.nearest_hit(t);
     });
     return same;
 }

@@ -1,7 +1,7 @@
 // raycache/cache_file.hpp: saving warm caching cubes to a file and loading them back, so that a walkthrough
 // starts warm (as engines bake their light probes) instead of losing its caches at exit.
 //
-// The file, format version 1. Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
+// The file, format version 2 (version 1 is read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
 // below, no library needed), so a truncated or corrupted file is refused, never half loaded.
 //
 //   prelude  "RAYCACHE" (8 bytes), u32 format version, u32 low half of fnv1a64 of those 12 bytes
@@ -14,14 +14,13 @@
 //            u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
 //            T = ceil(N / 16), strictly increasing; u32 1 and f32 x 6 (low and high corner) for the box of
 //            the origins its texels were stored from (CacheCube::origin_box), or u32 0 and six zeros;
-//            u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
+//            f32 the nearest hit distance of its stores (CacheCube::nearest_hit; infinity: none; not in
+//            format 1, whose tiles load without one and answer within the drift alone of an
+//            OriginTolerance until a store gives them a distance); u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
 //            doubtful (CacheCube::is_doubtful; only texels holding a value); and its 16 x 16 words row by
 //            row (texels past the face's edge, and empty texels, hold the technique's empty word; any other
 //            word must be valid)
 //   "END "   u32 cube count; nothing may follow
-//
-// Not saved: a tile's nearest hit distance (CacheCube::nearest_hit), so a loaded tile answers within the
-// drift alone of an OriginTolerance until a store gives it a distance again.
 //
 // Only tiles holding a value are written (sparse, as cubes allocate them). The scene identity is the
 // caller's: a 64-bit hash of whatever makes the cached colours right (geometry, materials, lights) and a
@@ -50,6 +49,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -81,7 +81,7 @@ struct SceneIdentity {
     std::string name;
 };
 
-inline constexpr std::uint32_t cache_file_version = 1;
+inline constexpr std::uint32_t cache_file_version = 2;
 
 inline constexpr std::uint64_t fnv1a64_basis = 14695981039346656037ull;
 
@@ -307,7 +307,8 @@ struct CubeRecord {
     int face_size = 0;
     CubeBounds bounds;
     std::uint32_t tiles = 0;
-    const std::uint8_t* tile_data = nullptr; // `tiles` times a tile_header_bytes header and 256 words
+    const std::uint8_t* tile_data = nullptr; // `tiles` times a tile_header_bytes(version) header and 256 words
+    std::uint32_t version = cache_file_version;
 };
 
 // A tile's index, origin box and doubtful marks, as the file stores them before its words.
@@ -315,12 +316,14 @@ struct TileHeader {
     std::uint32_t index = 0;
     bool has_box = false;
     glm::vec3 lo{0.0f}, hi{0.0f};
+    float nearest = std::numeric_limits<float>::infinity(); // format 2 on; format 1 has none
     std::uint64_t doubtful[4] = {0, 0, 0, 0};
     bool is_doubtful(int slot) const noexcept { return (doubtful[slot / 64] >> (slot % 64)) & 1u; }
 };
-inline constexpr std::size_t tile_header_bytes = 4 + 4 + 6 * 4 + 4 * 8;
+// Format 1 has no nearest hit distance (4 bytes) after the box.
+inline std::size_t tile_header_bytes(std::uint32_t version) noexcept { return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8; }
 
-inline TileHeader read_tile_header(ByteReader& r) {
+inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
     TileHeader h;
     h.index = r.u32("a tile index");
     const std::uint32_t flag = r.u32("a tile's origin flag");
@@ -332,6 +335,11 @@ inline TileHeader read_tile_header(ByteReader& r) {
     const bool box = glm::all(glm::lessThanEqual(h.lo, h.hi)) && shared::raycache_is_finite3(h.lo) && shared::raycache_is_finite3(h.hi);
     if (h.has_box ? !box : !zero)
         r.fail("tile " + std::to_string(h.index) + "'s origin box is not " + (h.has_box ? "finite, low <= high" : "zero"));
+    if (version >= 2) {
+        h.nearest = r.f32("a tile's nearest hit distance");
+        if (!(h.nearest >= 0.0f))
+            r.fail("tile " + std::to_string(h.index) + "'s nearest hit distance is not >= 0 (infinity: none)");
+    }
     for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
     return h;
 }
@@ -362,9 +370,10 @@ inline TexelAddress tile_texel(std::uint32_t index, int slot, int face_size) noe
 
 // Reads and checks one CUBE chunk's payload (every word valid or empty, empty past the face's edge).
 template <class Texel>
-CubeRecord read_cube_record(ByteReader& r) {
+CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     using Word = typename Texel::Word;
     CubeRecord c;
+    c.version = version;
     c.object = r.u64("the object id");
     c.part = r.u64("the object part");
     const std::uint32_t face_size = r.u32("the face size");
@@ -382,14 +391,14 @@ CubeRecord read_cube_record(ByteReader& r) {
     if (c.tiles > tile_count)
         r.fail(std::to_string(c.tiles) + " tiles, more than the " + std::to_string(tile_count) + " of a cube of face size " +
                std::to_string(face_size));
-    const std::size_t tile_bytes = tile_header_bytes + file_tile_texels * sizeof(Word);
+    const std::size_t tile_bytes = tile_header_bytes(c.version) + file_tile_texels * sizeof(Word);
     if (r.remaining() / tile_bytes < c.tiles || r.remaining() != c.tiles * tile_bytes)
         r.fail(std::to_string(c.tiles) + " tiles need " + std::to_string(std::uint64_t{c.tiles} * tile_bytes) + " bytes, the chunk holds " +
                std::to_string(r.remaining()));
     c.tile_data = r.here();
     std::int64_t previous = -1;
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
-        const TileHeader header = read_tile_header(r);
+        const TileHeader header = read_tile_header(r, c.version);
         const std::uint32_t index = header.index;
         if (index >= tile_count)
             r.fail("tile index " + std::to_string(index) + " is outside the cube's " + std::to_string(tile_count) + " tiles");
@@ -421,9 +430,9 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                                              const ByteReader& messages) {
     using Word = typename Texel::Word;
     auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget);
-    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes + file_tile_texels * sizeof(Word)), "tiles"); // checked
+    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(Word)), "tiles"); // checked
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
-        const TileHeader h = read_tile_header(tiles);
+        const TileHeader h = read_tile_header(tiles, c.version);
         for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {
             const Word w = read_word<Word>(tiles.here());
             tiles.skip(sizeof(Word), "a texel");
@@ -435,7 +444,7 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                               " in use) cannot hold the file's tiles as well as the cubes they replace");
             if (h.is_doubtful(slot)) cube->set_doubtful(t);
         }
-        if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi); // slot 0 is on the face
+        if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi, h.nearest); // slot 0 is on the face
     }
     return cube;
 }
@@ -493,6 +502,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             w.u32(box ? 1 : 0);
             for (const glm::vec3& corner : {box ? box->first : glm::vec3(0.0f), box ? box->second : glm::vec3(0.0f)})
                 for (int k = 0; k < 3; ++k) w.f32(corner[k] + 0.0f);
+            w.f32(box ? c.cube->nearest_hit(detail::tile_texel(index, 0, n)) : std::numeric_limits<float>::infinity());
             std::uint64_t doubtful[4] = {0, 0, 0, 0};
             for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
                 const TexelAddress t = detail::tile_texel(index, slot, n);
@@ -535,7 +545,7 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     if (version > cache_file_version)
         r.fail("format version " + std::to_string(version) + " is newer than this RayCache reads (" +
                std::to_string(cache_file_version) + "); load it with a newer RayCache or save the cache again");
-    if (version != cache_file_version) r.fail("unknown format version " + std::to_string(version));
+    if (version < 1) r.fail("unknown format version " + std::to_string(version));
 
     detail::ByteReader head = r.chunk(detail::head_tag, "the HEAD chunk");
     const std::uint32_t technique = head.u32("the technique");
@@ -553,7 +563,7 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     if (encoding != File::encoding || word_bytes != sizeof(Word))
         r.fail("texel encoding " + std::to_string(encoding) + " in " + std::to_string(word_bytes) + "-byte words is not " +
                File::name + "'s (encoding " + std::to_string(File::encoding) + ", " + std::to_string(sizeof(Word)) + " bytes)");
-    if (tile_edge != detail::file_tile_edge) r.fail("tiles of " + std::to_string(tile_edge) + " texels a side (format 1 has 16)");
+    if (tile_edge != detail::file_tile_edge) r.fail("tiles of " + std::to_string(tile_edge) + " texels a side (formats 1 and 2 have 16)");
     if (hash != expected.hash || name != expected.name)
         r.fail("it was saved for scene '" + name + "' (hash " + detail::hex(hash) + "), this is scene '" + expected.name +
                "' (hash " + detail::hex(expected.hash) + ")");
@@ -568,7 +578,7 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     for (std::uint32_t i = 0; i < cube_count; ++i) {
         const std::string what = "CUBE chunk " + std::to_string(i + 1) + " of " + std::to_string(cube_count);
         detail::ByteReader cube = r.chunk(detail::cube_tag, what);
-        records.push_back(detail::read_cube_record<Texel>(cube));
+        records.push_back(detail::read_cube_record<Texel>(cube, version));
         if (!keys.insert({records.back().object, records.back().part}).second)
             r.fail(detail::key_text(records.back().object, records.back().part) + " has two cubes");
     }
