@@ -194,8 +194,7 @@ public:
     // lookup(direction) of texel `t` (from texel_of(); must lie on the cube, asserted): counted, no origin test.
     std::optional<Value> lookup_at(const TexelAddress& t) noexcept {
         const InFrame use = in_frame();
-        RAYCACHE_ASSERT(contains(t));
-        std::optional<Value> value = contains(t) ? visible_value(t) : std::nullopt;
+        std::optional<Value> value = peek_at(t);
         record_lookup(value.has_value());
         return value;
     }
@@ -218,9 +217,8 @@ public:
 
     // lookup() without counting, for searches that read many texels per ray (count them with record_lookup()).
     std::optional<Value> peek(const glm::vec3& direction) const noexcept {
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE) return std::nullopt;
-        return visible_value(TexelAddress{a.face, a.column, a.row});
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? visible_value(*t) : std::nullopt;
     }
 
     // The value of `texel` as a lookup would see it (empty, or written this frame: std::nullopt), without
@@ -242,9 +240,8 @@ public:
     // Visible from the next begin_frame(). Thread-safe, lock-free.
     bool store(const glm::vec3& direction, const Value& value) noexcept {
         const InFrame use = in_frame();
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
-        if (a.face == RAYCACHE_NO_FACE) return refuse();
-        return store_word(TexelAddress{a.face, a.column, a.row}, Texel::encode(value));
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? store_word(*t, Texel::encode(value)) : refuse();
     }
 
     // store() for a ray that left from `origin`: also widens its tile's pending box of origins (unless the

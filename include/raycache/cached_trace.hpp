@@ -49,35 +49,6 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace
     return traced;
 }
 
-// cached_trace() and filtered_cached_trace() for a ray leaving from `origin`: a texel answers only while
-// `origin` lies within `drift` (world units) of the origins its tile was stored from
-// (CacheCube::lookup(direction, origin, drift)); otherwise the ray is traced and the tile is dropped at
-// the next begin_frame(), to refill from the current viewpoint. The traced value is stored with its origin.
-template <class Texel, class Trace>
-typename Texel::Value cached_trace(CacheCube<Texel>& cube, const glm::vec3& direction, const glm::vec3& origin, float drift,
-                                   Trace&& trace) {
-    using Value = typename Texel::Value;
-    static_assert(std::is_invocable_r_v<Value, Trace&>, "RayCache cached_trace: trace must be callable as `Value trace()`");
-    const auto use = cube.in_frame();
-    if (std::optional<Value> cached = cube.lookup(direction, origin, drift)) return *cached;
-    Value traced = std::forward<Trace>(trace)();
-    cube.store(direction, traced, origin);
-    return traced;
-}
-
-template <class Trace>
-glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, float drift,
-                                Trace&& trace) {
-    static_assert(std::is_invocable_r_v<glm::vec3, Trace&>,
-                  "RayCache filtered_cached_trace: trace must be callable as `glm::vec3 trace()`");
-    const auto use = cube.in_frame();
-    if (cube.lookup(direction, origin, drift))
-        return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });
-    glm::vec3 traced = std::forward<Trace>(trace)();
-    cube.store(direction, traced, origin);
-    return traced;
-}
-
 // The CCT's whole ray path for a ray leaving from `origin`, as SceneCache runs it: a lookup with the origin
 // test (tolerance; null: none, the direction alone keys the texel), else trace() and a store of its colour
 // with the origin and the hit distance. trace() returns anything with members `color` and `distance` (as
