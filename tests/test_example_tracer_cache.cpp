@@ -189,18 +189,27 @@ TEST_CASE("warm caches at the same viewpoint stay close to the uncached frame wi
             CHECK(psnr >= c.cct_min_psnr);
             CHECK(psnr > ceiling_psnr);
         }
-        {
-            const std::unique_ptr<SceneCache> caches = make_caches(tracer, cdct_pyramid, 64);
+        // The CDCT pre-filled, without the confidence test (every search that lands on a filled texel
+        // answers) and with it (the default: texels at colour edges are traced).
+        double cdct_psnr[2] = {0.0, 0.0};
+        for (const bool confidence : {false, true}) {
+            const std::unique_ptr<SceneCache> caches =
+                confidence ? make_caches(tracer, cdct_pyramid, 64) : make_caches(tracer, cdct_pyramid, 64, -1.0f);
             tracer.prefill(*caches, 2);
             caches->begin_frame();
             const rcx::Image warm = tracer.render(scene.camera, settings(64, cdct_pyramid, caches.get()));
             const SceneCacheStatistics s = caches->begin_frame();
             const double psnr = rcx::compare(warm, uncached).psnr_db;
-            INFO("cdct pre-filled: ", psnr, " dB, hit rate ", s.hit_rate(), "; one colour for every leaving ray: ", ceiling_psnr, " dB");
-            CHECK(s.hit_rate() >= c.cdct_min_hit_rate);
+            cdct_psnr[confidence] = psnr;
+            INFO("cdct pre-filled, confidence test ", confidence, ": ", psnr, " dB, hit rate ", s.hit_rate(),
+                 "; one colour for every leaving ray: ", ceiling_psnr, " dB");
+            if (!confidence) CHECK(s.hit_rate() >= c.cdct_min_hit_rate);
             CHECK(psnr >= c.cdct_min_psnr);
             CHECK(psnr > ceiling_psnr); // better than answering every leaving ray with one colour
         }
+        // Without the test the errors sit at colour edges (checker lines, rims seen in the mirror): the
+        // test measured +19.5 (behind-8), +15.2 (reflective-32) and +21.7 dB (glass) -> at least 8 dB.
+        CHECK(cdct_psnr[1] >= cdct_psnr[0] + 8.0);
     }
 }
 

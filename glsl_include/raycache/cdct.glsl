@@ -96,8 +96,8 @@ raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 
                                                      p.max_gap, p.max_reads);
     while (s.status == RAYCACHE_SECANT_READ) {
         uvec2 texel = raycache_cdct_texel_at(cube, raycache_secant_point(s, s.t));
-        s = raycache_secant_step(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
-                                 raycache_cdct_color(texel));
+        raycache_secant_advance(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
+                                raycache_cdct_color(texel));
     }
     raycache_relief_result result = raycache_secant_result(s, origin);
     raycache_count_lookup(cube, result.hit);

@@ -97,7 +97,8 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
 // box, jump to where the ray reaches the distance read, then refine a bracketed crossing by false position;
 // answer only when the point read lies within p.epsilon of its texel's surface (or a bracket shorter than
 // p.epsilon ends at most p.max_gap behind it). A miss for an empty or not-yet-visible texel, after
-// p.max_reads reads without such an answer, and for bad input (no texel read). Reads at most
+// p.max_reads reads without such an answer, and for bad input (no texel read). A texel marked doubtful
+// (raycache/edge_confidence.hpp) reads as empty: its colour, and often its distance, lie at an edge. Reads at most
 // min(p.max_reads, RAYCACHE_SECANT_MAX_READS) texels. Counts one lookup. Thread-safe as CacheCube::lookup.
 inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p) noexcept {
@@ -106,8 +107,8 @@ inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
                                                                      p.epsilon, p.max_gap, p.max_reads);
     while (s.status == RAYCACHE_SECANT_READ) {
         const std::optional<DepthSample> texel = cube.peek(shared::raycache_secant_point(s, s.t));
-        s = texel ? shared::raycache_secant_step(s, true, texel->distance, texel->color)
-                  : shared::raycache_secant_step(s, false, 0.0f, glm::vec3(0.0f));
+        if (texel) shared::raycache_secant_advance(s, true, texel->distance, texel->color);
+        else shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
     }
     const ReliefResult result = shared::raycache_secant_result(s, origin);
     cube.record_lookup(result.hit);

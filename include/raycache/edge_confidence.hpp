@@ -28,23 +28,31 @@ inline bool colours_differ(const glm::vec3& a, const glm::vec3& b, float thresho
     return std::max(d.x, std::max(d.y, d.z)) > threshold;
 }
 
+// The colour a texel value carries: a CCT texel is one, a CDCT texel holds one beside its distance.
+inline const glm::vec3& colour_of(const glm::vec3& color) noexcept { return color; }
+inline const glm::vec3& colour_of(const DepthSample& sample) noexcept { return sample.color; }
+
 // Marks doubtful every texel written this frame, and every filled neighbour of one (left, right, up,
 // down on its face), whose colours differ by more than `threshold`. Call it between frames, before the
 // cube's begin_frame() (it reads the frame's written texels). Returns the texels newly marked.
-// threshold < 0 (or NaN): nothing is marked.
-inline std::size_t mark_doubtful_edges(CctCube& cube, float threshold) {
+// threshold < 0 (or NaN): nothing is marked. Works on CCT and CDCT cubes alike: a CDCT texel holds one
+// ray's colour at one point, and a search answered at a point near a colour edge (a checker line seen in
+// the mirror) gets the wrong side as often as a CCT lookup does; its doubtful texels read as empty, so
+// such searches miss and are traced.
+template <class Texel>
+std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
     if (!(threshold >= 0.0f)) return 0;
     const int n = cube.face_size();
     const std::size_t before = cube.doubtful_texels();
     cube.for_each_written_texel([&](const TexelAddress& t) {
-        const std::optional<glm::vec3> own = cube.load(t);
+        const auto own = cube.load(t);
         if (!own) return;
         const TexelAddress neighbours[4] = {{t.face, t.column - 1, t.row}, {t.face, t.column + 1, t.row},
                                             {t.face, t.column, t.row - 1}, {t.face, t.column, t.row + 1}};
         for (const TexelAddress& other : neighbours) {
             if (!is_on_cube(other, n)) continue;
-            const std::optional<glm::vec3> value = cube.load(other);
-            if (value && colours_differ(*own, *value, threshold)) {
+            const auto value = cube.load(other);
+            if (value && colours_differ(colour_of(*own), colour_of(*value), threshold)) {
                 cube.set_doubtful(t);
                 cube.set_doubtful(other);
             }

@@ -151,8 +151,8 @@ CommandLine::CommandLine(const std::string& program)
                number("--rays-per-texel", o.rays_per_texel, true));
     add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
     add_option("--edge-threshold", "F",
-               "CCT: texels differing from a neighbour by more than F are traced,\n"
-               "not answered; negative: off (Embree tracer) " + shown_default(d.edge_threshold),
+               "texels differing in colour from a neighbour by more than F are\n"
+               "traced, not answered (CCT and CDCT); negative: off (Embree tracer) " + shown_default(d.edge_threshold),
                number("--edge-threshold", o.edge_threshold, false));
     add_option("--origin-drift", "F",
                "CCT: a tile met by a ray leaving further than F x the cube's\n"

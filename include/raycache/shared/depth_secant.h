@@ -16,7 +16,7 @@
  *     s = raycache_secant_start(origin, direction, centre, half_size, epsilon, max_gap, max_reads);
  *     while (s.status == RAYCACHE_SECANT_READ) {
  *         read the texel of direction raycache_secant_point(s, s.t) -> (valid, distance, colour);
- *         s = raycache_secant_step(s, valid, distance, colour);
+ *         raycache_secant_advance(s, valid, distance, colour);   // s updated in place
  *     }
  *     raycache_secant_result(s, origin): s.status == RAYCACHE_SECANT_HIT when the ray meets the cached
  *     surface at s.t, at the point raycache_ray_point(origin, s.d, s.t), seeing s.color; s.reads texels
@@ -65,7 +65,7 @@ RAYCACHE_FN float raycache_dot_no_fma(vec3 a, vec3 b) {
 }
 
 /* The ray's point at t, from the cube's centre: start + t d. */
-RAYCACHE_FN vec3 raycache_secant_point(raycache_secant_search s, float t) {
+RAYCACHE_FN vec3 raycache_secant_point(RAYCACHE_IN(raycache_secant_search) s, float t) {
     RAYCACHE_PRECISE vec3 p = s.start + vec3(raycache_no_fma(t * s.d.x), raycache_no_fma(t * s.d.y), raycache_no_fma(t * s.d.z));
     return p;
 }
@@ -119,19 +119,19 @@ RAYCACHE_FN raycache_secant_search raycache_secant_start(vec3 origin, vec3 direc
 }
 
 /* Takes the texel read at raycache_secant_point(s, s.t): valid (false: empty, a miss), its stored
- * distance from the centre and its colour. Returns the next state: another read at s.t, or the outcome. */
-RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s, bool valid, float distance, vec3 color) {
+ * distance from the centre and its colour. Advances `s` in place to the next state: another read at s.t, or the outcome. */
+RAYCACHE_FN void raycache_secant_advance(RAYCACHE_INOUT(raycache_secant_search) s, bool valid, float distance, vec3 color) {
     s.reads = s.reads + 1;
     if (!valid) {
         s.status = RAYCACHE_SECANT_MISS;
-        return s;
+        return;
     }
     RAYCACHE_PRECISE float f = raycache_length(raycache_secant_point(s, s.t)) - distance;
     if (abs(f) <= s.epsilon || (s.reads == 1 && f > 0.0f)) {
         /* On the surface; or, at the box exit already past it: the surface lies inside the box. */
         s.status = RAYCACHE_SECANT_HIT;
         s.color = color;
-        return s;
+        return;
     }
     if (f < 0.0f) {
         if (s.last_side < 0 && s.bracketed) s.hi_f = raycache_no_fma(0.5f * s.hi_f); /* Illinois: the same end again */
@@ -152,11 +152,11 @@ RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s
         s.status = (s.hi_f <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
         s.t = s.hi_t;
         s.color = s.hi_color;
-        return s;
+        return;
     }
     if (s.reads >= s.max_reads) {
         s.status = RAYCACHE_SECANT_MISS;
-        return s;
+        return;
     }
     float next;
     if (s.bracketed) {
@@ -174,14 +174,13 @@ RAYCACHE_FN raycache_secant_search raycache_secant_step(raycache_secant_search s
         s.status = (s.bracketed && s.hi_f <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
         s.t = s.hi_t;
         s.color = s.hi_color;
-        return s;
+        return;
     }
     s.t = next;
-    return s;
 }
 
 /* The search's outcome as a search result (origin: the ray's origin given to raycache_secant_start). */
-RAYCACHE_FN raycache_relief_result raycache_secant_result(raycache_secant_search s, vec3 origin) {
+RAYCACHE_FN raycache_relief_result raycache_secant_result(RAYCACHE_IN(raycache_secant_search) s, vec3 origin) {
     return raycache_search_result(s.status == RAYCACHE_SECANT_HIT, origin, s.d, s.t, s.color, s.reads);
 }
 

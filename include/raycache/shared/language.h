@@ -71,6 +71,11 @@ inline float raycache_no_fma(float x) {
 #define RAYCACHE_DEFAULT(value) = value
 /* +infinity as a float expression. */
 #define RAYCACHE_INFINITY (std::numeric_limits<float>::infinity())
+/* A parameter the function updates in place: a reference in C++, `inout` in GLSL (for state that a loop
+ * advances step by step, which copied in and out by value costs C++ more than the step itself). */
+#define RAYCACHE_INOUT(type) type&
+/* A struct parameter only read: a const reference in C++ (no copy), `in` in GLSL. */
+#define RAYCACHE_IN(type) const type&
 
 #else /* GLSL */
 
@@ -80,6 +85,8 @@ inline float raycache_no_fma(float x) {
 #define raycache_no_fma(x) (x)
 #define RAYCACHE_DEFAULT(value)
 #define RAYCACHE_INFINITY uintBitsToFloat(0x7F800000u)
+#define RAYCACHE_INOUT(type) inout type
+#define RAYCACHE_IN(type) in type
 
 #endif /* __cplusplus */
 

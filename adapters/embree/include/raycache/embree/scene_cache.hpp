@@ -134,7 +134,7 @@ struct SceneCacheSettings {
     // around the ray's direction (raycache/filtered_lookup.hpp); false (the default): with the own texel
     // alone. Filtering gains about 1.5 dB on moving cameras at adaptive sizes and costs 15-20% of the frame.
     bool filtered = false;
-    // CCT confidence test (raycache/edge_confidence.hpp): texels whose colour differs from a filled
+    // Confidence test, CCT and CDCT (raycache/edge_confidence.hpp): texels whose colour differs from a filled
     // neighbour's by more than this (linear radiance, any channel) are not answered; their rays are
     // traced. Negative: off.
     float edge_threshold = 0.1f;
@@ -214,7 +214,7 @@ struct SceneCacheStatistics {
     std::size_t allocated_bytes = 0; // what the cubes hold: allocated tiles and tile tables
     std::size_t pyramid_bytes = 0;   // CDCT depth pyramids
     std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
-    std::size_t doubtful_texels = 0; // CCT texels the confidence test does not answer (their rays are traced)
+    std::size_t doubtful_texels = 0; // texels the confidence test does not answer (their rays are traced)
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -524,7 +524,7 @@ public:
     SceneCacheStatistics begin_frame() {
         SceneCacheStatistics total;
         for (Entry& e : entries_) {
-            if (e.cct) mark_doubtful_edges(*e.cct, edge_threshold_);
+            with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
             const CubeStatistics frame = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
             add(total, frame);
             if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
@@ -534,7 +534,7 @@ public:
         total.texel_bytes = texel_bytes();
         total.allocated_bytes = allocated_bytes();
         total.pyramid_bytes = pyramid_bytes();
-        for (const Entry& e : entries_) total.doubtful_texels += e.cct ? e.cct->doubtful_texels() : 0;
+        for (const Entry& e : entries_) total.doubtful_texels += with_cube(e, [](const auto& cube) { return cube.doubtful_texels(); });
         texels_read_.reset();
         return total;
     }
@@ -766,9 +766,9 @@ private:
             if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
                 carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
-                mark_doubtful_edges(*e.cct, edge_threshold_);
             } else
                 resample_into(old.cdct->cube(), e.cdct->cube());
+            with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
             if (e.cdct) e.cdct->rebuild_pyramid();
         }
