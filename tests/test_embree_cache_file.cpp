@@ -159,6 +159,31 @@ TEST_CASE("adaptive cubes load at the face size they were saved with") {
     }
 }
 
+TEST_CASE("loaded adaptive cubes move with the saved cache's hysteresis, not as a first guess") {
+    // The saved cubes were sized from counted rays; a frame whose rays call for a size one half-octave
+    // step away (twice the rays: sqrt(2) the texels per edge) must not move them, in the loaded cache as in
+    // the saved one (hysteresis of 2 steps). A cube still at its first guess would jump to the new size.
+    ScratchFolder folder("adaptive-hysteresis");
+    for (Technique technique : {Technique::cct, Technique::cdct}) {
+        CAPTURE(static_cast<int>(technique));
+        std::unique_ptr<SceneCache> warm_cache = make_cache(technique, raycache::embree::adaptive_face_size);
+        std::unique_ptr<SceneCache> loaded_cache = make_cache(technique, raycache::embree::adaptive_face_size);
+        SceneCache &warm = *warm_cache, &loaded = *loaded_cache;
+        for (std::uint64_t f = 0; f < 3; ++f) frame(warm, rays_of_frame(7 + f, 20000));
+        warm.save(folder.file("warm.rcc"), scene);
+        loaded.load(folder.file("warm.rcc"), scene);
+        std::vector<int> saved_sizes;
+        for (const ObjectId& id : objects) saved_sizes.push_back(warm.face_size(id));
+        const std::vector<Ray> more = rays_of_frame(20, 40000);
+        frame(warm, more);
+        frame(loaded, more);
+        for (std::size_t k = 0; k < saved_sizes.size(); ++k) {
+            CHECK(warm.face_size(objects[k]) == saved_sizes[k]);
+            CHECK(loaded.face_size(objects[k]) == saved_sizes[k]);
+        }
+    }
+}
+
 TEST_CASE("a SceneCache refuses a file that does not fit it, says why, and keeps its cubes") {
     ScratchFolder folder("scene-refused");
     std::unique_ptr<SceneCache> warm = make_cache(Technique::cct, 32), target_cache = make_cache(Technique::cct, 32);

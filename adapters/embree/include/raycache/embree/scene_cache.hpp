@@ -858,6 +858,9 @@ private:
             else
                 e.cct = std::move(loaded[source_of[i]].cube);
             if (e.coverage) e.coverage->reset();
+            // A cube that holds texels received rays, so its face size came from counting them: later
+            // moves take the hysteresis, as in the cache that saved it (the file keeps no flag for that).
+            e.sized = with_cube(e, [](const auto& cube) { return cube.valid_texels() > 0; });
         }
     }
 
