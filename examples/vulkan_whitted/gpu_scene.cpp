@@ -1,9 +1,10 @@
 // The Vulkan tracer's scene layout; see gpu_scene.hpp.
 #include "gpu_scene.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 #include <string>
+
+#include <raycache/cube_placement.hpp>
 
 #include "rcx/meshes.hpp"
 
@@ -51,7 +52,8 @@ GpuObjects pack_objects(const Scene& scene, bool caching, int face_size) {
     std::vector<GpuObject>& objects = out.objects;
     std::vector<raycache::GpuCubeShape>& shapes = out.shapes;
     std::vector<int>& shape_of = out.shape_of;
-    auto add_object = [&](const Material& m, bool sphere, glm::vec3 centre, float radius, glm::vec3 lo, glm::vec3 hi) {
+    // cube: where the object's cube sits (raycache/cube_placement.hpp), called only for cached objects.
+    auto add_object = [&](const Material& m, bool sphere, glm::vec3 centre, float radius, auto cube) {
         GpuObject o{};
         set4(o.m[0], m.diffuse, m.specular);
         set4(o.m[1], m.checker_color, m.shininess);
@@ -61,17 +63,15 @@ GpuObjects pack_objects(const Scene& scene, bool caching, int face_size) {
         objects.push_back(o);
         shape_of.push_back(-1);
         if (caching && m.cached) {
-            const glm::vec3 half = 0.5f * (hi - lo);
-            shapes.push_back({face_size, raycache::CubeBounds{0.5f * (lo + hi), std::max(half.x, std::max(half.y, half.z))}});
+            shapes.push_back({face_size, cube()});
             shape_of.back() = static_cast<int>(shapes.size() - 1);
         }
     };
     for (const Sphere& s : scene.spheres)
-        add_object(s.material, true, s.centre, s.radius, s.centre - glm::vec3(s.radius), s.centre + glm::vec3(s.radius));
-    for (const Mesh& m : scene.meshes) {
-        const Bounds b = mesh_bounds(m);
-        add_object(m.material, false, glm::vec3(0.0f), 0.0f, b.min, b.max);
-    }
+        add_object(s.material, true, s.centre, s.radius, [&] { return raycache::cube_around_sphere(s.centre, s.radius); });
+    for (const Mesh& m : scene.meshes)
+        add_object(m.material, false, glm::vec3(0.0f), 0.0f,
+                   [&] { return raycache::cube_around_points(m.positions, "mesh '" + m.name + "'"); });
     return out;
 }
 

@@ -55,7 +55,8 @@ struct GpuObjects {
     std::vector<int> shape_of;                  // per object: its cube in shapes, or -1
 };
 
-// Packs the objects; with `caching`, a cube of face_size texels around each cached object's box.
+// Packs the objects; with `caching`, a cube of face_size texels around each cached object, placed by the
+// library's rule (raycache/cube_placement.hpp: a sphere's own centre and radius, a mesh's vertices' box).
 GpuObjects pack_objects(const Scene& scene, bool caching, int face_size);
 
 } // namespace rcx::gpu

@@ -7,10 +7,13 @@
  * and nothing is ever stored, with no error.
  *
  * How to use it, from a compute, fragment or ray-generation shader:
+ *   #version 450
  *   #extension GL_GOOGLE_include_directive : require
  *   #define RAYCACHE_SET 1                      // options: set, bindings, RAYCACHE_READ_ONLY (cube.glsl)
  *   #define RAYCACHE_CDCT                       // only for the CDCT (see below); the CCT needs nothing
  *   #include "raycache/raycache.glsl"           // or only raycache/cct.glsl or raycache/cdct.glsl
+ *   layout(std430, binding = 5) readonly buffer MyCubes { raycache_gpu_cube my_cubes[]; }; // yours: upload
+ *                              // raycache::gpu_buffer_layout(...).cubes there, at a binding RayCache leaves free
  *   raycache_gpu_cube cube = my_cubes[object];  // descriptor: raycache/shared/gpu_layout.h, C++ too
  *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
  *   if (!c.hit) { c.color = trace(hit, reflected); raycache_cct_store(cube, reflected, c.color); }
@@ -23,8 +26,9 @@
  * stores with 64-bit atomics: its shaders declare the Int64 capability and the device must enable
  * shaderInt64 and shaderBufferInt64Atomics (RAYCACHE_READ_ONLY: neither).
  * Buffers (set RAYCACHE_SET, bindings from raycache/shared/gpu_layout.h): CCT texels 0, pending 1, CDCT
- * texels 2, pending 3, frame buffer 4 (counters and the store list, raycache/frame.glsl; host side:
- * raycache/gpu_frame.hpp, which also gives the words to write into it before every frame).
+ * texels 2, pending 3 (declared only with RAYCACHE_CDCT), frame buffer 4 (counters and the store list,
+ * raycache/frame.glsl; host side: raycache/gpu_frame.hpp, which also gives the words to write into it
+ * before every frame). Barriers: README.md, "In your own Vulkan shaders", lists each one.
  * Between frames, the end-of-frame pass (raycache/end_frame.glsl, five lines, dispatched indirectly from
  * the frame buffer) makes the frame's stores visible, visiting only the texels stored.
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().

@@ -4,11 +4,13 @@
 // a device's largest storage buffer.
 //
 // A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
-//   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy);
+//   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy),
+//      then barrier (transfer write -> shader read and write; it also covers the first frame's fill);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
 //   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
 //      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset;
-//   4. read the frame buffer back: read_gpu_statistics(); when its overflow is non-zero, run the sweep
+//   4. barrier (shader write -> host read, or transfer read for a copy), and once the frame is done read the
+//      frame buffer back: read_gpu_statistics(); when its overflow is non-zero, run the sweep
 //      (gpu_sweep_groups) before the next frame.
 #pragma once
 

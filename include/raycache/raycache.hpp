@@ -16,6 +16,7 @@
 #include "raycache/cached_trace.hpp"
 #include "raycache/depth_pyramid.hpp"
 #include "raycache/cdct.hpp"
+#include "raycache/cube_placement.hpp"
 #include "raycache/cdct_cache.hpp"
 #include "raycache/prefill.hpp"
 #include "raycache/cache_file.hpp"

@@ -9,6 +9,9 @@
 #   -DMODE=embree_component     find_package(RayCache REQUIRED COMPONENTS Embree) and use Embree
 #   -DMODE=old_standard         every public header, compiled as C++11 and C++14, stops at one #error
 #                               naming C++17 (old_standard.cmake)
+#   -DMODE=vulkan_user          install and move as find_package, then build and run consumers/vulkan_user
+#                               (a Vulkan compute program written from the README; its output is shown, so
+#                               a skip, no device or no validation layer, reads as one)
 # Also: RAYCACHE_SOURCE_DIR, RAYCACHE_BINARY_DIR, CONSUMERS_DIR, WORK_DIR (wiped first), CONFIG,
 #       GENERATOR, MAKE_PROGRAM, CXX_COMPILER, PREFIX_PATH ('|'-separated).
 cmake_minimum_required(VERSION 3.20)
@@ -89,7 +92,8 @@ endfunction()
 function(build_and_run src bin)
   step("configure consumer" OK _o "${CMAKE_COMMAND}" -S "${src}" -B "${bin}" ${_configure_args} ${ARGN})
   step("build consumer" OK _o "${CMAKE_COMMAND}" --build "${bin}" ${_config_args})
-  step("run consumer" OK _o "${CMAKE_CTEST_COMMAND}" --test-dir "${bin}" ${_ctest_config_args} --output-on-failure)
+  step("run consumer" OK _o "${CMAKE_CTEST_COMMAND}" --test-dir "${bin}" ${_ctest_config_args} --output-on-failure -V)
+  set(_run_output "${_o}" PARENT_SCOPE)
 endfunction()
 
 # write_project(<dir> <body>): a throwaway consumer project for the component checks.
@@ -152,6 +156,12 @@ target_link_libraries(embree_consumer PRIVATE RayCache::Embree)
 enable_testing()
 add_test(NAME embree_consumer COMMAND embree_consumer)]])
   build_and_run("${WORK_DIR}/embree" "${WORK_DIR}/embree/build")
+
+elseif(MODE STREQUAL "vulkan_user")
+  install_relocated(_prefix)
+  search_prefixes("${_prefix}")
+  build_and_run("${CONSUMERS_DIR}/vulkan_user" "${WORK_DIR}/build")
+  message(STATUS "[${MODE}] the program's run:\n${_run_output}")
 
 elseif(MODE STREQUAL "old_standard")
   include("${CONSUMERS_DIR}/old_standard.cmake")

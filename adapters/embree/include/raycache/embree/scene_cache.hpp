@@ -70,16 +70,6 @@ inline void check_primitive_range(unsigned geom_id, unsigned first_prim, unsigne
                                     std::to_string(total) + " primitives (0.." + std::to_string(total - 1) + ")");
 }
 
-// The cube around the box [lower, upper]: its centre, half-size = the largest half-extent. Throws
-// std::invalid_argument naming `what` when the box is empty or infinite.
-inline CubeBounds enclosing_cube(const glm::vec3& lower, const glm::vec3& upper, const std::string& what) {
-    const glm::vec3 half = 0.5f * (upper - lower);
-    const float half_size = glm::max(half.x, glm::max(half.y, half.z));
-    if (!(half_size > 0.0f) || !std::isfinite(half_size))
-        throw std::invalid_argument("RayCache: " + what + " has empty or infinite bounds");
-    return CubeBounds{0.5f * (lower + upper), half_size};
-}
-
 // f(alone) on a committed scene that holds only geometry `id` of `scene` (Embree answers bounds and point
 // queries per scene). Throws std::invalid_argument when `scene` has no geometry `id`.
 template <class F>
@@ -112,8 +102,8 @@ inline CubeBounds measure_triangles(RTCGeometry geometry, unsigned geom_id, unsi
             lower = glm::min(lower, p);
             upper = glm::max(upper, p);
         }
-    return enclosing_cube(lower, upper, "primitives " + range_text(first_prim, prim_count) + " of geometry " +
-                                            std::to_string(geom_id));
+    return cube_around_box(lower, upper, "primitives " + range_text(first_prim, prim_count) + " of geometry " +
+                                             std::to_string(geom_id));
 }
 } // namespace detail
 
@@ -225,8 +215,8 @@ struct SceneCacheStatistics {
     }
 };
 
-// The cube placement of a geometry of a committed scene: centre of its bounds, half-size = the largest
-// half-extent (so the cube's box encloses it). For an instance id, the bounds of the whole instance.
+// The cube placement of a geometry of a committed scene: cube_around_box() of its bounds (the library's
+// rule, raycache/cube_placement.hpp). For an instance id, the bounds of the whole instance.
 // `id` must be one that rtcAttachGeometry returned for `scene` (Embree has no way to ask how many ids a
 // scene has, and its debug builds abort on one past the end). Throws std::invalid_argument when that
 // geometry was detached, or its bounds are empty or infinite.
@@ -237,8 +227,8 @@ inline CubeBounds bounds_of(RTCScene scene, ObjectId id) {
         rtcGetSceneBounds(alone, &bounds);
         return bounds;
     });
-    return detail::enclosing_cube(glm::vec3(b.lower_x, b.lower_y, b.lower_z), glm::vec3(b.upper_x, b.upper_y, b.upper_z),
-                                  "geometry " + std::to_string(outer));
+    return cube_around_box(glm::vec3(b.lower_x, b.lower_y, b.lower_z), glm::vec3(b.upper_x, b.upper_y, b.upper_z),
+                           "geometry " + std::to_string(outer));
 }
 
 // How many primitives geometry `geom_id` of the committed `scene` has, counted by a point query over all
