@@ -7,7 +7,9 @@
 //   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
 //   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
-//      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset;
+//      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset; with the
+//      confidence test (RAYCACHE_CONFIDENCE), a barrier (shader write -> shader read) and the mark pass,
+//      dispatched the same way;
 //   4. read the frame buffer back: read_gpu_statistics(); when its overflow is non-zero, run the sweep
 //      (gpu_sweep_groups) before the next frame.
 #pragma once
@@ -35,6 +37,11 @@ struct GpuBindings {
     std::uint32_t cdct_texels = RAYCACHE_CDCT_BINDING;
     std::uint32_t cdct_pending = RAYCACHE_CDCT_PENDING_BINDING;
     std::uint32_t frame = RAYCACHE_FRAME_BINDING;
+    // The confidence test's (shaders that define RAYCACHE_CONFIDENCE): doubtful bits, cube tables.
+    std::uint32_t cct_doubtful = RAYCACHE_CCT_DOUBTFUL_BINDING;
+    std::uint32_t cdct_doubtful = RAYCACHE_CDCT_DOUBTFUL_BINDING;
+    std::uint32_t cct_cubes = RAYCACHE_CCT_CUBES_BINDING;
+    std::uint32_t cdct_cubes = RAYCACHE_CDCT_CUBES_BINDING;
 };
 inline constexpr GpuBindings gpu_bindings{};
 
