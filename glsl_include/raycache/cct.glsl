@@ -7,7 +7,7 @@
  *   binding RAYCACHE_FRAME_BINDING (4)        uint raycache_frame[]        counters, store list (frame.glsl)
  * With RAYCACHE_CONFIDENCE defined (the confidence test), also:
  *   binding RAYCACHE_CCT_DOUBTFUL_BINDING (5) uint raycache_cct_doubtful[]  a bit per texel: doubtful, reads as empty
- *   binding RAYCACHE_CCT_CUBES_BINDING (7)    raycache_gpu_cube raycache_cct_cubes[]  the cube table (mark pass only)
+ *   binding RAYCACHE_CCT_CUBES_BINDING (7)    raycache_gpu_cube raycache_cct_cubes[]  the cube table (end_frame.glsl, mark pass)
  * Layout, frames, the confidence test and clearing: raycache/shared/gpu_layout.h. Algorithm 1 in a shader:
  *   raycache_cct_result c = raycache_cct_lookup(cube, r);
  *   if (!c.hit) { c.color = trace(r); raycache_cct_store(cube, r, c.color); }
@@ -33,22 +33,9 @@ layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_PENDING_BINDING) b
 layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_DOUBTFUL_BINDING) RAYCACHE_TEXEL_ACCESS buffer raycache_cct_doubtful_buffer {
     uint raycache_cct_doubtful[];
 };
-#ifdef RAYCACHE_END_FRAME
-layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_CUBES_BINDING) readonly buffer raycache_cct_cube_table {
-    raycache_gpu_cube raycache_cct_cubes[];
-};
 #endif
-#endif
-
-/* True when element's texel is marked doubtful (always false without RAYCACHE_CONFIDENCE). */
-bool raycache_cct_is_doubtful(uint element) {
-#ifdef RAYCACHE_CONFIDENCE
-    uint w = raycache_doubtful_word(element);
-    return w < uint(raycache_cct_doubtful.length()) && (raycache_cct_doubtful[w] & raycache_doubtful_bit(element)) != 0u;
-#else
-    return false;
-#endif
-}
+/* True when element's texel is marked doubtful (never without RAYCACHE_CONFIDENCE). */
+bool raycache_cct_is_doubtful(uint element) { return RAYCACHE_IS_DOUBTFUL(raycache_cct_doubtful, element); }
 
 /* What a lookup found: hit, and then the cached colour (RGB9E5-rounded). */
 struct raycache_cct_result {

@@ -8,7 +8,7 @@
  *   binding RAYCACHE_FRAME_BINDING (4)         uint raycache_frame[]             counters, store list (frame.glsl)
  * With RAYCACHE_CONFIDENCE defined (the confidence test; raycache/shared/gpu_layout.h), also:
  *   binding RAYCACHE_CDCT_DOUBTFUL_BINDING (6) uint raycache_cdct_doubtful[]     a bit per texel: doubtful, reads as empty
- *   binding RAYCACHE_CDCT_CUBES_BINDING (8)    raycache_gpu_cube raycache_cdct_cubes[]  the cube table (mark pass only)
+ *   binding RAYCACHE_CDCT_CUBES_BINDING (8)    raycache_gpu_cube raycache_cdct_cubes[]  the cube table (end_frame.glsl, mark pass)
  * A texel is x = RGB9E5 colour, y = float bits of the distance from the cube's centre (C++'s 64-bit
  * word, x low). Stores take the 64-bit atomicMin, so the nearest surface wins, then the smaller colour
  * word, exactly as in C++: the device needs shaderInt64 and shaderBufferInt64Atomics (lavapipe has
@@ -50,22 +50,9 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_PENDING_BINDING)
 layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_DOUBTFUL_BINDING) RAYCACHE_TEXEL_ACCESS buffer raycache_cdct_doubtful_buffer {
     uint raycache_cdct_doubtful[];
 };
-#ifdef RAYCACHE_END_FRAME
-layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_CUBES_BINDING) readonly buffer raycache_cdct_cube_table {
-    raycache_gpu_cube raycache_cdct_cubes[];
-};
 #endif
-#endif
-
-/* True when element's texel is marked doubtful (always false without RAYCACHE_CONFIDENCE). */
-bool raycache_cdct_is_doubtful(uint element) {
-#ifdef RAYCACHE_CONFIDENCE
-    uint w = raycache_doubtful_word(element);
-    return w < uint(raycache_cdct_doubtful.length()) && (raycache_cdct_doubtful[w] & raycache_doubtful_bit(element)) != 0u;
-#else
-    return false;
-#endif
-}
+/* True when element's texel is marked doubtful (never without RAYCACHE_CONFIDENCE). */
+bool raycache_cdct_is_doubtful(uint element) { return RAYCACHE_IS_DOUBTFUL(raycache_cdct_doubtful, element); }
 
 /* An empty CDCT texel, as C++ writes it. */
 uvec2 raycache_cdct_invalid_texel() {

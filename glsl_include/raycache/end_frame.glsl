@@ -36,8 +36,17 @@
 #ifdef RAYCACHE_CDCT
 #include "raycache/cdct.glsl"
 #endif
-#ifdef RAYCACHE_CONFIDENCE
+#if defined(RAYCACHE_CONFIDENCE) && defined(RAYCACHE_END_FRAME)
 #include "raycache/shared/edge_rule.h"
+/* The cube tables (raycache/shared/gpu_layout.h): each technique's cubes by increasing first_texel. */
+layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_CUBES_BINDING) readonly buffer raycache_cct_cube_table {
+    raycache_gpu_cube raycache_cct_cubes[];
+};
+#ifdef RAYCACHE_CDCT
+layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_CUBES_BINDING) readonly buffer raycache_cdct_cube_table {
+    raycache_gpu_cube raycache_cdct_cubes[];
+};
+#endif
 #endif
 
 #ifdef RAYCACHE_END_FRAME

@@ -129,16 +129,10 @@ struct Rig {
         return out;
     }
 
-    std::uint32_t element(const GpuBufferLayout& layout, std::uint32_t k, const TexelAddress& t) const {
+    static std::uint32_t element(const GpuBufferLayout& layout, std::uint32_t k, const TexelAddress& t) {
         const shared::raycache_gpu_cube& at = layout.cubes[k];
         return at.first_texel +
                shared::raycache_texel_linear_index(shared::raycache_texel_address{t.face, t.column, t.row}, at.face_size);
-    }
-    bool gpu_doubtful_cct(std::uint32_t k, const TexelAddress& t) const {
-        return gpu_doubtful(cct_doubtful.as<std::uint32_t>(), cct_layout.doubtful_words, element(cct_layout, k, t));
-    }
-    bool gpu_doubtful_cdct(std::uint32_t k, const TexelAddress& t) const {
-        return gpu_doubtful(cdct_doubtful.as<std::uint32_t>(), cdct_layout.doubtful_words, element(cdct_layout, k, t));
     }
     // Set bits of both doubtful-bit buffers.
     std::uint64_t gpu_marks() const {
@@ -156,37 +150,34 @@ struct Rig {
     // Every texel of every cube: the GPU's doubtful bit equals C++'s is_doubtful, and the texel words agree.
     // Returns the marks counted.
     std::size_t check_same_marks() const {
+        const std::size_t marks = check_cubes(cct, cct_layout, cct_texels, cct_doubtful) +
+                                  check_cubes(cdct, cdct_layout, cdct_texels, cdct_doubtful);
+        CHECK(gpu_marks() == marks);
+        return marks;
+    }
+    template <class Texel>
+    static std::size_t check_cubes(const std::vector<std::unique_ptr<CacheCube<Texel>>>& cubes, const GpuBufferLayout& layout,
+                                   const rcx::vk::Buffer& texels, const rcx::vk::Buffer& doubtful) {
+        using Word = typename Texel::Word;
         std::size_t marks = 0;
-        auto each = [](int n, auto&& f) {
+        for (std::uint32_t k = 0; k < cubes.size(); ++k) {
+            CAPTURE(k);
+            const std::vector<Word> words = rcx_test::words_of(*cubes[k]);
+            const int n = cubes[k]->face_size();
             for (int face = 0; face < 6; ++face)
                 for (int row = 0; row < n; ++row)
-                    for (int column = 0; column < n; ++column) f(TexelAddress{face, column, row});
-        };
-        for (std::uint32_t k = 0; k < cct.size(); ++k) {
-            CAPTURE(k);
-            const std::vector<std::uint32_t> words = rcx_test::words_of(*cct[k]);
-            each(cct[k]->face_size(), [&](const TexelAddress& t) {
-                const std::uint32_t e = element(cct_layout, k, t);
-                CAPTURE(e);
-                REQUIRE(cct_texels.as<std::uint32_t>()[e] == words[e - cct_layout.cubes[k].first_texel]);
-                CHECK(gpu_doubtful_cct(k, t) == cct[k]->is_doubtful(t));
-                marks += cct[k]->is_doubtful(t);
-            });
+                    for (int column = 0; column < n; ++column) {
+                        const TexelAddress t{face, column, row};
+                        const std::uint32_t e = element(layout, k, t);
+                        CAPTURE(e);
+                        const Word gpu = texels.as<Word>()[e], cpu = words[e - layout.cubes[k].first_texel];
+                        REQUIRE(Texel::is_valid(gpu) == Texel::is_valid(cpu)); // (C++'s empty CDCT word is not the GPU's)
+                        if (Texel::is_valid(gpu)) REQUIRE(gpu == cpu);
+                        const bool expected = cubes[k]->is_doubtful(t);
+                        CHECK(gpu_doubtful(doubtful.as<std::uint32_t>(), layout.doubtful_words, e) == expected);
+                        marks += expected;
+                    }
         }
-        for (std::uint32_t k = 0; k < cdct.size(); ++k) {
-            CAPTURE(k);
-            const std::vector<std::uint64_t> words = rcx_test::words_of(*cdct[k]);
-            each(cdct[k]->face_size(), [&](const TexelAddress& t) {
-                const std::uint32_t e = element(cdct_layout, k, t);
-                CAPTURE(e);
-                const std::uint64_t gpu = cdct_texels.as<std::uint64_t>()[e], cpu = words[e - cdct_layout.cubes[k].first_texel];
-                REQUIRE(CdctTexel::is_valid(gpu) == CdctTexel::is_valid(cpu)); // (C++'s empty word is not the GPU's)
-                if (CdctTexel::is_valid(gpu)) REQUIRE(gpu == cpu);
-                CHECK(gpu_doubtful_cdct(k, t) == cdct[k]->is_doubtful(t));
-                marks += cdct[k]->is_doubtful(t);
-            });
-        }
-        CHECK(gpu_marks() == marks);
         return marks;
     }
 
