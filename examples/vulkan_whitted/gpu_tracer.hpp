@@ -45,7 +45,8 @@ struct TracerSettings {
 
 struct FrameStats {
     double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for
-    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame passes (cct, cdct: publish, mark), over the texels stored
+    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame passes (cct, cdct: publish, then mark), over
+                                         // the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it

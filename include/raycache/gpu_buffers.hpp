@@ -7,6 +7,10 @@
 // (vkCmdFillBuffer(cmd, buffer, 0, VK_WHOLE_SIZE, raycache::gpu_clear_word), or fill_gpu_words on mapped
 // memory). Zeros are valid texels, black (CCT; the CDCT's at distance 0): a zero-filled cube answers every
 // lookup with black and refuses every store, without an error.
+//
+// The confidence test (shaders that define RAYCACHE_CONFIDENCE) adds, per technique, a doubtful-bit buffer
+// (GpuBufferLayout::doubtful_bytes; fill it with gpu_doubtful_clear_word whenever the texel buffers are
+// filled) and, for the end-of-frame mark pass, a cube table: GpuBufferLayout::cubes as it stands.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"

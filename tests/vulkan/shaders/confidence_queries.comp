@@ -1,8 +1,8 @@
 #version 450
 // Stores, lookups and searches of both techniques with the confidence test (RAYCACHE_CONFIDENCE), RayCache's
 // default bindings (CCT 0, 1, CDCT 2, 3, frame 4, doubtful bits 5, 6), for test_vulkan_confidence.cpp. The
-// cubes come from the cube tables that the mark pass reads (bindings 7, 8). Compiled again with -DCONFIDENCE_QUERIES_CCT
-// (confidence_queries_cct.spv: modes 2 to 4 answer nothing; no 64-bit feature).
+// cubes come from the cube tables that the mark pass reads (bindings 7, 8). Compiled again with
+// -DCONFIDENCE_QUERIES_CCT (confidence_queries_cct.spv: modes 2 to 4 answer nothing; no 64-bit feature).
 #extension GL_GOOGLE_include_directive : require
 #ifndef CONFIDENCE_QUERIES_CCT
 #define RAYCACHE_CDCT
