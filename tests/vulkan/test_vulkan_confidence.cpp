@@ -4,7 +4,8 @@
 // frames), hand-derived marks on a 2 x 2 face (strictly more than the threshold, never across a face's
 // edge), lookups and searches that miss on doubtful texels as C++'s do, and a threshold < 0 or NaN that
 // marks nothing. Shaders: confidence_queries.comp (stores, lookups, searches), confidence_end_frame.comp
-// (both passes), each also compiled for the CCT alone, which runs on a device without shaderInt64.
+// (both passes, and the sweep after a store-list overflow), each also compiled for the CCT alone, which runs
+// on a device without shaderInt64.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -36,7 +37,7 @@ struct Query {
 static_assert(sizeof(Query) == 48, "Query must match confidence_queries.comp");
 
 struct EndFramePush {
-    std::uint32_t mark; // 0: publish, 1: mark
+    std::uint32_t pass; // 0: publish the listed texels, 1: mark them; 2: publish every element, 3: mark every one
     float threshold;
 };
 
@@ -65,7 +66,9 @@ rcx::vk::Buffer table_buffer(rcx::vk::Context& vk, const std::vector<shared::ray
 // queued for both (store_cct, store_cdct) and made by run(): on the GPU a frame of queries, the end-of-frame
 // pass, a barrier and the mark pass; in C++ the stores, mark_doubtful_edges and begin_frame().
 struct Rig {
-    Rig(rcx::vk::Context& context, const std::vector<int>& cct_sizes, const std::vector<int>& cdct_sizes, bool cct_only)
+    // list_capacity: the store list's entries (0: every texel, so it never overflows).
+    Rig(rcx::vk::Context& context, const std::vector<int>& cct_sizes, const std::vector<int>& cdct_sizes, bool cct_only,
+        std::uint32_t list_capacity = 0)
         : vk(context),
           queries_pipeline(vk, rcx_test::spirv(cct_only ? "confidence_queries_cct" : "confidence_queries"), query_bindings,
                            sizeof(std::uint32_t)),
@@ -82,7 +85,8 @@ struct Rig {
           cct_table(table_buffer(vk, cct_layout.cubes)),
           cdct_table(table_buffer(vk, cdct_layout.cubes)),
           frame(vk, static_cast<std::uint32_t>(cct_sizes.size() + cdct_sizes.size()),
-                static_cast<std::uint32_t>(std::max<std::uint64_t>(cct_layout.texels + cdct_layout.texels, 1))) {
+                list_capacity ? list_capacity
+                              : static_cast<std::uint32_t>(std::max<std::uint64_t>(cct_layout.texels + cdct_layout.texels, 1))) {
         for (int n : cct_sizes) cct.push_back(std::make_unique<CctCube>(n));
         for (int n : cdct_sizes) cdct.push_back(std::make_unique<CdctCube>(n));
     }
@@ -98,13 +102,16 @@ struct Rig {
         cdct[k]->store(d, DepthSample{colour, distance});
     }
 
-    // Runs the queued queries as one GPU frame and the same frame in C++; returns the GPU's results.
-    std::vector<glm::uvec4> run(float threshold) {
+    // Runs the queued queries as one GPU frame and the same frame in C++; returns the GPU's results. sweep:
+    // end the frame as after a store-list overflow, with the sweep and the confidence test over every element.
+    std::vector<glm::uvec4> run(float threshold, bool sweep = false) {
         if (queries.empty()) queries.push_back(Query{glm::vec3(0.0f), 1u, glm::vec3(0.0f), 0.0f, glm::vec3(0.0f), 0u});
         rcx::vk::Buffer query_buffer = rcx_test::buffer_of(vk, queries);
         rcx::vk::Buffer results(vk, queries.size() * sizeof(glm::uvec4));
         const std::uint32_t count = static_cast<std::uint32_t>(queries.size());
-        const EndFramePush publish{0u, threshold}, mark{1u, threshold};
+        const EndFramePush publish{sweep ? 2u : 0u, threshold}, mark{sweep ? 3u : 1u, threshold};
+        const std::uint32_t sweep_groups =
+            rcx::vk::group_count(std::max(cct_layout.texels, cdct_layout.texels), RAYCACHE_END_FRAME_GROUP_SIZE);
         frame.start();
         vk.submit([&](rcx::vk::Commands& c) {
             c.dispatch(queries_pipeline,
@@ -113,16 +120,18 @@ struct Rig {
                        &count, sizeof count, rcx::vk::group_count(queries.size(), 64));
             c.barrier();
             for (const EndFramePush* push : {&publish, &mark}) {
-                c.dispatch_indirect(end_frame,
-                                    {cct_texels, cct_pending, cdct_texels, cdct_pending, frame.buffer, cct_doubtful,
-                                     cdct_doubtful, cct_table, cdct_table},
-                                    push, sizeof *push, frame.buffer, gpu_end_frame_dispatch_offset);
+                const std::initializer_list<rcx::vk::Resource> buffers = {cct_texels,  cct_pending,   cdct_texels,
+                                                                          cdct_pending, frame.buffer,  cct_doubtful,
+                                                                          cdct_doubtful, cct_table,    cdct_table};
+                if (sweep) c.dispatch(end_frame, buffers, push, sizeof *push, sweep_groups);
+                else c.dispatch_indirect(end_frame, buffers, push, sizeof *push, frame.buffer, gpu_end_frame_dispatch_offset);
                 c.barrier(); // the published texels, visible to the mark pass
             }
         });
         for (auto& cube : cct) mark_doubtful_edges(*cube, threshold), cube->begin_frame();
         for (auto& cube : cdct) mark_doubtful_edges(*cube, threshold), cube->begin_frame();
         listed_last_frame = frame.statistics().listed;
+        overflow_last_frame = frame.statistics().overflow;
         const glm::uvec4* r = results.as<glm::uvec4>();
         std::vector<glm::uvec4> out(r, r + queries.size());
         queries.clear();
@@ -189,7 +198,7 @@ struct Rig {
     std::vector<std::unique_ptr<CctCube>> cct;
     std::vector<std::unique_ptr<CdctCube>> cdct;
     std::vector<Query> queries;
-    std::uint64_t listed_last_frame = 0;
+    std::uint64_t listed_last_frame = 0, overflow_last_frame = 0;
 };
 
 // A hand-made pattern with edges: 2 x 2 checker blocks of 0.25 / 0.75 in red, plus noise of up to 0.15 in
@@ -257,6 +266,23 @@ TEST_CASE("the GPU's mark pass marks what mark_doubtful_edges marks in C++, bit 
     // The second frame fills the gaps beside texels made visible (and marked) in the first.
     store_pattern(rig, pattern, true);
     rig.run(0.1f);
+    CHECK(rig.check_same_marks() > first);
+}
+
+TEST_CASE("after a store-list overflow, the sweep and the confidence test over every element mark what C++ marks") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    Rig rig(*vk, {8, 5}, {6, 8}, false, 64); // a list of 64 entries: each frame stores hundreds of texels
+    Pattern pattern(5);
+    store_pattern(rig, pattern, false);
+    rig.run(0.1f, true);
+    CHECK(rig.overflow_last_frame > 0u);
+    const std::size_t first = rig.check_same_marks();
+    CHECK(first > 0u);
+    // The second frame: the sweep compares the older texels again, at the same threshold: no other marks.
+    store_pattern(rig, pattern, true);
+    rig.run(0.1f, true);
+    CHECK(rig.overflow_last_frame > 0u);
     CHECK(rig.check_same_marks() > first);
 }
 
