@@ -7,6 +7,8 @@
 // - RGB9E5 of (1, 0, 0): brightest 1 = 2^0, shared exponent 0 + 16 = 16 (bits 27..31), step 2^(16 - 24) =
 //   2^-8, red mantissa 1 / 2^-8 = 256: 16 << 27 | 256 = 0x80000100. Distance 2.5 = 1.25 * 2^1 as float
 //   bits: sign 0, exponent 128, mantissa 0.25 * 2^23: 0x40200000.
+// - Doubtful bits: one per texel in 32-bit words, ceil(1566 / 32) = 49 words (196 bytes) whatever the
+//   technique; element 37 is bit 37 - 32 = 5 of word 1.
 #include <doctest/doctest.h>
 
 #include <cstdint>
@@ -52,6 +54,25 @@ TEST_CASE("gpu_buffer_layout places cubes one after another, 6 N^2 texels each, 
     CHECK(cdct.words == 3132u);
     CHECK(cdct.bytes == 12528u);
     CHECK(gpu_buffer_layout<CctTexel>({}).bytes == 0u);
+}
+
+TEST_CASE("the confidence test's doubtful-bit buffer holds a bit per texel, and gpu_doubtful reads element k's bit") {
+    for (const GpuBufferLayout& layout : {gpu_buffer_layout<CctTexel>(three_cubes), gpu_buffer_layout<CdctTexel>(three_cubes)}) {
+        CHECK(layout.doubtful_words == 49u);
+        CHECK(layout.doubtful_bytes == 196u);
+    }
+    CHECK(gpu_buffer_layout<CctTexel>({{1, CubeBounds{}}}).doubtful_words == 1u); // 6 texels: one word
+    CHECK(gpu_doubtful_clear_word == 0u);
+    std::vector<std::uint32_t> words(49, 0u);
+    words[1] = 1u << 5;
+    CHECK(gpu_doubtful(words.data(), words.size(), 37));
+    CHECK_FALSE(gpu_doubtful(words.data(), words.size(), 36));
+    CHECK_FALSE(gpu_doubtful(words.data(), words.size(), 5)); // bit 5 of word 0
+    CHECK_FALSE(gpu_doubtful(words.data(), 1, 37));           // past the buffer's end
+    CHECK(gpu_bindings.cct_doubtful == 5u);
+    CHECK(gpu_bindings.cdct_doubtful == 6u);
+    CHECK(gpu_bindings.cct_cubes == 7u);
+    CHECK(gpu_bindings.cdct_cubes == 8u);
 }
 
 TEST_CASE("gpu_buffer_layout refuses face sizes outside 1..4096 and more texels than a uint addresses") {

@@ -12,6 +12,7 @@
 
 #include <glm/glm.hpp>
 #include <raycache/shared/depth_secant.h>
+#include <raycache/shared/edge_rule.h>
 #include <raycache/gpu_buffers.hpp>
 #include <raycache/shared/gpu_layout.h>
 
@@ -43,6 +44,7 @@ struct Tracer::Impl {
     std::unique_ptr<vk::ComputePipeline> whitted, end_frame;
     std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, dummy, texels, pending;
     std::unique_ptr<vk::Buffer> output, frame, gbuffer;
+    std::unique_ptr<vk::Buffer> doubtful, cube_table, zeros; // RayCache's confidence test: doubtful bits, cube table
     raycache::GpuFrameLayout frame_layout;          // RayCache's frame buffer: counters, store list
     std::vector<std::uint32_t> frame_start;         // its words before every frame
     std::unique_ptr<Raster> raster;
@@ -61,12 +63,12 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         throw std::invalid_argument("Vulkan tracer: --cache cdct needs a device with shaderInt64 and shaderBufferInt64Atomics");
     // Shaders first: a missing or rejected SPIR-V file is the first thing to report.
     const std::string suffix = t.cdct ? "_cdct" : "";
-    std::vector<VkDescriptorType> bindings(12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    std::vector<VkDescriptorType> bindings(14, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     t.whitted = std::make_unique<vk::ComputePipeline>(context, spirv_dir + "/whitted" + suffix + ".spv", bindings, 0);
     if (uses_caches(settings.mode))
         t.end_frame = std::make_unique<vk::ComputePipeline>(
-            context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
-            0);
+            context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(9, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+            8);
     const bool rsh = settings.secondary == Secondary::rsh;
     if (rsh && settings.mode != CacheMode::off)
         throw std::invalid_argument("Vulkan tracer: --secondary rsh traces every ray, without caching cubes: use --cache off");
@@ -129,11 +131,16 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(t.frame_layout.bytes, 16));
     t.dummy = std::make_unique<vk::Buffer>(context, 16);
     t.dummy->fill(RAYCACHE_GPU_CLEAR_WORD);
+    t.zeros = std::make_unique<vk::Buffer>(context, 32); // no doubtful texels; a cube table of none
+    t.zeros->fill(0u);
     if (texels > 0) {
         t.texels = std::make_unique<vk::Buffer>(context, texels * word_bytes);
         t.pending = std::make_unique<vk::Buffer>(context, texels * word_bytes);
         t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
         t.pending->fill(RAYCACHE_GPU_CLEAR_WORD);
+        t.doubtful = std::make_unique<vk::Buffer>(context, layout.doubtful_bytes);
+        t.doubtful->fill(raycache::gpu_doubtful_clear_word);
+        t.cube_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, layout.cubes)); // by first_texel, as placed
     }
     if (settings.hybrid)
         t.raster = std::make_unique<Raster>(
@@ -205,6 +212,10 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     const vk::Buffer& cct_pending = (!t.cdct && t.pending) ? *t.pending : *t.dummy;
     const vk::Buffer& cdct_texels = (t.cdct && t.texels) ? *t.texels : *t.dummy;
     const vk::Buffer& cdct_pending = (t.cdct && t.pending) ? *t.pending : *t.dummy;
+    const vk::Buffer& cct_doubtful = (!t.cdct && t.doubtful) ? *t.doubtful : *t.zeros;
+    const vk::Buffer& cdct_doubtful = (t.cdct && t.doubtful) ? *t.doubtful : *t.zeros;
+    const vk::Buffer& cct_table = (!t.cdct && t.cube_table) ? *t.cube_table : *t.zeros;
+    const vk::Buffer& cdct_table = (t.cdct && t.cube_table) ? *t.cube_table : *t.zeros;
 
     auto start = std::chrono::steady_clock::now();
     const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
@@ -225,20 +236,35 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         }
         commands.dispatch(*t.whitted,
                           {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame, *t.nodes, *t.primitives, *t.objects,
-                           *t.params, *t.output, *t.cubes, gbuffer},
+                           *t.params, *t.output, *t.cubes, gbuffer, cct_doubtful, cdct_doubtful},
                           nullptr, 0, vk::group_count(static_cast<std::uint64_t>(width), 8),
                           vk::group_count(static_cast<std::uint64_t>(height), 8));
     });
     const double ms = ms_since(start);
 
     // RayCache's end-of-frame pass over the texels stored this frame, dispatched from the frame buffer's own
-    // group count (the frame's submission has completed, so its writes are visible to this one).
+    // group count (the frame's submission has completed, so its writes are visible to this one); then, after a
+    // barrier (it reads the texels just published), the confidence test's mark pass over the same list.
     double end_ms = 0.0;
     if (t.end_frame && t.texel_count > 0) {
         start = std::chrono::steady_clock::now();
+        struct Pass {
+            std::uint32_t mark;
+            float threshold;
+        };
         t.context.submit([&](vk::Commands& commands) {
-            commands.dispatch_indirect(*t.end_frame, {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame}, nullptr, 0,
-                                       *t.frame, raycache::gpu_end_frame_dispatch_offset);
+            auto pass = [&](std::uint32_t mark) {
+                const Pass push{mark, t.settings.edge_threshold};
+                commands.dispatch_indirect(*t.end_frame,
+                                           {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame, cct_doubtful,
+                                            cdct_doubtful, cct_table, cdct_table},
+                                           &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
+            };
+            pass(0u);
+            if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
+                commands.barrier();
+                pass(1u);
+            }
         });
         end_ms = ms_since(start);
     }

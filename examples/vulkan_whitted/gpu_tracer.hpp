@@ -40,11 +40,13 @@ struct TracerSettings {
     bool hybrid = false;      // primary hits from a raster pass into a G-buffer (thesis Table 5.1), the rest in compute
     Secondary secondary = Secondary::bvh;
     std::uint32_t pair_capacity = 1u << 21; // rsh: pairs a stream holds (RshSettings)
+    float edge_threshold = 0.1f; // cct, cdct: the confidence test's threshold (RayCache's mark pass); < 0: off
 };
 
 struct FrameStats {
     double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for
-    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame pass (cct, cdct), over the texels stored
+    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame passes (cct, cdct: publish, then mark), over
+                                         // the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
@@ -71,7 +73,9 @@ public:
     // std::invalid_argument when the primitive count differs.
     void set_scene(const Scene& moved);
 
-    // Renders one frame, then (cct, cdct) runs the end-frame pass so this frame's stores become visible.
+    // Renders one frame, then (cct, cdct) runs the end-frame pass so this frame's stores become visible, and
+    // the mark pass (RayCache's confidence test, unless edge_threshold < 0): texels whose colour differs from
+    // a neighbour's by more than edge_threshold read as empty from the next frame on, so their rays are traced.
     Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr);
 
     std::size_t bvh_nodes() const noexcept;

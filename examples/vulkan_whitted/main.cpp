@@ -59,8 +59,6 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     const rcx::Options defaults;
     if (o.warm_up != defaults.warm_up) throw InputError("--warm-up is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
-    if (o.edge_threshold != defaults.edge_threshold)
-        throw InputError("--edge-threshold is not supported by the Vulkan tracer: it has no confidence test yet");
     if (o.origin_drift != defaults.origin_drift)
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.origin_parallax != defaults.origin_parallax)
@@ -122,6 +120,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.hybrid = hybrid;
     settings.secondary = v.secondary;
     settings.pair_capacity = v.pair_capacity;
+    settings.edge_threshold = o.edge_threshold;
     const std::string spirv = rcx::gpu::default_spirv_dir();
     std::unique_ptr<rcx::gpu::Tracer> tracer, reference;
     try {

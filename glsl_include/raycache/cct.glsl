@@ -5,7 +5,10 @@
  *   binding RAYCACHE_CCT_BINDING (0)          uint raycache_cct_texels[]   what lookups read
  *   binding RAYCACHE_CCT_PENDING_BINDING (1)  uint raycache_cct_pending[]  this frame's stores (atomicMin)
  *   binding RAYCACHE_FRAME_BINDING (4)        uint raycache_frame[]        counters, store list (frame.glsl)
- * Layout, frames and clearing: raycache/shared/gpu_layout.h. Algorithm 1 in a shader:
+ * With RAYCACHE_CONFIDENCE defined (the confidence test), also:
+ *   binding RAYCACHE_CCT_DOUBTFUL_BINDING (5) uint raycache_cct_doubtful[]  a bit per texel: doubtful, reads as empty
+ *   binding RAYCACHE_CCT_CUBES_BINDING (7)    raycache_gpu_cube raycache_cct_cubes[]  the cube table (end_frame.glsl, mark pass)
+ * Layout, frames, the confidence test and clearing: raycache/shared/gpu_layout.h. Algorithm 1 in a shader:
  *   raycache_cct_result c = raycache_cct_lookup(cube, r);
  *   if (!c.hit) { c.color = trace(r); raycache_cct_store(cube, r, c.color); }
  */
@@ -26,6 +29,13 @@ layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_PENDING_BINDING) b
     uint raycache_cct_pending[];
 };
 #endif
+#ifdef RAYCACHE_CONFIDENCE
+layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_DOUBTFUL_BINDING) RAYCACHE_TEXEL_ACCESS buffer raycache_cct_doubtful_buffer {
+    uint raycache_cct_doubtful[];
+};
+#endif
+/* True when element's texel is marked doubtful (never without RAYCACHE_CONFIDENCE). */
+bool raycache_cct_is_doubtful(uint element) { return RAYCACHE_IS_DOUBTFUL(raycache_cct_doubtful, element); }
 
 /* What a lookup found: hit, and then the cached colour (RGB9E5-rounded). */
 struct raycache_cct_result {
@@ -34,7 +44,7 @@ struct raycache_cct_result {
 };
 
 /* The colour cached for `direction` (need not be unit length) in `cube`, without counting. A miss when the
- * texel is empty, was stored this frame, or `direction` is not a direction (zero, NaN, infinite). */
+ * texel is empty, was stored this frame, is doubtful, or `direction` is not a direction (zero, NaN, infinite). */
 raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
     raycache_cct_result result;
     result.hit = false;
@@ -42,7 +52,7 @@ raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
     uint i = raycache_cube_texel(cube, direction);
     if (i >= uint(raycache_cct_texels.length())) return result;
     uint word = raycache_cct_texels[i];
-    if (!raycache_cct_is_valid(word)) return result;
+    if (!raycache_cct_is_valid(word) || raycache_cct_is_doubtful(i)) return result;
     result.hit = true;
     result.color = raycache_unpack_rgb9e5(word);
     return result;

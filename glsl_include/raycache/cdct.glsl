@@ -6,6 +6,9 @@
  *   binding RAYCACHE_CDCT_BINDING (2)          uvec2 raycache_cdct_texels[]      what searches read
  *   binding RAYCACHE_CDCT_PENDING_BINDING (3)  uint64_t raycache_cdct_pending[]  this frame's stores
  *   binding RAYCACHE_FRAME_BINDING (4)         uint raycache_frame[]             counters, store list (frame.glsl)
+ * With RAYCACHE_CONFIDENCE defined (the confidence test; raycache/shared/gpu_layout.h), also:
+ *   binding RAYCACHE_CDCT_DOUBTFUL_BINDING (6) uint raycache_cdct_doubtful[]     a bit per texel: doubtful, reads as empty
+ *   binding RAYCACHE_CDCT_CUBES_BINDING (8)    raycache_gpu_cube raycache_cdct_cubes[]  the cube table (end_frame.glsl, mark pass)
  * A texel is x = RGB9E5 colour, y = float bits of the distance from the cube's centre (C++'s 64-bit
  * word, x low). Stores take the 64-bit atomicMin, so the nearest surface wins, then the smaller colour
  * word, exactly as in C++: the device needs shaderInt64 and shaderBufferInt64Atomics (lavapipe has
@@ -43,6 +46,13 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_PENDING_BINDING)
     uint64_t raycache_cdct_pending[];
 };
 #endif
+#ifdef RAYCACHE_CONFIDENCE
+layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_DOUBTFUL_BINDING) RAYCACHE_TEXEL_ACCESS buffer raycache_cdct_doubtful_buffer {
+    uint raycache_cdct_doubtful[];
+};
+#endif
+/* True when element's texel is marked doubtful (never without RAYCACHE_CONFIDENCE). */
+bool raycache_cdct_is_doubtful(uint element) { return RAYCACHE_IS_DOUBTFUL(raycache_cdct_doubtful, element); }
 
 /* An empty CDCT texel, as C++ writes it. */
 uvec2 raycache_cdct_invalid_texel() {
@@ -54,10 +64,11 @@ bool raycache_cube_box_is_usable(raycache_gpu_cube cube) {
     return raycache_box_is_usable(cube.centre, cube.half_size);
 }
 
-/* The texel that the vector v from the cube's centre points at (empty when none). */
+/* The texel that the vector v from the cube's centre points at (empty when none, or doubtful: so the
+ * searches miss on a doubtful texel as on an empty one). */
 uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
     uint i = raycache_cube_texel(cube, v);
-    if (i >= uint(raycache_cdct_texels.length())) return raycache_cdct_invalid_texel();
+    if (i >= uint(raycache_cdct_texels.length()) || raycache_cdct_is_doubtful(i)) return raycache_cdct_invalid_texel();
     return raycache_cdct_texels[i];
 }
 
@@ -65,7 +76,7 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
  * (raycache/shared/relief_walk.h walks; this function only reads the texels): walk the ray
  * origin + t * unit(direction) from where it leaves the cube's box, in steps of p.step; at each point Q read
  * the texel in direction Q - centre; a crossing (stored distance <= |Q - centre|) is bisected (at most 64
- * times, keeping the crossed end) down to p.epsilon. A miss: an empty or this-frame texel on the way,
+ * times, keeping the crossed end) down to p.epsilon. A miss: an empty, this-frame or doubtful texel on the way,
  * p.max_steps used up, a step too small to change t (t + p.step == t), a crossing more than p.max_gap behind
  * the surface, a bad origin, direction, box or parameters (p.max_steps above RAYCACHE_MAX_RELIEF_STEPS among
  * them). Reads at most 1 + p.max_steps + 64 texels. */
@@ -86,8 +97,8 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
  * function only reads the texels): from where the ray leaves the box, jump to where the ray reaches the
  * distance read, then refine a bracketed crossing by false position; answer only when the point read lies
  * within p.epsilon of its texel's surface (or a bracket shorter than p.epsilon ends at most p.max_gap
- * behind it). Reads the texels lookups read (visible ones: not this frame's stores). A miss: an empty or
- * this-frame texel, p.max_reads reads without such an answer, a bad origin, direction or box, or
+ * behind it). Reads the texels lookups read (visible ones: not this frame's stores). A miss: an empty,
+ * this-frame or doubtful texel, p.max_reads reads without such an answer, a bad origin, direction or box, or
  * p.epsilon not > 0 (then nothing is read). Reads at most min(p.max_reads, RAYCACHE_SECANT_MAX_READS)
  * texels; p.step and p.max_steps are not used. */
 raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,

@@ -10,6 +10,8 @@
  *                        (no atomics needed)
  *   RAYCACHE_END_FRAME   texel buffers writable, and the end-frame functions defined (for the pass
  *                        that runs between frames); otherwise texel buffers are readonly
+ *   RAYCACHE_CONFIDENCE  the confidence test: doubtful-bit buffers, doubtful texels read as empty
+ *                        (raycache/shared/gpu_layout.h; the mark pass: raycache/end_frame.glsl)
  * Stores from a fragment shader need the device feature fragmentStoresAndAtomics.
  */
 #ifndef RAYCACHE_CUBE_GLSL
@@ -31,6 +33,16 @@
 #define RAYCACHE_TEXEL_ACCESS
 #else
 #define RAYCACHE_TEXEL_ACCESS readonly
+#endif
+
+/* Whether element's bit is set in a doubtful-bit buffer `bits` (uint bits[]; raycache/shared/gpu_layout.h):
+ * whether its texel is doubtful. Always false without RAYCACHE_CONFIDENCE (no such buffer then). */
+#ifdef RAYCACHE_CONFIDENCE
+#define RAYCACHE_IS_DOUBTFUL(bits, element)                              \
+    (raycache_doubtful_word(element) < uint(bits.length()) &&            \
+     (bits[raycache_doubtful_word(element)] & raycache_doubtful_bit(element)) != 0u)
+#else
+#define RAYCACHE_IS_DOUBTFUL(bits, element) false
 #endif
 
 /* Returned instead of a buffer element when a vector has no texel. */

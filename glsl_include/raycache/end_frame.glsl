@@ -14,6 +14,20 @@
  * stores keep that count), or directly with raycache::gpu_end_frame_groups(listed) groups; with the texel,
  * pending and frame buffers bound as in the frame, after a barrier that makes the frame's shader writes
  * visible to the indirect read and to this pass.
+ *
+ * The confidence test (RAYCACHE_CONFIDENCE defined here and in the frame's shaders; raycache/shared/gpu_layout.h)
+ * adds a second pass over the same list, the mark pass, with the doubtful-bit buffers and cube tables bound
+ * too: record a barrier (shader write -> shader read) after the pass above, then dispatch this one the same
+ * way (the list and its group count are unchanged). The threshold comes from the shader, e.g.
+ *
+ *   layout(push_constant) uniform Edge { float threshold; };
+ *   void main() { raycache_end_frame_mark_pass(threshold); }
+ *
+ * After a list overflow, the sweep (every element through raycache_cct_end_frame / raycache_cdct_end_frame),
+ * a barrier, and raycache_mark_edges for every element of both techniques: that compares every filled texel
+ * with its neighbours, not only this frame's, which marks what the listed pass and C++ mark as long as the
+ * threshold is the same from frame to frame (the older pairs were compared when stored, and marks only get
+ * set); its cost follows the buffers' size, as the sweep's does.
  */
 #ifndef RAYCACHE_END_FRAME_GLSL
 #define RAYCACHE_END_FRAME_GLSL
@@ -21,6 +35,18 @@
 #include "raycache/cct.glsl"
 #ifdef RAYCACHE_CDCT
 #include "raycache/cdct.glsl"
+#endif
+#if defined(RAYCACHE_CONFIDENCE) && defined(RAYCACHE_END_FRAME)
+#include "raycache/shared/edge_rule.h"
+/* The cube tables (raycache/shared/gpu_layout.h): each technique's cubes by increasing first_texel. */
+layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_CUBES_BINDING) readonly buffer raycache_cct_cube_table {
+    raycache_gpu_cube raycache_cct_cubes[];
+};
+#ifdef RAYCACHE_CDCT
+layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_CUBES_BINDING) readonly buffer raycache_cdct_cube_table {
+    raycache_gpu_cube raycache_cdct_cubes[];
+};
+#endif
 #endif
 
 #ifdef RAYCACHE_END_FRAME
@@ -36,16 +62,127 @@ void raycache_end_frame_entry(uint entry) {
     }
 }
 
+/* Store-list entry k for invocation k of a pass over the list; false when there is none. */
+bool raycache_end_frame_listed_entry(out uint entry) {
+    entry = 0u;
+    uint listed = min(raycache_frame[RAYCACHE_FRAME_LIST_COUNT], raycache_frame[RAYCACHE_FRAME_LIST_CAPACITY]);
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= listed) return false;
+    uint word = raycache_frame_list_word(raycache_frame[RAYCACHE_FRAME_CUBE_COUNT], k);
+    if (word >= uint(raycache_frame.length())) return false;
+    entry = raycache_frame[word];
+    return true;
+}
+
 /* The pass's body, for a 1D dispatch of raycache_end_frame_groups(listed) groups: invocation k publishes
  * entry k. No loop: on lavapipe a grid-stride loop here made the pass about 50 times slower, so the list
  * holds at most RAYCACHE_END_FRAME_MAX_ENTRIES (the host's capacity is capped there). */
 void raycache_end_frame_pass() {
-    uint listed = min(raycache_frame[RAYCACHE_FRAME_LIST_COUNT], raycache_frame[RAYCACHE_FRAME_LIST_CAPACITY]);
-    uint k = gl_GlobalInvocationID.x;
-    if (k >= listed) return;
-    uint word = raycache_frame_list_word(raycache_frame[RAYCACHE_FRAME_CUBE_COUNT], k);
-    if (word < uint(raycache_frame.length())) raycache_end_frame_entry(raycache_frame[word]);
+    uint entry;
+    if (raycache_end_frame_listed_entry(entry)) raycache_end_frame_entry(entry);
 }
+
+#ifdef RAYCACHE_CONFIDENCE
+/* Cube k of the technique's cube table (the CDCT's: cdct), and the table's length (0 for a technique this
+ * shader does not include). */
+uint raycache_cube_table_length(bool cdct) {
+    if (cdct) {
+#ifdef RAYCACHE_CDCT
+        return uint(raycache_cdct_cubes.length());
+#else
+        return 0u;
+#endif
+    }
+    return uint(raycache_cct_cubes.length());
+}
+raycache_gpu_cube raycache_cube_table_entry(bool cdct, uint k) {
+#ifdef RAYCACHE_CDCT
+    if (cdct) return raycache_cdct_cubes[k];
+#endif
+    return raycache_cct_cubes[k];
+}
+
+/* The cube of the technique's table whose texels hold `element` (false when none). The table lists the
+ * cubes by increasing first_texel: a binary search for the last one starting at or before `element`. */
+bool raycache_cube_holding(bool cdct, uint element, out raycache_gpu_cube cube) {
+    uint lo = 0u, hi = raycache_cube_table_length(cdct);
+    if (hi == 0u) return false;
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (raycache_cube_table_entry(cdct, mid).first_texel <= element) lo = mid;
+        else hi = mid;
+    }
+    cube = raycache_cube_table_entry(cdct, lo);
+    return raycache_cube_has_texels(cube) && element >= cube.first_texel &&
+           element - cube.first_texel < raycache_gpu_cube_texel_count(cube.face_size);
+}
+
+/* The colour of element's visible texel (false when it is empty or past the buffer). */
+bool raycache_visible_colour(bool cdct, uint element, out vec3 colour) {
+    colour = vec3(0.0);
+    if (cdct) {
+#ifdef RAYCACHE_CDCT
+        if (element >= uint(raycache_cdct_texels.length())) return false;
+        uvec2 texel = raycache_cdct_texels[element];
+        colour = raycache_cdct_color(texel);
+        return raycache_cdct_is_valid(texel);
+#else
+        return false;
+#endif
+    }
+    if (element >= uint(raycache_cct_texels.length())) return false;
+    uint word = raycache_cct_texels[element];
+    colour = raycache_unpack_rgb9e5(word);
+    return raycache_cct_is_valid(word);
+}
+
+/* Sets element's doubtful bit (atomicOr: marks from any number of invocations add up). */
+void raycache_mark_doubtful(bool cdct, uint element) {
+    uint w = raycache_doubtful_word(element);
+    if (cdct) {
+#ifdef RAYCACHE_CDCT
+        if (w < uint(raycache_cdct_doubtful.length())) atomicOr(raycache_cdct_doubtful[w], raycache_doubtful_bit(element));
+#endif
+        return;
+    }
+    if (w < uint(raycache_cct_doubtful.length())) atomicOr(raycache_cct_doubtful[w], raycache_doubtful_bit(element));
+}
+
+/* The confidence test for one texel of a technique's buffers (the CDCT's: cdct), as C++'s
+ * raycache::mark_doubtful_edges for one written texel: when it holds a value, it and each filled neighbour
+ * on its face (left, right, up, down) whose colours differ by more than `threshold` are marked doubtful.
+ * Reads texel words only, so any number of invocations may run it at once, in any order. */
+void raycache_mark_edges(bool cdct, uint element, float threshold) {
+    raycache_gpu_cube cube;
+    vec3 own;
+    if (!raycache_edge_test_enabled(threshold) || !raycache_cube_holding(cdct, element, cube) ||
+        !raycache_visible_colour(cdct, element, own))
+        return;
+    uint n = uint(cube.face_size), local = element - cube.first_texel;
+    uint column = local % n, row = (local / n) % n;
+    uint neighbours[4];
+    neighbours[0] = column > 0u ? element - 1u : RAYCACHE_NO_TEXEL;
+    neighbours[1] = column + 1u < n ? element + 1u : RAYCACHE_NO_TEXEL;
+    neighbours[2] = row > 0u ? element - n : RAYCACHE_NO_TEXEL;
+    neighbours[3] = row + 1u < n ? element + n : RAYCACHE_NO_TEXEL;
+    for (int k = 0; k < 4; ++k) {
+        vec3 other;
+        if (neighbours[k] == RAYCACHE_NO_TEXEL || !raycache_visible_colour(cdct, neighbours[k], other) ||
+            !raycache_colours_differ(own, other, threshold))
+            continue;
+        raycache_mark_doubtful(cdct, element);
+        raycache_mark_doubtful(cdct, neighbours[k]);
+    }
+}
+
+/* The mark pass's body, dispatched as raycache_end_frame_pass after it (and a barrier): invocation k runs
+ * the confidence test for entry k. threshold < 0 or NaN: nothing is marked. */
+void raycache_end_frame_mark_pass(float threshold) {
+    uint entry;
+    if (raycache_edge_test_enabled(threshold) && raycache_end_frame_listed_entry(entry))
+        raycache_mark_edges((entry & RAYCACHE_FRAME_CDCT_ENTRY) != 0u, entry & ~RAYCACHE_FRAME_CDCT_ENTRY, threshold);
+}
+#endif
 #endif
 
 #endif /* RAYCACHE_END_FRAME_GLSL */

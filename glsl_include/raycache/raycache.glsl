@@ -31,6 +31,10 @@
  * before every frame). Barriers: README.md, "In your own Vulkan shaders", lists each one.
  * Between frames, the end-of-frame pass (raycache/end_frame.glsl, five lines, dispatched indirectly from
  * the frame buffer) makes the frame's stores visible, visiting only the texels stored.
+ * The confidence test (C++'s raycache::mark_doubtful_edges): define RAYCACHE_CONFIDENCE in every shader of
+ * the frame and bind the doubtful-bit buffers (CCT 5, CDCT 6); a second end-of-frame pass, the mark pass
+ * (with the cube tables, CCT 7, CDCT 8), marks the texels whose colours differ from a neighbour's, and
+ * lookups and searches then miss on them (raycache/shared/gpu_layout.h, raycache/end_frame.glsl).
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
  */
 #ifndef RAYCACHE_RAYCACHE_GLSL

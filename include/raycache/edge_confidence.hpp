@@ -11,21 +11,20 @@
 
 #include "raycache/requires_cpp17.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <optional>
 
 #include <glm/glm.hpp>
 
 #include "raycache/cache_cube.hpp"
+#include "raycache/shared/edge_rule.h"
 
 namespace raycache {
 
-// True when two cached colours differ by more than `threshold` in some channel (linear radiance).
+// True when two cached colours differ by more than `threshold` in some channel (linear radiance); the rule
+// lives in raycache/shared/edge_rule.h, which the GPU's mark pass (raycache/end_frame.glsl) compiles too.
 inline bool colours_differ(const glm::vec3& a, const glm::vec3& b, float threshold) noexcept {
-    const glm::vec3 d = glm::abs(a - b);
-    return std::max(d.x, std::max(d.y, d.z)) > threshold;
+    return shared::raycache_colours_differ(a, b, threshold);
 }
 
 // The colour a texel value carries: a CCT texel is one, a CDCT texel holds one beside its distance.
@@ -41,7 +40,7 @@ inline const glm::vec3& colour_of(const DepthSample& sample) noexcept { return s
 // such searches miss and are traced.
 template <class Texel>
 std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
-    if (!(threshold >= 0.0f)) return 0;
+    if (!shared::raycache_edge_test_enabled(threshold)) return 0;
     const int n = cube.face_size();
     const std::size_t before = cube.doubtful_texels();
     cube.for_each_written_texel([&](const TexelAddress& t) {

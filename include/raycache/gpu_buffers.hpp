@@ -7,10 +7,15 @@
 // (vkCmdFillBuffer(cmd, buffer, 0, VK_WHOLE_SIZE, raycache::gpu_clear_word), or fill_gpu_words on mapped
 // memory). Zeros are valid texels, black (CCT; the CDCT's at distance 0): a zero-filled cube answers every
 // lookup with black and refuses every store, without an error.
+//
+// The confidence test (shaders that define RAYCACHE_CONFIDENCE) adds, per technique, a doubtful-bit buffer
+// (GpuBufferLayout::doubtful_bytes; fill it with gpu_doubtful_clear_word whenever the texel buffers are
+// filled) and, for the end-of-frame mark pass, a cube table: GpuBufferLayout::cubes as it stands.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -43,7 +48,15 @@ struct GpuBufferLayout {
     std::uint64_t texels = 0;                     // elements of each buffer: the sum of 6 N^2
     std::uint64_t words = 0;                      // 32-bit words of each buffer
     std::uint64_t bytes = 0;                      // bytes of each buffer (create both this size, fill with gpu_clear_word)
+    // The confidence test's doubtful-bit buffer (RAYCACHE_CONFIDENCE): one bit per texel, in uint words;
+    // create it this size (at least 4 bytes) and fill it with gpu_doubtful_clear_word. Its cube table is
+    // `cubes` as it stands (cubes.size() * sizeof(raycache_gpu_cube) bytes).
+    std::uint64_t doubtful_words = 0;
+    std::uint64_t doubtful_bytes = 0;
 };
+
+// The word that empties a doubtful-bit buffer (no texel doubtful); clear it with the texel buffers.
+inline constexpr std::uint32_t gpu_doubtful_clear_word = 0u;
 
 // Places the cubes: cube k's texels start at element sum_{j<k} 6 N_j^2, and its counters in the frame buffer
 // are number first_index + k (give the other technique's cubes other numbers). Throws std::invalid_argument
@@ -67,6 +80,8 @@ GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes, std::
     }
     layout.words = layout.texels * gpu_words_per_texel<Texel>;
     layout.bytes = layout.words * sizeof(std::uint32_t);
+    layout.doubtful_words = std::max<std::uint64_t>((layout.texels + 31) / 32, 1);
+    layout.doubtful_bytes = layout.doubtful_words * sizeof(std::uint32_t);
     return layout;
 }
 
@@ -134,6 +149,13 @@ std::size_t read_gpu_words(CacheCube<Texel>& cube, const shared::raycache_gpu_cu
                 ++valid;
             }
     return valid;
+}
+
+// Whether `element`'s bit is set in a doubtful-bit buffer's contents (`words`, `word_count` of them, as
+// read back): whether that texel is doubtful. False past the buffer's end.
+inline bool gpu_doubtful(const std::uint32_t* words, std::size_t word_count, std::uint32_t element) noexcept {
+    const std::uint32_t w = shared::raycache_doubtful_word(element);
+    return w < word_count && (words[w] & shared::raycache_doubtful_bit(element)) != 0u;
 }
 
 } // namespace raycache

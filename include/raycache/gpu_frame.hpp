@@ -8,7 +8,9 @@
 //      then barrier (transfer write -> shader read and write; it also covers the first frame's fill);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
 //   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
-//      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset;
+//      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset; with the
+//      confidence test (RAYCACHE_CONFIDENCE), a barrier (shader write -> shader read) and the mark pass,
+//      dispatched the same way;
 //   4. barrier (shader write -> host read, or transfer read for a copy), and once the frame is done read the
 //      frame buffer back: read_gpu_statistics(); when its overflow is non-zero, run the sweep
 //      (gpu_sweep_groups) before the next frame.
@@ -37,6 +39,11 @@ struct GpuBindings {
     std::uint32_t cdct_texels = RAYCACHE_CDCT_BINDING;
     std::uint32_t cdct_pending = RAYCACHE_CDCT_PENDING_BINDING;
     std::uint32_t frame = RAYCACHE_FRAME_BINDING;
+    // The confidence test's (shaders that define RAYCACHE_CONFIDENCE): doubtful bits, cube tables.
+    std::uint32_t cct_doubtful = RAYCACHE_CCT_DOUBTFUL_BINDING;
+    std::uint32_t cdct_doubtful = RAYCACHE_CDCT_DOUBTFUL_BINDING;
+    std::uint32_t cct_cubes = RAYCACHE_CCT_CUBES_BINDING;
+    std::uint32_t cdct_cubes = RAYCACHE_CDCT_CUBES_BINDING;
 };
 inline constexpr GpuBindings gpu_bindings{};
 

@@ -5,7 +5,8 @@
 // (CDCT: the secant search, the default, and the relief walk) are close to the Embree tracer's warm
 // frames made with the same settings (the two implement the same store rule and, in C++ and GLSL, the
 // same searches), and two tracers fed the same frames give the same pixels (no dependence on the
-// driver's thread timing). No validation error.
+// driver's thread timing); with the confidence test on, the warm frames still match the Embree tracer's made
+// with the same threshold. No validation error.
 // Exit 77 (CTest: skipped) only when there is no Vulkan device.
 #include <cstdio>
 #include <cstring>
@@ -44,7 +45,7 @@ rcx::Image embree_warm(const rcx::Scene& scene, int size, const rcx::gpu::Tracer
     const rcx::embree::Tracer tracer(scene);
     raycache::embree::SceneCacheSettings same; // stated: the comparison depends on it
     same.filtered = false;
-    same.edge_threshold = -1.0f; // the GPU tracer has no confidence test: every filled texel answers
+    same.edge_threshold = gpu.edge_threshold; // the confidence test: the GPU's mark pass marks as C++ does
     same.depth_pyramid = false;
     same.relief.step = gpu.delta;
     same.relief.epsilon = gpu.epsilon;
@@ -94,6 +95,7 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         settings.mode = mode;
         settings.secant = secant;
         settings.face_size = mode == rcx::CacheMode::cct ? 128 : 64;
+        settings.edge_threshold = -1.0f; // the floors below were measured without the confidence test
         rcx::gpu::Tracer a(context, scene, spirv, settings), b(context, scene, spirv, settings);
         rcx::gpu::FrameStats cold_stats, warm_stats, twin_stats;
         const rcx::Image cold = a.render(scene.camera, size, size, &cold_stats);
@@ -124,6 +126,16 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         }
         check(rcx::bit_identical(warm, twin) && warm_stats.hits == twin_stats.hits,
               name + ": two tracers fed the same frames give the same warm pixels and hits");
+        // With the confidence test (the tracers' default threshold) the warm frame still matches the Embree
+        // tracer's made with the same threshold: the GPU's mark pass marks the texels C++ marks.
+        rcx::gpu::TracerSettings marked = settings;
+        marked.edge_threshold = rcx::gpu::TracerSettings{}.edge_threshold;
+        rcx::gpu::Tracer m(context, scene, spirv, marked);
+        m.render(scene.camera, size, size);
+        const double marked_psnr = rcx::compare(m.render(scene.camera, size, size), embree_warm(scene, size, marked)).psnr_db;
+        const double min_marked = mode == rcx::CacheMode::cct ? c.cct_min_embree_psnr : c.cdct_min_embree_psnr;
+        check(marked_psnr >= min_marked,
+              name + format(": with --edge-threshold 0.1, warm frame against the Embree tracer's %.2f dB >= %.0f dB", marked_psnr, min_marked));
         if (!rcx::bit_identical(cold, uncached) || psnr < 10.0) {
             rcx::write_png("vulkan-cache-" + std::string(c.scene) + "-" + rcx::to_string(mode) +
                                (secant ? "-secant" : "") + "-warm.png", warm);

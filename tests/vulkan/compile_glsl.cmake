@@ -64,7 +64,9 @@ function(compile name stage body)
 endfunction()
 
 # Option set and the stages it is compiled for.
-set(_variants "default:comp;default:frag;default:rgen;RAYCACHE_READ_ONLY:frag;RAYCACHE_END_FRAME:comp")
+# Several options join with "+".
+set(_variants "default:comp;default:frag;default:rgen;RAYCACHE_READ_ONLY:frag;RAYCACHE_END_FRAME:comp"
+              "RAYCACHE_CONFIDENCE:frag;RAYCACHE_CONFIDENCE+RAYCACHE_READ_ONLY:frag;RAYCACHE_CONFIDENCE+RAYCACHE_END_FRAME:comp")
 foreach(_file IN LISTS _files ITEMS use_all.glsl)
   string(MAKE_C_IDENTIFIER "${_file}" _id)
   foreach(_variant IN LISTS _variants)
@@ -73,7 +75,11 @@ foreach(_file IN LISTS _files ITEMS use_all.glsl)
     list(GET _variant 1 _stage)
     set(_define "")
     if(NOT _option STREQUAL "default")
-      set(_define "#define ${_option}\n")
+      string(REPLACE "+" ";" _options "${_option}")
+      foreach(_o IN LISTS _options)
+        string(APPEND _define "#define ${_o}\n")
+      endforeach()
+      string(REPLACE "+" "_" _option "${_option}")
     endif()
     if(_file STREQUAL "use_all.glsl")
       compile("${_id}_${_option}" ${_stage} "${_define}#include \"use_all.glsl\"\nvoid main() { raycache_test_use_all(); }\n")

@@ -6,9 +6,6 @@
 
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <iterator>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,41 +14,14 @@
 
 #include "vulkan_test.hpp"
 
-namespace {
-
-// SPIR-V's OpCapability operands present in a module (the SPIR-V specification: a 5-word header, then
-// instructions whose first word is word count << 16 | opcode; OpCapability is opcode 17).
-std::set<std::uint32_t> capabilities_of(const std::string& path) {
-    std::ifstream file(path, std::ios::binary);
-    REQUIRE_MESSAGE(file, "cannot read " << path);
-    std::vector<char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    REQUIRE(bytes.size() % 4 == 0);
-    std::vector<std::uint32_t> words(bytes.size() / 4);
-    std::memcpy(words.data(), bytes.data(), bytes.size());
-    REQUIRE(words.size() > 5);
-    REQUIRE(words[0] == 0x07230203u); // the SPIR-V magic number
-    std::set<std::uint32_t> found;
-    for (std::size_t i = 5; i < words.size();) {
-        const std::uint32_t count = words[i] >> 16, opcode = words[i] & 0xFFFFu;
-        REQUIRE(count > 0);
-        if (opcode == 17 && i + 1 < words.size()) found.insert(words[i + 1]);
-        i += count;
-    }
-    return found;
-}
-
-constexpr std::uint32_t capability_shader = 1, capability_int64 = 11, capability_int64_atomics = 12;
-
-} // namespace
-
 TEST_CASE("a CCT-only shader through raycache.glsl declares no 64-bit capability, and one asking for the CDCT declares Int64") {
-    const std::set<std::uint32_t> cct_only = capabilities_of(rcx_test::spirv("cct_only"));
-    CHECK(cct_only.count(capability_shader) == 1);
-    CHECK(cct_only.count(capability_int64) == 0);
-    CHECK(cct_only.count(capability_int64_atomics) == 0);
-    const std::set<std::uint32_t> with_cdct = capabilities_of(rcx_test::spirv("with_cdct"));
-    CHECK(with_cdct.count(capability_int64) == 1);
-    CHECK(with_cdct.count(capability_int64_atomics) == 1);
+    const std::set<std::uint32_t> cct_only = rcx_test::capabilities_of(rcx_test::spirv("cct_only"));
+    CHECK(cct_only.count(rcx_test::capability_shader) == 1);
+    CHECK(cct_only.count(rcx_test::capability_int64) == 0);
+    CHECK(cct_only.count(rcx_test::capability_int64_atomics) == 0);
+    const std::set<std::uint32_t> with_cdct = rcx_test::capabilities_of(rcx_test::spirv("with_cdct"));
+    CHECK(with_cdct.count(rcx_test::capability_int64) == 1);
+    CHECK(with_cdct.count(rcx_test::capability_int64_atomics) == 1);
 }
 
 TEST_CASE("a CCT-only shader runs without shaderInt64 and no validation error: filled buffers miss and store, "

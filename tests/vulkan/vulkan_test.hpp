@@ -8,7 +8,11 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
+#include <fstream>
 #include <initializer_list>
+#include <iterator>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -87,5 +91,28 @@ inline void record_end_frame(rcx::vk::Commands& commands, const rcx::vk::Compute
     const std::uint32_t x = std::min<std::uint32_t>(groups, 65535u);
     commands.dispatch(end_frame, {texels, pending}, nullptr, 0, x, (groups + x - 1) / x);
 }
+
+// SPIR-V's OpCapability operands present in a module (the SPIR-V specification: a 5-word header, then
+// instructions whose first word is word count << 16 | opcode; OpCapability is opcode 17).
+inline std::set<std::uint32_t> capabilities_of(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    REQUIRE_MESSAGE(file, "cannot read " << path);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() % 4 == 0);
+    std::vector<std::uint32_t> words(bytes.size() / 4);
+    std::memcpy(words.data(), bytes.data(), bytes.size());
+    REQUIRE(words.size() > 5);
+    REQUIRE(words[0] == 0x07230203u); // the SPIR-V magic number
+    std::set<std::uint32_t> found;
+    for (std::size_t i = 5; i < words.size();) {
+        const std::uint32_t count = words[i] >> 16, opcode = words[i] & 0xFFFFu;
+        REQUIRE(count > 0);
+        if (opcode == 17 && i + 1 < words.size()) found.insert(words[i + 1]);
+        i += count;
+    }
+    return found;
+}
+
+inline constexpr std::uint32_t capability_shader = 1, capability_int64 = 11, capability_int64_atomics = 12;
 
 } // namespace rcx_test

@@ -11,6 +11,10 @@
 // that the raster pass wrote (gbuffer.vert/.frag) instead of traced. Compiled twice: without
 // WHITTED_CDCT (off, cct, ceiling: no 64-bit atomics needed) and with it (cdct).
 #extension GL_GOOGLE_include_directive : require
+// RayCache's confidence test: doubtful texels (marked by end_frame.comp's mark pass) read as empty.
+#define RAYCACHE_CONFIDENCE
+#define RAYCACHE_CCT_DOUBTFUL_BINDING 12
+#define RAYCACHE_CDCT_DOUBTFUL_BINDING 13
 #ifdef WHITTED_CDCT
 #include "raycache/cdct.glsl"
 #else
@@ -22,7 +26,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "scene.glsl"
 
 // RayCache's buffers take bindings 0..4 (raycache/shared/gpu_layout.h: CCT texels and pending, CDCT texels
-// and pending, the frame buffer with its counters and store list); the scene's 5..8 (scene.glsl).
+// and pending, the frame buffer with its counters and store list) and 12, 13 (doubtful bits, moved from
+// their defaults 5, 6); the scene's 5..8 (scene.glsl).
 layout(std430, binding = 9) writeonly buffer Output { vec4 pixels[]; };
 layout(std430, binding = 10) readonly buffer Cubes { raycache_gpu_cube cubes[]; };
 // Hybrid (Params.frame.z >= 16 adds it to the mode): the primary hit of each pixel from the raster pass,

@@ -23,8 +23,23 @@
  *   word (C++'s stores plus its same-frame losers), `refused` = stores refused before it (not a direction,
  *   a value that cannot be stored, a texel already visible or outside the buffers).
  *
- * Clearing: fill both buffers with RAYCACHE_GPU_CLEAR_WORD (vkCmdFillBuffer). Every all-ones word is
- * invalid, in the CDCT too (negative distance bits), and is larger than every valid word.
+ * Confidence test (optional: shaders that define RAYCACHE_CONFIDENCE; the rule is raycache/shared/edge_rule.h,
+ * as in C++'s raycache::mark_doubtful_edges). Each technique has a doubtful-bit buffer (binding
+ * RAYCACHE_CCT_DOUBTFUL_BINDING / RAYCACHE_CDCT_DOUBTFUL_BINDING, uint words): bit (element & 31) of word
+ * (element >> 5) is set when the texel is doubtful. A doubtful texel keeps its word but reads as empty to
+ * lookups and searches (its rays are traced), and a store into it is refused as into any visible texel.
+ * A second end-of-frame pass, the mark pass, runs over the same store list after the first one, with a
+ * barrier between (it reads the texels that pass wrote). It compares each listed texel's visible colour
+ * with its 4 neighbours' on the same face (left, right, up, down; not across a face's edge) and
+ * atomicOr's the bits of both when they differ by more than the threshold the shader gives it (< 0 or
+ * NaN: off). It reads only texel words, which no invocation of that pass writes, and only ever sets bits,
+ * so its marks do not depend on invocation order. It finds a listed texel's cube in the technique's cube
+ * table (binding RAYCACHE_CCT_CUBES_BINDING / RAYCACHE_CDCT_CUBES_BINDING: the technique's raycache_gpu_cube
+ * descriptors by increasing first_texel, as raycache::gpu_buffer_layout places them).
+ *
+ * Clearing: fill both buffers with RAYCACHE_GPU_CLEAR_WORD (vkCmdFillBuffer), and the doubtful-bit buffer
+ * with 0. Every all-ones word is invalid, in the CDCT too (negative distance bits), and is larger than every
+ * valid word.
  */
 #ifndef RAYCACHE_SHARED_GPU_LAYOUT_H
 #define RAYCACHE_SHARED_GPU_LAYOUT_H
@@ -59,6 +74,20 @@ namespace shared {
 #endif
 #ifndef RAYCACHE_FRAME_BINDING
 #define RAYCACHE_FRAME_BINDING 4
+#endif
+/* The confidence test's buffers (only in shaders that define RAYCACHE_CONFIDENCE): doubtful bits (lookups,
+ * searches and both end-of-frame passes) and cube tables (the mark pass only). */
+#ifndef RAYCACHE_CCT_DOUBTFUL_BINDING
+#define RAYCACHE_CCT_DOUBTFUL_BINDING 5
+#endif
+#ifndef RAYCACHE_CDCT_DOUBTFUL_BINDING
+#define RAYCACHE_CDCT_DOUBTFUL_BINDING 6
+#endif
+#ifndef RAYCACHE_CCT_CUBES_BINDING
+#define RAYCACHE_CCT_CUBES_BINDING 7
+#endif
+#ifndef RAYCACHE_CDCT_CUBES_BINDING
+#define RAYCACHE_CDCT_CUBES_BINDING 8
 #endif
 
 /* Frame buffer: header words. */
@@ -124,6 +153,14 @@ RAYCACHE_FN uint raycache_frame_list_word(uint cube_count, uint k) {
  * most RAYCACHE_END_FRAME_MAX_GROUPS. A store that appends entry k adds a group exactly when this grows. */
 RAYCACHE_FN uint raycache_end_frame_groups(uint entries) {
     return min((entries + RAYCACHE_END_FRAME_GROUP_SIZE - 1u) / RAYCACHE_END_FRAME_GROUP_SIZE, RAYCACHE_END_FRAME_MAX_GROUPS);
+}
+
+/* The doubtful-bit buffer's word holding element's bit, and the bit within it. */
+RAYCACHE_FN uint raycache_doubtful_word(uint element) {
+    return element >> 5u;
+}
+RAYCACHE_FN uint raycache_doubtful_bit(uint element) {
+    return 1u << (element & 31u);
 }
 
 #ifdef __cplusplus

@@ -6,6 +6,9 @@ bool raycache_test_fetch(raycache_texel_address texel, out vec3 color);
 #define RAYCACHE_FILTER_FETCH raycache_test_fetch
 #define RAYCACHE_CDCT
 #include "raycache/raycache.glsl"
+#if defined(RAYCACHE_CONFIDENCE) && defined(RAYCACHE_END_FRAME)
+#include "raycache/end_frame.glsl"
+#endif
 
 layout(std430, set = 1, binding = 0) buffer raycache_test_sink { vec4 raycache_test_values[]; };
 
@@ -50,6 +53,15 @@ void raycache_test_use_all() {
 #ifdef RAYCACHE_END_FRAME
     raycache_cct_end_frame(0u);
     raycache_cdct_end_frame(0u);
+#endif
+#ifdef RAYCACHE_CONFIDENCE
+    sum.w += (raycache_cct_is_doubtful(1u) ? 1.0 : 0.0) + (raycache_cdct_is_doubtful(2u) ? 1.0 : 0.0);
+#ifdef RAYCACHE_END_FRAME
+    raycache_end_frame_pass();
+    raycache_end_frame_mark_pass(0.1);
+    raycache_mark_edges(false, 3u, 0.1);
+    raycache_mark_edges(true, 4u, 0.1);
+#endif
 #endif
     raycache_test_values[0] = sum;
 }
