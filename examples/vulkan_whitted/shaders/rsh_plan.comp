@@ -1,10 +1,12 @@
 #version 450
 // rsh_plan.comp (one invocation): sizes the passes of the next step from what the previous one produced,
 // as indirect dispatch arguments, so the host never waits for a count. pc.arg: the level about to be
-// traversed (its tests are counted there) or, with bit 16 set, the final intersection. Unless pc.arg has
-// bit 17 set (the first level: the root pass set the count), the count is the last compaction's total,
-// clamped to the capacity; a total above it marks the batch overflowed (the scatter wrote only the
-// first `capacity` pairs), and an overflowed batch runs no final pass.
+// traversed or, with bit 16 set, the final intersection, or, with bit 18 set, a prefix sum over a caller's
+// flags (RshEngine::record_prefix_sum: pc.count elements per unit of control[CTL_RAYS], at most
+// pc.capacity). Unless pc.arg has bit 17 set (the first level: the root pass set the count), the count is
+// the last compaction's total, clamped to the capacity; a total above it marks the batch overflowed (the
+// scatter wrote only the first `capacity` pairs), and an overflowed batch runs no final pass. Adds the
+// cone-sphere tests, the leaf pairs and the overflows to the accumulators.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 1) in;
 #include "rsh_common.glsl"
@@ -18,28 +20,19 @@ void args(uint slot, uint groups) {
 
 uint groups(uint n, uint size) { return (n + size - 1u) / size; }
 
-void main() {
-    uint count = control[CTL_COUNT];
-    if ((pc.arg & 0x20000u) == 0u) {
-        uint total = scan[pc.off3];
-        if (total > pc.capacity) control[CTL_OVERFLOW] = 1u;
-        count = min(total, pc.capacity);
-        control[CTL_COUNT] = count;
-    }
-    if ((pc.arg & 0x10000u) != 0u) {
-        bool ok = control[CTL_OVERFLOW] == 0u;
-        control[CTL_LEAF_PAIRS] = ok ? count : 0u;
-        args(ARG_FINAL, ok ? groups(count, 64u) : 0u);
-        return;
-    }
-    uint level = pc.arg & 0xFFFFu;
-    uint n0 = 4u * count;
+void add64(uint at, uint v) { // one invocation: no atomics needed
+    uint lo = control[at];
+    uint sum = lo + v;
+    control[at] = sum;
+    if (sum < lo) control[at + 1u] += 1u;
+}
+
+// The sizes of the three scan levels over n0 elements and of the passes that read them.
+void plan_scan(uint n0) {
     uint n1 = groups(n0, SCAN_BLOCK), n2 = groups(n1, SCAN_BLOCK);
     control[CTL_N] = n0;
     control[CTL_N + 1u] = n1;
     control[CTL_N + 2u] = n2;
-    if (level < 32u) control[CTL_TESTS + level] = n0;
-    args(ARG_TRAVERSE, groups(count, 64u));
     // Every scan level runs at least one group, so each writes its block total (0 for no elements).
     args(ARG_SCAN0, max(n1, 1u));
     args(ARG_SCAN1, max(n2, 1u));
@@ -47,4 +40,33 @@ void main() {
     args(ARG_ADD1, groups(n1, 256u));
     args(ARG_ADD0, groups(n0, 256u));
     args(ARG_SCATTER, groups(n0, 256u));
+}
+
+void main() {
+    if ((pc.arg & 0x40000u) != 0u) {
+        plan_scan(min(pc.count * control[CTL_RAYS], pc.capacity));
+        return;
+    }
+    uint count = control[CTL_COUNT];
+    if ((pc.arg & 0x20000u) == 0u) {
+        uint total = scan[pc.off3];
+        if (total > pc.capacity) {
+            control[CTL_OVERFLOW] = 1u;
+            control[ACC_MAX_TOTAL] = max(control[ACC_MAX_TOTAL], total);
+        }
+        count = min(total, pc.capacity);
+        control[CTL_COUNT] = count;
+    }
+    if ((pc.arg & 0x10000u) != 0u) {
+        bool ok = control[CTL_OVERFLOW] == 0u;
+        control[CTL_LEAF_PAIRS] = ok ? count : 0u;
+        if (ok) add64(ACC_LEAF_PAIRS, count);
+        else control[ACC_OVERFLOWS] += 1u;
+        args(ARG_FINAL, ok ? groups(count, 64u) : 0u);
+        return;
+    }
+    uint n0 = 4u * count;
+    add64(ACC_TESTS, n0);
+    args(ARG_TRAVERSE, groups(count, 64u));
+    plan_scan(n0);
 }
