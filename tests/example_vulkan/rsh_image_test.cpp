@@ -18,6 +18,9 @@
 // counted by the Vulkan harness, however many generations it has; the host waits for the device only at
 // the end of a submission.
 //
+// A generation with more rays than the Morton slots (a glass sphere filling the view) makes the frame
+// record itself again with more room, and the image is still the BVH path's.
+//
 // A pair capacity small enough to split the primitives into batches gives the same image bit for bit:
 // capacities from 4160 (a little above the 64 x 64 Morton slots one primitive can meet) down by halves
 // are tried until one splits a batch (one below what a single primitive meets is refused with an
@@ -28,6 +31,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <glm/glm.hpp>
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
@@ -126,6 +130,45 @@ int main() {
             check(split, std::string(name) + ": a pair capacity split the primitives into batches");
         }
     }
+
+    // A generation larger than the Morton slots: a glass sphere filling a 64 x 64 frame sends a reflected
+    // and a refracted ray from every pixel, 8192 rays for 4096 slots. The frame sees it only at its end
+    // and records itself again with room for 4 times the rays: the same image as the BVH path; the next
+    // frame keeps the room and is one submission again.
+    {
+        rcx::Scene scene = rcx::make_scene("glass");
+        rcx::Sphere lens;
+        lens.centre = scene.camera.target;
+        lens.radius = 0.6f * glm::length(scene.camera.eye - scene.camera.target); // 37 degrees: beyond the 22.5 of the view
+        lens.material.diffuse = glm::vec3(0.1f);
+        lens.material.transparency = 0.9f;
+        lens.material.ior = 1.3f;
+        scene.spheres.push_back(lens);
+        const int side = 64;
+        rcx::gpu::TracerSettings settings;
+        settings.mode = rcx::CacheMode::off;
+        rcx::gpu::Tracer bvh(*context, scene, spirv, settings);
+        settings.secondary = rcx::gpu::Secondary::rsh;
+        rcx::gpu::Tracer rsh(*context, scene, spirv, settings);
+        const rcx::Image a = bvh.render(scene.camera, side, side);
+        rcx::gpu::FrameStats first, second;
+        const rcx::Image b = rsh.render(scene.camera, side, side, &first);
+        const std::uint64_t before = context->submissions();
+        const rcx::Image c = rsh.render(scene.camera, side, side, &second);
+        const std::uint64_t submissions = context->submissions() - before;
+        const rcx::ImageDifference d = rcx::compare(a, b);
+        check(first.rsh.ray_overflows > 0 && first.rsh.submissions == first.rsh.ray_overflows + 1 &&
+                  first.rsh.ray_capacity >= 4u * side * side && d.differing_pixels == 0 && rcx::bit_identical(b, c),
+              "a glass sphere filling the view: " + std::to_string(first.rsh.secondary_rays) + " secondary rays, " +
+                  "a generation over the " + std::to_string(side * side) + " slots: recorded " +
+                  std::to_string(first.rsh.ray_overflows) + " more time(s), with room for " +
+                  std::to_string(first.rsh.ray_capacity) + " rays: " +
+                  std::to_string(d.differing_pixels) + " pixels differ from the BVH path; the next frame " +
+                  (rcx::bit_identical(b, c) ? "the same" : "different"));
+        check(second.rsh.ray_overflows == 0 && second.rsh.submissions == 1 && submissions == 1,
+              "the next frame keeps the room: " + std::to_string(submissions) + " submission(s)");
+    }
+
     context.reset();
     failures += rcx::gpu::test::validation_failures();
     return failures == 0 ? 0 : 1;
