@@ -23,7 +23,7 @@ static_assert(sizeof(Push) == 32, "rsh push constants");
 
 // Control words and argument slots (shaders/rsh_common.glsl).
 constexpr std::uint32_t ctl_rays = 3, ctl_args = 8, ctl_words = 64;
-constexpr std::uint32_t acc_tests = 32, acc_leaf_pairs = 34, acc_overflows = 36, acc_max_total = 37, acc_live = 38,
+constexpr std::uint32_t acc_tests = 32, acc_leaf_pairs = 34, acc_overflows = 36, acc_max_wanted = 37, acc_live = 38,
                         acc_slots = 39;
 enum Arg : std::uint32_t { arg_traverse, arg_scan0, arg_scan1, arg_scan2, arg_add1, arg_add0, arg_scatter, arg_final };
 constexpr std::uint32_t plan_final = 0x10000u, plan_first = 0x20000u, plan_prefix_sum = 0x40000u;
@@ -192,14 +192,15 @@ RshStats RshEngine::end() {
     s.overflows = ctl[acc_overflows];
     s.batches = e.recorded_batches - s.overflows;
     if (s.overflows > 0) {
-        // Section 3.4: more, smaller batches. The streams grow about in proportion to the batch: aim below
-        // the capacity by the factor the largest stream exceeded it, and at least halve.
+        // Section 3.4: more, smaller batches. The streams grow about in proportion to the batch: aim 10%
+        // below the capacity by the factor the largest stream (estimated across the cut levels) exceeded
+        // it, and at least halve, so that one more recording usually fits.
         if (e.batch <= 1)
             throw std::runtime_error("ray-space hierarchy: one primitive meets more leaves than the pair capacity (" +
                                      std::to_string(e.settings.pair_capacity) + "); raise it");
-        const std::uint64_t wanted = std::max<std::uint64_t>(ctl[acc_max_total], e.settings.pair_capacity);
-        const std::uint64_t scaled = std::uint64_t{e.batch} * e.settings.pair_capacity / wanted;
-        e.batch = static_cast<std::uint32_t>(std::max<std::uint64_t>(1, std::min<std::uint64_t>(e.batch / 2, scaled)));
+        const double wanted = std::max<double>(ctl[acc_max_wanted], e.settings.pair_capacity);
+        const double scaled = 0.9 * e.batch * (e.settings.pair_capacity / wanted);
+        e.batch = static_cast<std::uint32_t>(std::max(1.0, std::min<double>(e.batch / 2, scaled)));
     }
     return s;
 }

@@ -13,6 +13,7 @@ const uint CTL_OVERFLOW = 1u;    // 1 when a level of this batch produced more p
 const uint CTL_LEAF_PAIRS = 2u;  // pairs that reached the leaves (the final pass's count)
 const uint CTL_RAYS = 3u;        // ray slots of the current trace (copied from where the caller keeps it)
 const uint CTL_N = 4u;           // 4..6: elements of scan levels 0, 1, 2
+const uint CTL_SCALE = 7u;       // float bits: how much the batch's streams were cut so far (1: not cut)
 const uint CTL_ARGS = 8u;        // indirect dispatch arguments, 3 uints each, from here:
 const uint ARG_TRAVERSE = 0u, ARG_SCAN0 = 1u, ARG_SCAN1 = 2u, ARG_SCAN2 = 3u, ARG_ADD1 = 4u, ARG_ADD0 = 5u,
            ARG_SCATTER = 6u, ARG_FINAL = 7u;
@@ -20,7 +21,8 @@ const uint ARG_TRAVERSE = 0u, ARG_SCAN0 = 1u, ARG_SCAN1 = 2u, ARG_SCAN2 = 3u, AR
 const uint ACC_TESTS = 32u;      // 32, 33: cone-sphere tests (4 per pair and level)
 const uint ACC_LEAF_PAIRS = 34u; // 34, 35: pairs intersected at the leaves (batches that did not overflow)
 const uint ACC_OVERFLOWS = 36u;  // batches that overflowed (their hits are incomplete: record again)
-const uint ACC_MAX_TOTAL = 37u;  // the largest stream a level wanted, when above the capacity
+const uint ACC_MAX_WANTED = 37u; // the largest stream a level of an overflowed batch would have had,
+                                 // estimated: its total times the factors by which earlier levels were cut
 const uint ACC_LIVE = 38u;       // rays that entered a hierarchy (tmax > 0)
 const uint ACC_SLOTS = 39u;      // ray slots traced (empty ones included)
 const uint CTL_WORDS = 64u;

@@ -6,7 +6,8 @@
 // pc.capacity). Unless pc.arg has bit 17 set (the first level: the root pass set the count), the count is
 // the last compaction's total, clamped to the capacity; a total above it marks the batch overflowed (the
 // scatter wrote only the first `capacity` pairs), and an overflowed batch runs no final pass. Adds the
-// cone-sphere tests, the leaf pairs and the overflows to the accumulators.
+// cone-sphere tests, the leaf pairs and the overflows to the accumulators, and estimates the largest
+// stream an overflowed batch would have needed (for the host's next batch size).
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 1) in;
 #include "rsh_common.glsl"
@@ -50,9 +51,14 @@ void main() {
     uint count = control[CTL_COUNT];
     if ((pc.arg & 0x20000u) == 0u) {
         uint total = scan[pc.off3];
+        // A level after a cut one was computed from the capacity's pairs instead of all: scale it back.
+        float scale = uintBitsToFloat(control[CTL_SCALE]);
+        float wanted = float(total) * scale;
+        if (wanted > float(pc.capacity))
+            control[ACC_MAX_WANTED] = max(control[ACC_MAX_WANTED], uint(min(wanted, 4.0e9)));
         if (total > pc.capacity) {
             control[CTL_OVERFLOW] = 1u;
-            control[ACC_MAX_TOTAL] = max(control[ACC_MAX_TOTAL], total);
+            control[CTL_SCALE] = floatBitsToUint(scale * float(total) / float(pc.capacity));
         }
         count = min(total, pc.capacity);
         control[CTL_COUNT] = count;

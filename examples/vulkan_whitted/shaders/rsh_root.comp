@@ -13,6 +13,7 @@ void main() {
         control[CTL_COUNT] = count;
         control[CTL_OVERFLOW] = 0u;
         control[CTL_LEAF_PAIRS] = 0u;
+        control[CTL_SCALE] = floatBitsToUint(1.0);
     }
     if (i < count) pairs_in[i] = raycache_rsh_pair(0u, pc.arg + i);
 }
