@@ -22,11 +22,11 @@ struct Push {
 static_assert(sizeof(Push) == 32, "rsh push constants");
 
 // Control words and argument slots (shaders/rsh_common.glsl).
-constexpr std::uint32_t ctl_rays = 3, ctl_args = 8, ctl_words = 64;
+constexpr std::uint32_t ctl_rays = 3, ctl_args = 8, ctl_build_args = 64, ctl_words = 128;
 constexpr std::uint32_t acc_tests = 32, acc_leaf_pairs = 34, acc_overflows = 36, acc_max_wanted = 37, acc_live = 38,
                         acc_slots = 39;
 enum Arg : std::uint32_t { arg_traverse, arg_scan0, arg_scan1, arg_scan2, arg_add1, arg_add0, arg_scatter, arg_final };
-constexpr std::uint32_t plan_final = 0x10000u, plan_first = 0x20000u, plan_prefix_sum = 0x40000u;
+constexpr std::uint32_t plan_final = 0x10000u, plan_first = 0x20000u, plan_prefix_sum = 0x40000u, plan_build = 0x80000u;
 constexpr std::uint32_t scan_block = 1024;
 
 // Offsets of the scan levels 1, 2 and 3 (the total) in a scan buffer over at most n elements.
@@ -61,6 +61,8 @@ struct RshEngine::Impl {
     std::uint32_t recorded_batches = 0, recorded_levels = 0;
     std::vector<std::unique_ptr<vk::Buffer>> retired;
     bool marks_full = false;
+    const vk::Buffer* spheres_of = nullptr; // whose bounding spheres `spheres` holds in this recording
+    std::uint32_t spheres_count = 0;
 
     // Grows `buffer` to `bytes`; a replaced buffer stays alive until end() (a recorded command may use it).
     void grow(std::unique_ptr<vk::Buffer>& buffer, std::uint64_t bytes) {
@@ -169,6 +171,7 @@ void RshEngine::begin(vk::Commands& c) {
     Impl& e = *impl_;
     e.recording = true; // a recording whose submission failed is simply dropped
     e.retired.clear();
+    e.spheres_of = nullptr, e.spheres_count = 0;
     e.recorded_batches = e.recorded_levels = 0;
     e.begin_marks(c);
     c.fill(*e.control, 0u);
@@ -260,6 +263,7 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
     const std::uint32_t leaves = 1u << (2 * levels);
     const std::uint32_t leaf_first = raycache_rsh_level_first(levels);
     e.grow(e.nodes, std::uint64_t{raycache_rsh_level_first(levels + 1)} * sizeof(raycache_rsh_node));
+    if (!e.spheres || e.spheres->size() < std::uint64_t{primitive_count} * 16) e.spheres_of = nullptr; // a new buffer: no spheres yet
     e.grow(e.spheres, std::uint64_t{primitive_count} * 16);
 
     Push base;
@@ -270,9 +274,13 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
         c.dispatch(pipe, {*e.control, rays, primitives, *e.spheres, *e.nodes, *e.pairs[in], *e.pairs[1 - in], *e.flags,
                           *e.scan_words, hits}, &p, sizeof p, groups);
     };
-    auto indirect = [&](const vk::ComputePipeline& pipe, int in, const Push& p, std::uint32_t slot) {
+    // Indirect: the group counts at control word `word`, or at argument slot `slot`.
+    auto indirect_at = [&](const vk::ComputePipeline& pipe, int in, const Push& p, std::uint32_t word) {
         c.dispatch_indirect(pipe, {*e.control, rays, primitives, *e.spheres, *e.nodes, *e.pairs[in], *e.pairs[1 - in],
-                                   *e.flags, *e.scan_words, hits}, &p, sizeof p, *e.control, 4 * (ctl_args + 3 * slot));
+                                   *e.flags, *e.scan_words, hits}, &p, sizeof p, *e.control, 4 * std::uint64_t{word});
+    };
+    auto indirect = [&](const vk::ComputePipeline& pipe, int in, const Push& p, std::uint32_t slot) {
+        indirect_at(pipe, in, p, ctl_args + 3 * slot);
     };
 
     // 1-2. The ray count where the passes read it; bounding spheres, leaves, levels bottom-up; hits emptied.
@@ -282,16 +290,27 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
     vkCmdFillBuffer(c.handle(), hits.handle(), 0, std::uint64_t{ray_capacity} * sizeof(raycache_rsh_hit), RAYCACHE_RSH_NO_HIT);
     c.barrier();
     Push p = base;
-    p.count = primitive_count, p.arg = 0;
-    if (primitive_count > 0) direct(*e.prepare, 0, p, vk::group_count(primitive_count, 64));
+    // The primitives' bounding spheres, once a recording (the primitives do not change during one).
+    if (primitive_count > 0 && (e.spheres_of != &primitives || e.spheres_count != primitive_count)) {
+        p.count = primitive_count, p.arg = 0;
+        direct(*e.prepare, 0, p, vk::group_count(primitive_count, 64));
+        e.spheres_of = &primitives, e.spheres_count = primitive_count;
+    }
+    // The leaves and levels are sized on the device by the ray count: the nodes that cover a slot.
+    p = base;
+    p.count = static_cast<std::uint32_t>(levels), p.arg = plan_build;
+    direct(*e.plan, 0, p, 1);
+    c.barrier();
+    p = base;
     p.arg = 1, p.parent_first = leaves, p.child_first = leaf_first;
-    direct(*e.prepare, 0, p, vk::group_count(leaves, 64));
+    indirect_at(*e.prepare, 0, p, ctl_build_args + 3 * static_cast<std::uint32_t>(levels));
     c.barrier();
     for (int l = levels - 1; l >= 0; --l) {
         p = base;
         p.parent_first = raycache_rsh_level_first(l), p.child_first = raycache_rsh_level_first(l + 1);
         p.count = 1u << (2 * l);
-        direct(*e.build, 0, p, vk::group_count(p.count, 64));
+        p.arg = static_cast<std::uint32_t>(levels - l); // a node of level l spans 4^(levels - l) slots
+        indirect_at(*e.build, 0, p, ctl_build_args + 3 * static_cast<std::uint32_t>(l));
         c.barrier();
     }
     e.mark(c, phase_build);

@@ -25,7 +25,8 @@ const uint ACC_MAX_WANTED = 37u; // the largest stream a level of an overflowed 
                                  // estimated: its total times the factors by which earlier levels were cut
 const uint ACC_LIVE = 38u;       // rays that entered a hierarchy (tmax > 0)
 const uint ACC_SLOTS = 39u;      // ray slots traced (empty ones included)
-const uint CTL_WORDS = 64u;
+const uint CTL_BUILD_ARGS = 64u; // 64 + 3 l: dispatch arguments of the build of level l (13 levels at most)
+const uint CTL_WORDS = 128u;
 
 const uint SCAN_BLOCK = 1024u;   // elements per scan workgroup (256 invocations, 4 each)
 

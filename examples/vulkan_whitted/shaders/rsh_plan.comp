@@ -3,7 +3,8 @@
 // as indirect dispatch arguments, so the host never waits for a count. pc.arg: the level about to be
 // traversed or, with bit 16 set, the final intersection, or, with bit 18 set, a prefix sum over a caller's
 // flags (RshEngine::record_prefix_sum: pc.count elements per unit of control[CTL_RAYS], at most
-// pc.capacity). Unless pc.arg has bit 17 set (the first level: the root pass set the count), the count is
+// pc.capacity), or, with bit 19 set, the build of a hierarchy of pc.count levels. Unless pc.arg has bit
+// 17 set (the first level: the root pass set the count), the count is
 // the last compaction's total, clamped to the capacity; a total above it marks the batch overflowed (the
 // scatter wrote only the first `capacity` pairs), and an overflowed batch runs no final pass. Adds the
 // cone-sphere tests, the leaf pairs and the overflows to the accumulators, and estimates the largest
@@ -44,6 +45,23 @@ void plan_scan(uint n0) {
 }
 
 void main() {
+    if ((pc.arg & 0x80000u) != 0u) {
+        // The build of a hierarchy of pc.count levels over control[CTL_RAYS] ray slots: level l writes the
+        // nodes that cover a slot, rounded up to whole groups of 4 siblings (so every child of a node that
+        // covers a slot is written, empty or not), level 0 its root; no slot: nothing (the root pass then
+        // starts no stream).
+        uint levels = pc.count, slots = control[CTL_RAYS];
+        for (uint l = 0u; l <= levels; ++l) {
+            uint span = 1u << (2u * (levels - l)); // slots under a node of level l
+            uint covering = (slots + span - 1u) / span;
+            uint nodes = l == 0u ? min(covering, 1u) : (covering + 3u) / 4u * 4u;
+            uint a = CTL_BUILD_ARGS + 3u * l;
+            control[a] = groups(nodes, 64u);
+            control[a + 1u] = 1u;
+            control[a + 2u] = 1u;
+        }
+        return;
+    }
     if ((pc.arg & 0x40000u) != 0u) {
         plan_scan(min(pc.count * control[CTL_RAYS], pc.capacity));
         return;
