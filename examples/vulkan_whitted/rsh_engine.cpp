@@ -22,9 +22,9 @@ struct Push {
 static_assert(sizeof(Push) == 32, "rsh push constants");
 
 // Control words and argument slots (shaders/rsh_common.glsl).
-constexpr std::uint32_t ctl_rays = 3, ctl_args = 8, ctl_build_args = 64, ctl_words = 128;
-constexpr std::uint32_t acc_tests = 32, acc_leaf_pairs = 34, acc_overflows = 36, acc_max_wanted = 37, acc_live = 38,
-                        acc_slots = 39;
+constexpr std::uint32_t ctl_rays = 3, ctl_args = 8, ctl_build_args = 64, ctl_words = 256;
+constexpr std::uint32_t acc_tests = 32, acc_leaf_pairs = 34, acc_live = 38, acc_slots = 39;
+constexpr std::uint32_t acc_traces = 128, acc_trace_count = 64; // per trace of a recording: overflows, largest stream wanted
 enum Arg : std::uint32_t { arg_traverse, arg_scan0, arg_scan1, arg_scan2, arg_add1, arg_add0, arg_scatter, arg_final };
 constexpr std::uint32_t plan_final = 0x10000u, plan_first = 0x20000u, plan_prefix_sum = 0x40000u, plan_build = 0x80000u;
 constexpr std::uint32_t scan_block = 1024;
@@ -58,7 +58,10 @@ struct RshEngine::Impl {
     double tick_ns = 0.0;
     // The recording since begin(): batches and levels recorded, buffers it uses that were replaced since.
     bool recording = false;
-    std::uint32_t recorded_batches = 0, recorded_levels = 0;
+    std::uint32_t recorded_batches = 0, recorded_levels = 0, recorded_traces = 0;
+    // The batch size of each trace of a recording, by its index (a frame records the same sequence of
+    // traces every time): lowered where that trace overflowed, so that traces of few rays keep big batches.
+    std::vector<std::uint32_t> trace_batch, trace_primitives; // ... and its primitives in the last recording
     std::vector<std::unique_ptr<vk::Buffer>> retired;
     bool marks_full = false;
     const vk::Buffer* spheres_of = nullptr; // whose bounding spheres `spheres` holds in this recording
@@ -172,7 +175,7 @@ void RshEngine::begin(vk::Commands& c) {
     e.recording = true; // a recording whose submission failed is simply dropped
     e.retired.clear();
     e.spheres_of = nullptr, e.spheres_count = 0;
-    e.recorded_batches = e.recorded_levels = 0;
+    e.recorded_batches = e.recorded_levels = e.recorded_traces = 0;
     e.begin_marks(c);
     c.fill(*e.control, 0u);
     c.barrier();
@@ -192,19 +195,24 @@ RshStats RshEngine::end() {
     s.levels = e.recorded_levels;
     s.cone_sphere_tests = word64(acc_tests);
     s.leaf_pairs = word64(acc_leaf_pairs);
-    s.overflows = ctl[acc_overflows];
-    s.batches = e.recorded_batches - s.overflows;
-    if (s.overflows > 0) {
-        // Section 3.4: more, smaller batches. The streams grow about in proportion to the batch: aim 10%
-        // below the capacity by the factor the largest stream (estimated across the cut levels) exceeded
-        // it, and at least halve, so that one more recording usually fits.
-        if (e.batch <= 1)
+    for (std::uint32_t k = 0; k < std::min(e.recorded_traces, acc_trace_count); ++k) {
+        const std::uint32_t overflows = ctl[acc_traces + 2 * k];
+        if (overflows == 0) continue;
+        s.overflows += overflows;
+        // Section 3.4: more, smaller batches for this trace. The streams grow about in proportion to the
+        // batch: aim 20% below the capacity by the factor the largest stream (estimated across the cut
+        // levels) exceeded it, and at least halve, so that one more recording usually fits.
+        std::uint32_t& batch = e.trace_batch[k];
+        batch = std::min(batch, e.trace_primitives[k]); // what the batches held
+        if (batch <= 1)
             throw std::runtime_error("ray-space hierarchy: one primitive meets more leaves than the pair capacity (" +
                                      std::to_string(e.settings.pair_capacity) + "); raise it");
-        const double wanted = std::max<double>(ctl[acc_max_wanted], e.settings.pair_capacity);
-        const double scaled = 0.9 * e.batch * (e.settings.pair_capacity / wanted);
-        e.batch = static_cast<std::uint32_t>(std::max(1.0, std::min<double>(e.batch / 2, scaled)));
+        const double wanted = std::max<double>(ctl[acc_traces + 2 * k + 1], e.settings.pair_capacity);
+        const double scaled = 0.8 * batch * (e.settings.pair_capacity / wanted);
+        batch = static_cast<std::uint32_t>(std::max(1.0, std::min<double>(batch / 2, scaled)));
+        e.batch = std::min(e.batch, batch);
     }
+    s.batches = e.recorded_batches - s.overflows;
     return s;
 }
 
@@ -315,9 +323,16 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
     }
     e.mark(c, phase_build);
 
-    // 3-4. Batches of primitives, each as big as the batch size, the last the rest.
-    for (std::uint32_t first = 0; first < primitive_count; first += e.batch) {
-        const std::uint32_t count = std::min(e.batch, primitive_count - first);
+    // 3-4. Batches of primitives, each as big as this trace's batch size, the last the rest.
+    const std::uint32_t trace = std::min(e.recorded_traces++, acc_trace_count - 1); // later ones share the last slot
+    if (e.trace_batch.size() <= trace) {
+        e.trace_batch.resize(trace + 1, e.settings.pair_capacity);
+        e.trace_primitives.resize(trace + 1, 0);
+    }
+    e.trace_primitives[trace] = primitive_count;
+    const std::uint32_t batch = e.trace_batch[trace];
+    for (std::uint32_t first = 0; first < primitive_count; first += batch) {
+        const std::uint32_t count = std::min(batch, primitive_count - first);
         ++e.recorded_batches;
         int in = 0;
         p = base;
@@ -329,6 +344,7 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
             p = base;
             p.parent_first = raycache_rsh_level_first(l), p.child_first = raycache_rsh_level_first(l + 1);
             p.arg = static_cast<std::uint32_t>(l) | (l == 0 ? plan_first : 0u);
+            p.count = trace; // the plan pass accumulates per trace
             direct(*e.plan, in, p, 1);
             c.barrier();
             e.mark(c, phase_compaction);
@@ -352,6 +368,7 @@ void RshEngine::record_trace(vk::Commands& c, const vk::Buffer& rays, std::uint3
         }
         p = base;
         p.arg = plan_final | (levels == 0 ? plan_first : 0u);
+        p.count = trace;
         direct(*e.plan, in, p, 1);
         c.barrier();
         e.mark(c, phase_compaction);

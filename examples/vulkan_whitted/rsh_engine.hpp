@@ -16,8 +16,9 @@
 // recording of one trace, with a count the host knows.
 // The pair streams have a fixed capacity; a level that would exceed it is cut at the capacity (no write
 // past a buffer) and marks the batch overflowed, which the accumulators count; end() then lowers the batch
-// size (section 3.4: the primitives are split into more, smaller batches), for the caller to record the
-// work again (trace() does) and for every later recording. Layouts and the geometry are
+// size of that trace (section 3.4: the primitives are split into more, smaller batches; traces are told
+// apart by their order in the recording, as a frame records the same sequence every time), for the
+// caller to record the work again (trace() does) and for every later recording. Layouts and the geometry are
 // raycache/shared/rsh_layout.h, shared with the C++ reference rcx/rsh_reference.hpp.
 // Needs 64-bit buffer atomics (shaderBufferInt64Atomics; lavapipe has them).
 #pragma once
@@ -78,8 +79,9 @@ public:
     void begin(vk::Commands& commands);
     // A trace whose ray count is on the device: the uint32 at word `count_word` of `counts`, written by an
     // earlier pass of this submission, at most ray_capacity (rays and hits must hold ray_capacity). The
-    // hierarchy has the levels of ray_capacity; the passes run as many groups as the count needs. Every
-    // batch of primitives has the current batch_size().
+    // hierarchy has the levels of ray_capacity; the passes run as many groups as the count needs. The
+    // primitives are cut into batches of this trace's batch size (by its order in the recording), and
+    // must not change during the recording (their bounding spheres are computed once).
     void record_trace(vk::Commands& commands, const vk::Buffer& rays, std::uint32_t ray_capacity, const vk::Buffer& counts,
                       std::uint32_t count_word, const vk::Buffer& primitives, std::uint32_t primitive_count,
                       const vk::Buffer& hits);
@@ -95,7 +97,8 @@ public:
     // std::runtime_error when a batch of one primitive overflowed (the capacity is too small for it).
     RshStats end();
 
-    // The batch size the next call starts with (the capacity until a batch overflows; halved each time).
+    // The smallest batch size a trace of the next recording starts with (the capacity until a batch
+    // overflows; then at most half of what overflowed).
     std::uint32_t batch_size() const noexcept;
     std::uint32_t pair_capacity() const noexcept;
 

@@ -20,13 +20,15 @@ const uint ARG_TRAVERSE = 0u, ARG_SCAN0 = 1u, ARG_SCAN1 = 2u, ARG_SCAN2 = 3u, AR
 // Accumulators over every trace and batch since RshEngine::begin (64-bit ones as low, high words).
 const uint ACC_TESTS = 32u;      // 32, 33: cone-sphere tests (4 per pair and level)
 const uint ACC_LEAF_PAIRS = 34u; // 34, 35: pairs intersected at the leaves (batches that did not overflow)
-const uint ACC_OVERFLOWS = 36u;  // batches that overflowed (their hits are incomplete: record again)
-const uint ACC_MAX_WANTED = 37u; // the largest stream a level of an overflowed batch would have had,
-                                 // estimated: its total times the factors by which earlier levels were cut
+// Per trace k of the recording (k < 64, pc.count of the plan pass), from ACC_TRACES + 2 k: batches that
+// overflowed (their hits are incomplete: record again), and the largest stream a level of an overflowed
+// batch would have had, estimated: its total times the factors by which earlier levels were cut.
+const uint ACC_TRACES = 128u;
+const uint ACC_TRACE_COUNT = 64u;
 const uint ACC_LIVE = 38u;       // rays that entered a hierarchy (tmax > 0)
 const uint ACC_SLOTS = 39u;      // ray slots traced (empty ones included)
 const uint CTL_BUILD_ARGS = 64u; // 64 + 3 l: dispatch arguments of the build of level l (13 levels at most)
-const uint CTL_WORDS = 128u;
+const uint CTL_WORDS = 256u;
 
 const uint SCAN_BLOCK = 1024u;   // elements per scan workgroup (256 invocations, 4 each)
 

@@ -8,7 +8,8 @@
 // the last compaction's total, clamped to the capacity; a total above it marks the batch overflowed (the
 // scatter wrote only the first `capacity` pairs), and an overflowed batch runs no final pass. Adds the
 // cone-sphere tests, the leaf pairs and the overflows to the accumulators, and estimates the largest
-// stream an overflowed batch would have needed (for the host's next batch size).
+// stream an overflowed batch would have needed (for the host's next batch size), both per trace of the
+// recording (pc.count: its index).
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 1) in;
 #include "rsh_common.glsl"
@@ -73,7 +74,7 @@ void main() {
         float scale = uintBitsToFloat(control[CTL_SCALE]);
         float wanted = float(total) * scale;
         if (wanted > float(pc.capacity))
-            control[ACC_MAX_WANTED] = max(control[ACC_MAX_WANTED], uint(min(wanted, 4.0e9)));
+            control[ACC_TRACES + 2u * pc.count + 1u] = max(control[ACC_TRACES + 2u * pc.count + 1u], uint(min(wanted, 4.0e9)));
         if (total > pc.capacity) {
             control[CTL_OVERFLOW] = 1u;
             control[CTL_SCALE] = floatBitsToUint(scale * float(total) / float(pc.capacity));
@@ -85,7 +86,7 @@ void main() {
         bool ok = control[CTL_OVERFLOW] == 0u;
         control[CTL_LEAF_PAIRS] = ok ? count : 0u;
         if (ok) add64(ACC_LEAF_PAIRS, count);
-        else control[ACC_OVERFLOWS] += 1u;
+        else control[ACC_TRACES + 2u * pc.count] += 1u;
         args(ARG_FINAL, ok ? groups(count, 64u) : 0u);
         return;
     }
