@@ -51,6 +51,7 @@ struct RshFrame::Impl {
     vk::ComputePipeline whitted;
     std::unique_ptr<vk::Buffer> rays, hits, states, shadow_rays, shadow_hits, local, candidates, flags, sums, control, dummy;
     std::uint32_t ray_capacity = 0; // kept between frames: raised when a generation outgrew it
+    int generations_hint = 0;       // generations the last frame had rays in (0: record all)
 };
 
 RshFrame::RshFrame(vk::Context& context, const std::string& spirv_dir, const RshSettings& settings)
@@ -81,6 +82,9 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
         // Generation 0 holds the Morton slots; later ones as many rays as the capacity (grown by 4 after
         // a frame whose generation exceeded it, so that the hierarchy over it stays a full 4-ary tree).
         const std::uint32_t capacity = std::max(f.ray_capacity, slots);
+        // Generations recorded: as many as the last frame had (all of them the first time); a frame whose
+        // rays outlive them is recorded again with all.
+        const int recorded = f.generations_hint > 0 ? std::min(f.generations_hint, max_depth + 1) : max_depth + 1;
         const std::uint64_t n = capacity;
         grow(f.context, f.rays, n * 32);
         grow(f.context, f.hits, n * 8);
@@ -119,7 +123,7 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
                 c.barrier();
             };
             pass(mode_generate, 0, false, 0);
-            for (int g = 0; g <= max_depth; ++g) {
+            for (int g = 0; g < recorded; ++g) {
                 const std::uint32_t gen = static_cast<std::uint32_t>(g);
                 if (g > 0)
                     f.engine.record_trace(c, *f.rays, capacity, *f.control, fc_counts + gen, *scene.rsh_prims, scene.prim_count,
@@ -133,7 +137,7 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
                 pass(mode_flag, gen, true, 3);
                 f.engine.record_prefix_sum(c, *f.flags, *f.control, fc_counts + gen, 3, 3 * capacity, *f.sums);
                 pass(mode_plan, gen, false, 0);
-                pass(mode_scatter, gen, true, 3);
+                if (g + 1 < recorded) pass(mode_scatter, gen, true, 3); // the last one only counts what would follow
             }
         });
         ++s.submissions;
@@ -144,9 +148,15 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
             ++s.ray_overflows;
             while (f.ray_capacity < words[fc_overflow]) f.ray_capacity = std::max(capacity, f.ray_capacity) * 4;
         }
+        // Rays past the generations recorded: record them all.
+        const bool truncated = recorded <= max_depth && words[fc_counts + static_cast<std::uint32_t>(recorded)] > 0;
+        if (truncated) {
+            ++s.truncations;
+            f.generations_hint = max_depth + 1;
+        }
         s.trace.overflows += t.overflows;
         s.trace.cone_sphere_tests += t.cone_sphere_tests;
-        if (rays_overflowed || t.overflows > 0) continue;
+        if (rays_overflowed || t.overflows > 0 || truncated) continue;
 
         const std::uint32_t overflows = s.trace.overflows;
         const std::uint64_t tests = s.trace.cone_sphere_tests;
@@ -159,6 +169,9 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
             s.secondary_rays += words[fc_counts + static_cast<std::uint32_t>(g)];
             s.generations = g + 1;
         }
+        // The next frame records as many generations as this one had rays (and counts the one after, to
+        // know that none was left out).
+        f.generations_hint = s.generations;
         break;
     }
     s.trace.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

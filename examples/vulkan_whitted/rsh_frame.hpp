@@ -7,9 +7,12 @@
 // the device (the engine's work-efficient prefix sum over their flags, then a scatter) into the next
 // generation (section 3.5.2), which is traced through the hierarchy, until the scene's depth limit. The
 // generations' counts stay on the device and size their passes through indirect dispatch: the whole frame
-// is one submission, read back once at its end (the image and the counters). A frame whose rays outgrow
-// the buffers (a generation above the ray capacity) or whose pair streams overflow is recorded again with
-// more room or smaller batches (the image is only ever the complete one).
+// is one submission, read back once at its end (the image and the counters). It records as many
+// generations as the last frame had rays in (all, up to the depth limit, the first time), with the
+// compaction after the last to count what would follow. A frame whose rays outlive the generations
+// recorded, outgrow the buffers (a generation above the ray capacity) or whose pair streams overflow is
+// recorded again with all generations, more room or smaller batches (the image is only ever the complete
+// one).
 #pragma once
 
 #include <cstdint>
@@ -31,6 +34,7 @@ struct RshFrameStats {
                                     // shading, gathering, ray compaction, submission and read-back
     std::uint32_t submissions = 0;  // of the frame: 1, or more when it had to be recorded again
     std::uint32_t ray_overflows = 0; // recordings done again because a generation exceeded the ray capacity
+    std::uint32_t truncations = 0;  // recordings done again because rays outlived the generations recorded
     std::uint32_t ray_capacity = 0; // rays a generation may hold (the Morton slots, more after an overflow)
 };
 

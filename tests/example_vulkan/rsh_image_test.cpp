@@ -18,7 +18,8 @@
 // counted by the Vulkan harness, however many generations it has; the host waits for the device only at
 // the end of a submission.
 //
-// A generation with more rays than the Morton slots (a glass sphere filling the view) makes the frame
+// A frame after one with fewer generations records too few, sees it at its end and renders again with
+// all. A generation with more rays than the Morton slots (a glass sphere filling the view) makes the frame
 // record itself again with more room, and the image is still the BVH path's.
 //
 // A pair capacity small enough to split the primitives into batches gives the same image bit for bit:
@@ -167,6 +168,30 @@ int main() {
                   (rcx::bit_identical(b, c) ? "the same" : "different"));
         check(second.rsh.ray_overflows == 0 && second.rsh.submissions == 1 && submissions == 1,
               "the next frame keeps the room: " + std::to_string(submissions) + " submission(s)");
+    }
+
+    // A frame records as many generations as the last had rays in: glass seen after a view with fewer
+    // generations (the camera turned away) has rays beyond them, which the frame sees at its end and
+    // renders again with all generations: the BVH path's image.
+    {
+        const rcx::Scene scene = rcx::make_scene("glass");
+        rcx::Camera away = scene.camera;
+        away.target = away.eye + (away.eye - away.target);
+        rcx::gpu::TracerSettings settings;
+        settings.mode = rcx::CacheMode::off;
+        rcx::gpu::Tracer bvh(*context, scene, spirv, settings);
+        settings.secondary = rcx::gpu::Secondary::rsh;
+        rcx::gpu::Tracer rsh(*context, scene, spirv, settings);
+        rcx::gpu::FrameStats few, more;
+        rsh.render(away, size, size, &few);
+        const rcx::Image b = rsh.render(scene.camera, size, size, &more);
+        const rcx::ImageDifference d = rcx::compare(bvh.render(scene.camera, size, size), b);
+        check(few.rsh.generations < more.rsh.generations && more.rsh.truncations == 1 && more.rsh.submissions == 2 &&
+                  d.differing_pixels == 0,
+              "glass after a view of " + std::to_string(few.rsh.generations) + " generation(s): " +
+                  std::to_string(more.rsh.generations) + " generations, recorded " + std::to_string(more.rsh.submissions) +
+                  " times (" + std::to_string(more.rsh.truncations) + " with too few), " +
+                  std::to_string(d.differing_pixels) + " pixels differ from the BVH path");
     }
 
     context.reset();
