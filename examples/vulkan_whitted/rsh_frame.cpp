@@ -78,7 +78,7 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
     const vk::Buffer& gbuffer = scene.gbuffer ? *scene.gbuffer : *f.dummy;
     const std::uint32_t hybrid = scene.gbuffer ? 1u : 0u;
 
-    for (;;) { // once, or again with more room for rays or smaller batches
+    for (;;) { // once, or again with more room for rays, smaller batches or all generations
         // Generation 0 holds the Morton slots; later ones as many rays as the capacity (grown by 4 after
         // a frame whose generation exceeded it, so that the hierarchy over it stays a full 4-ary tree).
         const std::uint32_t capacity = std::max(f.ray_capacity, slots);
