@@ -96,7 +96,7 @@ def _plot_phases(scenes, path):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     labels = [f"{s['triangles'] / 1000:.1f}k" for s in scenes]
     bottom = [0.0] * len(scenes)
-    for key, label in PHASES + [("other_ms", "shading, host compaction of rays, submissions"),
+    for key, label in PHASES + [("other_ms", "shading, ray compaction, submission"),
                                 ("rsh_update_ms", "primitive upload")]:
         values = [s[key] for s in scenes]
         ax.bar(labels, values, bottom=bottom, label=label)
@@ -167,7 +167,8 @@ def section(results, rel):
           "in every scene. Per scene the two paths' first pictures, then their moved frames interleaved in one "
           "process. *ms* = mean wall time of a moved frame (set_scene + render); phases are GPU timestamps summed "
           "over the frame's traces (rays and shadow rays of each generation); *other* = the rest of the frame "
-          "(shading passes, the host's compaction of the next generation, submissions and waits). *Kept per ray* "
+          "(shading passes, the compaction of the next generation's rays on the GPU, the frame's one submission "
+          "and its read-back). *Kept per ray* "
           "= (ray, primitive) pairs intersected at the leaves / rays traced (shadow and secondary rays; the "
           "paper's Figure 13a: 2.5 to 4.5); *per slot* counts the hierarchy's empty leaves too. First picture = "
           "tracer set-up (shaders, buffers, BVH build for bvh) + first frame. Per frame: `rsh_frames.csv`.", ""]
@@ -197,7 +198,7 @@ def section(results, rel):
            f"time closely follows the tests).",
            "- What lavapipe means here: it runs the compute shaders on the same 2 CPU cores as Embree's BVH "
            "build, so this compares two CPU programs, one of them written for a GPU. The hierarchy's dozens of "
-           "small dependent passes per trace (9 per level, several traces a frame) pay a submission and wait each, "
+           "small dependent passes per trace (9 per level, several traces a frame) wait for each other at barriers, "
            "and its prefix sums and pair streams do a GPU's kind of work without a GPU's bandwidth; Embree's "
            "rebuild, by contrast, is fast CPU code. The paper's crossover was measured on a 2007 GPU against "
            "GPU BVH builds; no GPU was available for this run, so where the two cross on one is not measured here.",

@@ -16,7 +16,7 @@ std::vector<GpuPrimitive> gather_primitives(const Scene& scene) {
     for (const Sphere& s : scene.spheres) {
         GpuPrimitive p{};
         set4(p.p[0], s.centre, s.radius);
-        p.info[0] = 0, p.info[1] = object, p.info[2] = 0;
+        p.info[0] = 0, p.info[1] = object, p.info[2] = 0, p.info[3] = static_cast<std::uint32_t>(all.size());
         all.push_back(p);
         ++object;
     }
@@ -30,6 +30,7 @@ std::vector<GpuPrimitive> gather_primitives(const Scene& scene) {
                 set4(p.n[c], m.normals[t[c]], 0.0f);
             }
             p.info[0] = 1, p.info[1] = object, p.info[2] = static_cast<std::uint32_t>(k);
+            p.info[3] = static_cast<std::uint32_t>(all.size());
             all.push_back(p);
         }
         ++object;

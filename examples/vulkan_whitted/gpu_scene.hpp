@@ -17,7 +17,8 @@ namespace rcx::gpu {
 struct GpuPrimitive {
     float p[3][4];   // sphere: p[0] = centre, radius; triangle: vertices
     float n[3][4];   // triangle: vertex normals
-    std::uint32_t info[4]; // kind (0 sphere, 1 triangle), object (Embree geometry id order), triangle, 0
+    std::uint32_t info[4]; // kind (0 sphere, 1 triangle), object (Embree geometry id order), triangle,
+                           // index in scene order (gather_primitives' order, kept when a BVH reorders them)
 };
 static_assert(sizeof(GpuPrimitive) == 112, "GPU layouts");
 

@@ -48,8 +48,9 @@ struct Tracer::Impl {
     raycache::GpuFrameLayout frame_layout;          // RayCache's frame buffer: counters, store list
     std::vector<std::uint32_t> frame_start;         // its words before every frame
     std::unique_ptr<Raster> raster;
-    std::unique_ptr<RshFrame> rsh;          // --secondary rsh: every ray through the ray-space hierarchy
+    std::unique_ptr<RshFrame> rsh;          // --secondary rsh: secondary rays through the ray-space hierarchy
     std::unique_ptr<vk::Buffer> rsh_prims;  // ... its primitives (raycache_rsh_primitive, scene order)
+    std::unique_ptr<vk::Buffer> bvh_prims;  // ... without --hybrid: the BVH's primitives (leaf order) for the primary rays
     double update_ms = 0.0;                 // the last set_scene
     std::uint32_t texel_count = 0;
     bool cdct = false;
@@ -72,10 +73,18 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     const bool rsh = settings.secondary == Secondary::rsh;
     if (rsh && settings.mode != CacheMode::off)
         throw std::invalid_argument("Vulkan tracer: --secondary rsh traces every ray, without caching cubes: use --cache off");
+    std::vector<GpuPrimitive> scene_order; // rsh: the primitives the hierarchy and the shading index
     if (rsh) {
-        t.bvh.primitives = gather_primitives(scene); // no scene structure: the primitives in scene order
-        if (t.bvh.primitives.empty()) throw std::runtime_error("Vulkan tracer: the scene has no primitives");
-        t.bvh.nodes.assign(1, BvhNode{});
+        // No scene structure for the secondary rays: the primitives in scene order. Without --hybrid the
+        // primary rays are traced as the BVH path traces them, through a BVH (rebuilt by set_scene).
+        scene_order = gather_primitives(scene);
+        if (scene_order.empty()) throw std::runtime_error("Vulkan tracer: the scene has no primitives");
+        if (settings.hybrid) {
+            t.bvh.primitives = scene_order;
+            t.bvh.nodes.assign(1, BvhNode{});
+        } else {
+            t.bvh = build_bvh(scene);
+        }
         RshSettings rs;
         rs.pair_capacity = settings.pair_capacity;
         t.rsh = std::make_unique<RshFrame>(context, spirv_dir, rs);
@@ -124,7 +133,8 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     // Room for any binary BVH over these primitives (2n - 1 nodes), so set_scene uploads in place.
     t.nodes = std::make_unique<vk::Buffer>(context, std::max(t.bvh.nodes.size(), 2 * t.bvh.primitives.size()) * sizeof(BvhNode));
     t.nodes->upload(t.bvh.nodes.data(), t.bvh.nodes.size() * sizeof(BvhNode));
-    t.primitives = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
+    t.primitives = std::make_unique<vk::Buffer>(vk::buffer_of(context, rsh ? scene_order : t.bvh.primitives, 16));
+    if (rsh && !settings.hybrid) t.bvh_prims = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
     t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
     t.cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, cubes, 16));
     t.params = std::make_unique<vk::Buffer>(context, sizeof(GpuParams));
@@ -162,6 +172,14 @@ void Tracer::set_scene(const Scene& moved) {
             throw std::invalid_argument("Vulkan tracer: set_scene needs the same primitives, moved");
         t.primitives->upload(prims.data(), prims.size() * sizeof(GpuPrimitive));
         t.rsh_prims->upload(rp.data(), rp.size() * sizeof(rsh::Primitive));
+        if (t.bvh_prims) { // the primary rays' BVH, rebuilt as the BVH path rebuilds it
+            FlatBvh bvh = build_bvh(moved);
+            if (bvh.nodes.size() * sizeof(BvhNode) > t.nodes->size())
+                throw std::invalid_argument("Vulkan tracer: set_scene needs the same primitives, moved");
+            t.bvh = std::move(bvh);
+            t.nodes->upload(t.bvh.nodes.data(), t.bvh.nodes.size() * sizeof(BvhNode));
+            t.bvh_prims->upload(t.bvh.primitives.data(), t.bvh.primitives.size() * sizeof(GpuPrimitive));
+        }
     } else {
         FlatBvh bvh = build_bvh(moved);
         if (bvh.primitives.size() != t.bvh.primitives.size() || bvh.nodes.size() * sizeof(BvhNode) > t.nodes->size())
@@ -174,7 +192,7 @@ void Tracer::set_scene(const Scene& moved) {
     t.update_ms = ms_since(start);
 }
 
-std::size_t Tracer::bvh_nodes() const noexcept { return impl_->rsh ? 0 : impl_->bvh.nodes.size(); }
+std::size_t Tracer::bvh_nodes() const noexcept { return impl_->rsh && !impl_->bvh_prims ? 0 : impl_->bvh.nodes.size(); }
 int Tracer::face_size() const noexcept { return impl_->settings.face_size; }
 std::size_t Tracer::cube_bytes() const noexcept {
     return impl_->texels ? static_cast<std::size_t>(2 * impl_->texels->size()) : 0;
@@ -228,6 +246,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         b.prims = t.primitives.get(), b.objects = t.objects.get(), b.params = t.params.get(), b.rsh_prims = t.rsh_prims.get();
         b.prim_count = static_cast<std::uint32_t>(t.bvh.primitives.size());
         b.gbuffer = t.raster ? &gbuffer : nullptr;
+        b.bvh_nodes = t.bvh_prims ? t.nodes.get() : nullptr;
+        b.bvh_prims = t.bvh_prims.get();
         t.rsh->render(width, height, t.scene.max_depth, b, *t.output, stats ? &stats->rsh : nullptr);
     } else t.context.submit([&](vk::Commands& commands) {
         if (t.raster) {

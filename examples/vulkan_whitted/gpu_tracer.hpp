@@ -24,7 +24,8 @@ namespace rcx::gpu {
 
 // How rays after the primary hit are traced: the BVH (built on the CPU, every frame for a dynamic scene)
 // or the ray-space hierarchy (rsh_frame.hpp: built on the GPU over the rays each frame, no scene
-// structure; primary rays too, unless hybrid).
+// structure). Primary hits come from the raster pass with --hybrid, else from the BVH traversal in both
+// (so rsh without --hybrid still rebuilds a BVH every frame, for the primary rays alone).
 enum class Secondary { bvh, rsh };
 const char* to_string(Secondary secondary);
 
@@ -50,7 +51,8 @@ struct FrameStats {
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
-    double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh) or upload (rsh)
+    double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
+                                         // --hybrid, for the primary rays) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces
 };
 
@@ -69,7 +71,8 @@ public:
 
     // Moves the scene's objects (a dynamic scene's at_frame): the same objects, primitives and materials
     // in the same order, other positions. bvh: rebuilds the BVH and uploads it; rsh: uploads the
-    // primitives only. The time goes into the next frame's FrameStats::update_ms. Throws
+    // primitives (hybrid) or the primitives and the primary rays' rebuilt BVH (not hybrid). The time goes
+    // into the next frame's FrameStats::update_ms. Throws
     // std::invalid_argument when the primitive count differs.
     void set_scene(const Scene& moved);
 

@@ -202,7 +202,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
             if (v.secondary == rcx::gpu::Secondary::rsh) {
                 const rcx::gpu::RshStats& r = stats.rsh.trace;
                 std::printf("   rsh: %d generations, %u batches (%u overflowed), %.3g cone-sphere tests, %llu leaf pairs; GPU ms "
-                            "build %.1f, tests %.1f, compaction %.1f, final %.1f; shading %.1f",
+                            "build %.1f, tests %.1f, compaction %.1f, final %.1f; other (primary rays, shading, ray compaction) %.1f",
                             stats.rsh.generations, r.batches, r.overflows, static_cast<double>(r.cone_sphere_tests),
                             static_cast<unsigned long long>(r.leaf_pairs), r.build_ms, r.traverse_ms, r.compaction_ms,
                             r.final_ms, stats.rsh.shade_ms);
@@ -246,9 +246,10 @@ int main(int argc, char** argv) {
                           "compute (thesis Table 5.1); with --compare the uncached reference is\n"
                           "rendered the same way");
     command_line.add_option("--secondary", "S",
-                            "trace rays after the raster pass (or all rays, without --hybrid)\n"
+                            "trace the rays after the primary hits (reflected, refracted, shadow)\n"
                             "through the BVH (bvh) or the ray-space hierarchy of Roger et al. 2007\n"
-                            "(rsh; needs --cache off) " + rcx::shown_default(rcx::gpu::to_string(vulkan.secondary)),
+                            "(rsh; needs --cache off); primary hits come from the BVH, or from the\n"
+                            "raster pass with --hybrid " + rcx::shown_default(rcx::gpu::to_string(vulkan.secondary)),
                             [&vulkan](const std::string& text) {
                                 if (text != "bvh" && text != "rsh")
                                     throw rcx::UsageError("--secondary: '" + text + "' is not bvh or rsh");

@@ -3,7 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <raycache/shared/rsh_layout.h>
@@ -12,7 +13,7 @@ namespace rcx::gpu {
 
 namespace {
 
-// shaders/rsh_whitted.comp's RayState and Candidate.
+// shaders/rsh_whitted.comp's RayState, Candidate, push constants and frame control words.
 struct RayState {
     float weight[4];
     std::uint32_t pixel;
@@ -26,24 +27,31 @@ struct Candidate {
 static_assert(sizeof(RayState) == 32 && sizeof(Candidate) == 64, "rsh_whitted.comp layouts");
 
 struct Push {
-    std::uint32_t mode, count, side, hybrid;
+    std::uint32_t mode, generation, side, hybrid, capacity, total_word;
 };
+enum Mode : std::uint32_t { mode_generate, mode_shade, mode_gather, mode_flag, mode_plan, mode_scatter };
+constexpr std::uint32_t fc_counts = 0, fc_overflow = 32, fc_shadow = 33, fc_args = 64, fc_words = 64 + 6 * 32;
+constexpr int max_generations = 31;
 
 void grow(vk::Context& context, std::unique_ptr<vk::Buffer>& buffer, std::uint64_t bytes) {
     if (!buffer || buffer->size() < bytes) buffer = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(bytes, 64));
 }
+
+std::uint32_t groups(std::uint64_t n) { return static_cast<std::uint32_t>((n + 63) / 64); }
 
 } // namespace
 
 struct RshFrame::Impl {
     Impl(vk::Context& c, const std::string& spirv_dir, const RshSettings& s)
         : context(c), engine(c, spirv_dir, s),
-          whitted(c, spirv_dir + "/rsh_whitted.spv", std::vector<VkDescriptorType>(13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+          whitted(c, spirv_dir + "/rsh_whitted.spv", std::vector<VkDescriptorType>(16, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
                   sizeof(Push)) {}
     vk::Context& context;
     RshEngine engine;
     vk::ComputePipeline whitted;
-    std::unique_ptr<vk::Buffer> rays, hits, states, shadow_rays, shadow_hits, local, candidates, dummy;
+    std::unique_ptr<vk::Buffer> rays, hits, states, shadow_rays, shadow_hits, local, candidates, flags, sums, control, dummy;
+    std::uint32_t ray_capacity = 0; // kept between frames: raised when a generation outgrew it
+    int generations_hint = 0;       // generations the last frame had rays in (0: record all)
 };
 
 RshFrame::RshFrame(vk::Context& context, const std::string& spirv_dir, const RshSettings& settings)
@@ -54,72 +62,121 @@ const RshEngine& RshFrame::engine() const noexcept { return impl_->engine; }
 void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffers& scene, const vk::Buffer& image,
                       RshFrameStats* stats) {
     Impl& f = *impl_;
+    if (max_depth < 0 || max_depth + 1 > max_generations)
+        throw std::invalid_argument("ray-space hierarchy frame: the depth limit must be 0.." + std::to_string(max_generations - 1));
+    if (!scene.gbuffer && (!scene.bvh_nodes || !scene.bvh_prims))
+        throw std::invalid_argument("ray-space hierarchy frame: without a G-buffer the primary rays need the BVH");
     RshFrameStats local_stats;
     RshFrameStats& s = stats ? *stats : local_stats;
     s = RshFrameStats{};
+    const auto start = std::chrono::steady_clock::now();
     std::uint32_t side = 1;
     while (side < static_cast<std::uint32_t>(std::max(width, height))) side *= 2;
-    std::uint32_t count = side * side;
+    const std::uint32_t slots = side * side;
     grow(f.context, f.dummy, 64);
+    grow(f.context, f.control, std::uint64_t{fc_words} * 4);
     const vk::Buffer& gbuffer = scene.gbuffer ? *scene.gbuffer : *f.dummy;
+    const std::uint32_t hybrid = scene.gbuffer ? 1u : 0u;
 
-    auto size_for = [&](std::uint32_t n) {
-        grow(f.context, f.rays, std::uint64_t{n} * 32);
-        grow(f.context, f.hits, std::uint64_t{n} * 8);
-        grow(f.context, f.states, std::uint64_t{n} * 32);
-        grow(f.context, f.shadow_rays, std::uint64_t{n} * 32);
-        grow(f.context, f.shadow_hits, std::uint64_t{n} * 8);
-        grow(f.context, f.local, std::uint64_t{n} * 32);
-        grow(f.context, f.candidates, std::uint64_t{n} * 3 * 64);
-    };
-    auto pass = [&](std::uint32_t mode, std::uint32_t n) {
-        const Push p{mode, n, side, scene.gbuffer ? 1u : 0u};
+    for (;;) { // once, or again with more room for rays, smaller batches or all generations
+        // Generation 0 holds the Morton slots; later ones as many rays as the capacity (grown by 4 after
+        // a frame whose generation exceeded it, so that the hierarchy over it stays a full 4-ary tree).
+        const std::uint32_t capacity = std::max(f.ray_capacity, slots);
+        // Generations recorded: as many as the last frame had (all of them the first time); a frame whose
+        // rays outlive them is recorded again with all.
+        const int recorded = f.generations_hint > 0 ? std::min(f.generations_hint, max_depth + 1) : max_depth + 1;
+        const std::uint64_t n = capacity;
+        grow(f.context, f.rays, n * 32);
+        grow(f.context, f.hits, n * 8);
+        grow(f.context, f.states, n * 32);
+        grow(f.context, f.shadow_rays, n * 32);
+        grow(f.context, f.shadow_hits, n * 8);
+        grow(f.context, f.local, n * 32);
+        grow(f.context, f.candidates, n * 3 * 64);
+        grow(f.context, f.flags, n * 3 * 4);
+        grow(f.context, f.sums, RshEngine::prefix_sum_bytes(3 * capacity));
+        const std::uint32_t total_word = RshEngine::prefix_sum_total_word(3 * capacity);
+
+        // Before the submission (a write, not a read-back): generation 0's count and dispatch sizes.
+        std::vector<std::uint32_t> control(fc_words, 0u);
+        control[fc_counts] = slots;
+        control[fc_args + 0] = groups(slots), control[fc_args + 1] = 1, control[fc_args + 2] = 1;
+        control[fc_args + 3] = groups(std::uint64_t{3} * slots), control[fc_args + 4] = 1, control[fc_args + 5] = 1;
+        f.control->upload(control.data(), control.size() * 4);
+
         f.context.submit([&](vk::Commands& c) {
-            c.dispatch(f.whitted, {*f.rays, *f.hits, *f.states, *f.shadow_rays, *f.shadow_hits, *scene.prims, *scene.prims,
-                                   *scene.objects, *scene.params, *f.local, *f.candidates, image, gbuffer},
-                       &p, sizeof p, vk::group_count(n, 64));
+            f.engine.begin(c);
+            auto pass = [&](std::uint32_t mode, std::uint32_t generation, bool indirect, std::uint32_t slot) {
+                const Push p{mode, generation, side, hybrid, capacity, total_word};
+                // The primary rays read the BVH (bindings 5, 6: nodes, primitives in leaf order); the
+                // shading the primitives in scene order.
+                const bool bvh = mode == mode_generate && !hybrid;
+                std::initializer_list<vk::Resource> resources = {
+                    *f.rays, *f.hits, *f.states, *f.shadow_rays, *f.shadow_hits,
+                    bvh ? *scene.bvh_nodes : *scene.prims, bvh ? *scene.bvh_prims : *scene.prims,
+                    *scene.objects, *scene.params, *f.local, *f.candidates, image, gbuffer, *f.control, *f.flags, *f.sums};
+                if (indirect) // the generation's sizes, as the plan pass (or, for generation 0, the host) wrote them
+                    c.dispatch_indirect(f.whitted, resources, &p, sizeof p, *f.control,
+                                        4 * (std::uint64_t{fc_args} + 6 * generation + slot));
+                else
+                    c.dispatch(f.whitted, resources, &p, sizeof p, mode == mode_plan ? 1 : groups(slots));
+                c.barrier();
+            };
+            pass(mode_generate, 0, false, 0);
+            for (int g = 0; g < recorded; ++g) {
+                const std::uint32_t gen = static_cast<std::uint32_t>(g);
+                if (g > 0)
+                    f.engine.record_trace(c, *f.rays, capacity, *f.control, fc_counts + gen, *scene.rsh_prims, scene.prim_count,
+                                          *f.hits);
+                pass(mode_shade, gen, true, 0);
+                f.engine.record_trace(c, *f.shadow_rays, capacity, *f.control, fc_counts + gen, *scene.rsh_prims,
+                                      scene.prim_count, *f.shadow_hits);
+                pass(mode_gather, gen, true, 0);
+                if (g == max_depth) break;
+                // The next generation: the candidates that hold a ray, in order, compacted on the device.
+                pass(mode_flag, gen, true, 3);
+                f.engine.record_prefix_sum(c, *f.flags, *f.control, fc_counts + gen, 3, 3 * capacity, *f.sums);
+                pass(mode_plan, gen, false, 0);
+                if (g + 1 < recorded) pass(mode_scatter, gen, true, 3); // the last one only counts what would follow
+            }
         });
-    };
-    auto add = [&](const RshStats& t) {
-        RshStats& a = s.trace;
-        a.rays += t.rays, a.levels = std::max(a.levels, t.levels), a.batches += t.batches, a.overflows += t.overflows;
-        a.cone_sphere_tests += t.cone_sphere_tests, a.leaf_pairs += t.leaf_pairs;
-        a.build_ms += t.build_ms, a.traverse_ms += t.traverse_ms, a.compaction_ms += t.compaction_ms;
-        a.final_ms += t.final_ms, a.wall_ms += t.wall_ms, a.timed = a.timed || t.timed;
-    };
+        ++s.submissions;
+        const RshStats t = f.engine.end(); // lowers the batch size when a batch overflowed
+        const std::uint32_t* words = f.control->as<std::uint32_t>();
+        const bool rays_overflowed = words[fc_overflow] > 0;
+        if (rays_overflowed) {
+            ++s.ray_overflows;
+            while (f.ray_capacity < words[fc_overflow]) f.ray_capacity = std::max(capacity, f.ray_capacity) * 4;
+        }
+        // Rays past the generations recorded: record them all.
+        const bool truncated = recorded <= max_depth && words[fc_counts + static_cast<std::uint32_t>(recorded)] > 0;
+        if (truncated) {
+            ++s.truncations;
+            f.generations_hint = max_depth + 1;
+        }
+        s.trace.overflows += t.overflows;
+        s.trace.cone_sphere_tests += t.cone_sphere_tests;
+        if (rays_overflowed || t.overflows > 0 || truncated) continue;
 
-    size_for(count);
-    auto start = std::chrono::steady_clock::now();
-    pass(0, count);
-    std::vector<Candidate> next;
-    for (int generation = 0; count > 0; ++generation) {
-        s.shade_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        if (generation > 0 || !scene.gbuffer) add(f.engine.trace(*f.rays, count, *scene.rsh_prims, scene.prim_count, *f.hits));
-        start = std::chrono::steady_clock::now();
-        pass(1, count);
-        s.shade_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        const RshStats shadow = f.engine.trace(*f.shadow_rays, count, *scene.rsh_prims, scene.prim_count, *f.shadow_hits);
-        add(shadow);
-        start = std::chrono::steady_clock::now();
-        const auto* sr = f.shadow_rays->as<raycache::shared::raycache_rsh_ray>();
-        for (std::uint32_t i = 0; i < count; ++i) s.shadow_rays += sr[i].tmax > 0.0f ? 1 : 0;
-        pass(2, count);
-        s.generations = generation + 1;
-        if (generation >= max_depth) break;
-        // The next generation: the candidates that hold a ray, in order.
-        const auto* cand = f.candidates->as<Candidate>();
-        next.clear();
-        for (std::uint64_t k = 0; k < std::uint64_t{count} * 3; ++k)
-            if (cand[k].ray.tmax > 0.0f) next.push_back(cand[k]);
-        count = static_cast<std::uint32_t>(next.size());
-        s.secondary_rays += count;
-        if (count == 0) break;
-        size_for(count);
-        auto* rays = f.rays->as<raycache::shared::raycache_rsh_ray>();
-        auto* states = f.states->as<RayState>();
-        for (std::uint32_t i = 0; i < count; ++i) rays[i] = next[i].ray, states[i] = next[i].state;
+        const std::uint32_t overflows = s.trace.overflows;
+        const std::uint64_t tests = s.trace.cone_sphere_tests;
+        s.trace = t;
+        s.trace.overflows = overflows, s.trace.cone_sphere_tests = tests;
+        s.ray_capacity = capacity;
+        s.shadow_rays = words[fc_shadow];
+        s.generations = 1;
+        for (int g = 1; g <= max_depth && words[fc_counts + static_cast<std::uint32_t>(g)] > 0; ++g) {
+            s.secondary_rays += words[fc_counts + static_cast<std::uint32_t>(g)];
+            s.generations = g + 1;
+        }
+        // The next frame records as many generations as this one had rays (and counts the one after, to
+        // know that none was left out).
+        f.generations_hint = s.generations;
+        break;
     }
-    s.shade_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    s.trace.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double phases = s.trace.timed ? s.trace.build_ms + s.trace.traverse_ms + s.trace.compaction_ms + s.trace.final_ms : 0.0;
+    s.shade_ms = std::max(0.0, s.trace.wall_ms - phases);
 }
 
 } // namespace rcx::gpu

@@ -2,8 +2,9 @@
 // (rcx/rsh_reference.hpp, in C++): for every ray the same closest primitive, the distance within 1e-5
 // relative (the GPU runs the BVH tracer's GLSL tests, brute force their C++ transcription), on random
 // triangles and spheres and on first-bounce rays of behind-8 and dynamic-8; a pair capacity too small
-// for one batch gives bit-identical hits in several batches (and says so); and the validation layer
-// reports nothing. Exit 77 (CTest: skipped) when there is no Vulkan device with 64-bit atomics.
+// for one batch gives bit-identical hits in several batches (and says so); the engine's prefix sum,
+// recorded with its count on the device, gives a running sum's values; and the validation layer reports
+// nothing. Exit 77 (CTest: skipped) when there is no Vulkan device with 64-bit atomics.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -151,6 +152,38 @@ int main() {
             const std::vector<Ray> bounce = rcx::rsh::first_bounce_rays(scene, scene.camera_at(7), 64);
             const std::vector<Primitive> sp = rcx::rsh::primitives_of(scene);
             compare(std::string(name) + " first bounce", run(vk, engine, bounce, sp), rcx::rsh::brute_force(bounce, sp));
+        }
+
+        // The engine's prefix sum over a caller's flags, recorded with its count on the device (as the
+        // frame compacts a generation's candidates): exclusive sums and total against a running sum on
+        // the host, over three scan levels (more than 1024 * 1024 elements) and over a short stream.
+        for (const std::uint32_t units : {400000u, 5u}) {
+            const std::uint32_t scale = 3, n = scale * units, max_elements = n + 1000;
+            std::vector<std::uint32_t> flags(max_elements, 1u); // past n: must not be counted
+            std::uint64_t state = 11;
+            for (std::uint32_t i = 0; i < n; ++i) flags[i] = next(state) % 3 == 0 ? 1u : 0u;
+            rcx::vk::Buffer flag_buffer = rcx::vk::buffer_of(vk, flags, 4);
+            rcx::vk::Buffer counts(vk, 16);
+            const std::uint32_t count_words[4] = {0u, 0u, units, 0u};
+            counts.upload(count_words, sizeof count_words);
+            rcx::vk::Buffer sums(vk, rcx::gpu::RshEngine::prefix_sum_bytes(max_elements));
+            sums.fill(0xDEADBEEFu);
+            vk.submit([&](rcx::vk::Commands& c) {
+                engine.begin(c);
+                engine.record_prefix_sum(c, flag_buffer, counts, 2, scale, max_elements, sums);
+            });
+            engine.end();
+            const std::uint32_t* out = sums.as<std::uint32_t>();
+            std::uint32_t running = 0, bad = 0;
+            for (std::uint32_t i = 0; i < n; ++i) {
+                if (out[i] != running && bad++ < 5) std::printf("  prefix sum %u: %u, expected %u\n", i, out[i], running);
+                running += flags[i];
+            }
+            const std::uint32_t total = out[rcx::gpu::RshEngine::prefix_sum_total_word(max_elements)];
+            const bool ok = bad == 0 && total == running;
+            std::printf("%s prefix sum of %u flags with the count on the device: %u differ, total %u (expected %u)\n",
+                        ok ? "ok  " : "FAIL", n, bad, total, running);
+            if (!ok) ++failures;
         }
 
         // No primitives, no rays: nothing hit, nothing written out of bounds.

@@ -391,6 +391,7 @@ void Context::submit(const std::function<void(Commands&)>& record) {
         submit_info.commandBufferCount = 1;
         submit_info.pCommandBuffers = &command_buffer;
         check(vkQueueSubmit(queue_, 1, &submit_info, fence), "vkQueueSubmit");
+        ++submissions_;
         check(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
     } catch (...) {
         vkQueueWaitIdle(queue_);

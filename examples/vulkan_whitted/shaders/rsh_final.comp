@@ -16,7 +16,7 @@ void main() {
     if (i >= control[CTL_COUNT]) return;
     raycache_rsh_pair p = pairs_in[i];
     uint ray = p.node - pc.child_first;
-    if (ray >= pc.count) return;
+    if (ray >= control[CTL_RAYS]) return;
     raycache_rsh_ray r = rays[ray];
     raycache_rsh_primitive q = primitives[p.primitive];
     float t = 0.0, u = 0.0, v = 0.0;

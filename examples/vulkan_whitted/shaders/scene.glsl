@@ -16,7 +16,8 @@ struct Node {        // 32 bytes; leaf: b > 0 primitives from a; inner: b == 0, 
 struct Prim {        // sphere: p0 = (centre, radius); triangle: p0..p2 vertices, n0..n2 vertex normals
     vec4 p0, p1, p2;
     vec4 n0, n1, n2;
-    uvec4 info;      // x: 0 sphere, 1 triangle; y: object (= Embree geometry id: spheres, then meshes)
+    uvec4 info;      // x: 0 sphere, 1 triangle; y: object (= Embree geometry id: spheres, then meshes); z: triangle
+                     // of its mesh; w: index in scene order (gpu_scene.hpp), the same in a BVH's leaf order
 };
 struct Object {
     vec4 m0;         // diffuse, specular

@@ -211,6 +211,9 @@ public:
 
     // Records commands with `record`, submits them to the compute queue and waits until they finished.
     void submit(const std::function<void(Commands&)>& record);
+    // Submissions so far (submit() and dispatch() calls that reached the queue). The host waits for the
+    // device only at the end of one, so a task done in one submission read nothing back in its course.
+    std::uint64_t submissions() const noexcept { return submissions_; }
     // submit() with one dispatch.
     void dispatch(const ComputePipeline& pipeline, std::initializer_list<Resource> resources, const void* push,
                   std::uint32_t push_bytes, std::uint32_t groups_x, std::uint32_t groups_y = 1,
@@ -238,6 +241,7 @@ private:
     VkCommandPool command_pool_ = VK_NULL_HANDLE;
     bool validation_ = false;
     bool int64_atomics_ = false;
+    std::uint64_t submissions_ = 0;
 };
 
 // A compute pipeline made from a SPIR-V file (entry point "main"), with one descriptor set (set 0)
