@@ -116,7 +116,7 @@ RAYCACHE_FN raycache_filter_taps raycache_filter_taps_of(vec3 s, int face_size) 
     if (corner >= 0) share = raycache_no_fma(w[corner] * RAYCACHE_FILTER_CORNER_SHARE);
 
     for (int k = 0; k < RAYCACHE_FILTER_MAX_TAPS; ++k) {
-        if (k == corner) continue;
+        if (k == corner) { continue; } /* braces: clang reads the empty RAYCACHE_PRECISE below as misleading indentation */
         RAYCACHE_PRECISE float weight = w[k] + share;
         if (!(weight > 0.0f)) continue;
         int i = i0 + (k & 1);
