@@ -316,17 +316,13 @@ public:
         for (std::size_t i = 0; i < tile_count(); ++i) {
             const Tile* tile = state_->tiles[i].load(std::memory_order_acquire);
             if (!tile) continue;
-            const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
-            const int face = static_cast<int>(i / (per_edge * per_edge));
-            const int tile_row = static_cast<int>((i / per_edge) % per_edge), tile_column = static_cast<int>(i % per_edge);
-            TileState t{i, face, tile_column * tile_edge, tile_row * tile_edge,
-                        std::min(face_size_, (tile_column + 1) * tile_edge), std::min(face_size_, (tile_row + 1) * tile_edge),
+            const TexelAddress first = first_texel_of_tile(i);
+            TileState t{i, first.face, first.column, first.row,
+                        std::min(face_size_, first.column + tile_edge), std::min(face_size_, first.row + tile_edge),
                         tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
                         tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
             // Recorded bits are set only on texels holding a value (and cleared when one is emptied).
-            int recorded = 0;
-            for (const auto& bits : tile->recorded_bits) recorded += popcount(bits.load(std::memory_order_relaxed));
-            t.unrecorded_texels = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) - recorded;
+            t.unrecorded_texels = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) - count_bits(tile->recorded_bits);
             // record_path() widens all three axes at once, so one axis tells whether the box is empty.
             if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
                 for (int k = 0; k < 3; ++k) {
@@ -360,18 +356,14 @@ public:
         assert_between_frames();
         Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
         if (!tile) return 0;
-        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
-        const int face = static_cast<int>(index / (per_edge * per_edge));
-        const int row0 = static_cast<int>((index / per_edge) % per_edge) * tile_edge;
-        const int column0 = static_cast<int>(index % per_edge) * tile_edge;
+        const TexelAddress first = first_texel_of_tile(index);
         std::size_t dropped = 0;
-        for (int row = row0; row < std::min(face_size_, row0 + tile_edge); ++row)
-            for (int column = column0; column < std::min(face_size_, column0 + tile_edge); ++column) {
-                const TexelAddress t{face, column, row};
+        for (int row = first.row; row < std::min(face_size_, first.row + tile_edge); ++row)
+            for (int column = first.column; column < std::min(face_size_, first.column + tile_edge); ++column) {
+                const TexelAddress t{first.face, column, row};
                 const int slot = slot_of(t);
                 if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) continue;
-                const bool recorded = (tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
-                if (!drop(t, recorded)) continue;
+                if (!drop(t, bit_set(tile->recorded_bits, slot))) continue;
                 invalidate(t);
                 ++dropped;
             }
@@ -737,18 +729,27 @@ private:
         state_->allocated_tiles.store(0, std::memory_order_relaxed);
     }
 
-    static int popcount(std::uint64_t bits) noexcept {
+    using TileBits = std::atomic<std::uint64_t>[bit_words]; // one bit per texel of a tile, by slot
+
+    static bool bit_set(const TileBits& bits, int slot) noexcept {
+        return (bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
+    }
+    // How many of a tile's bits are set.
+    static int count_bits(const TileBits& bits) noexcept {
         int n = 0;
-        for (; bits; bits &= bits - 1) ++n;
+        for (const auto& word : bits)
+            for (std::uint64_t w = word.load(std::memory_order_relaxed); w; w &= w - 1) ++n;
         return n;
     }
+    // The first texel (lowest column and row) of tile `index`.
+    TexelAddress first_texel_of_tile(std::size_t index) const noexcept {
+        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+        return TexelAddress{static_cast<int>(index / (per_edge * per_edge)), static_cast<int>(index % per_edge) * tile_edge,
+                            static_cast<int>((index / per_edge) % per_edge) * tile_edge};
+    }
 
-    static bool written(const Tile& tile, int slot) noexcept {
-        return (tile.written_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
-    }
-    static bool doubtful(const Tile& tile, int slot) noexcept {
-        return (tile.doubtful_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
-    }
+    static bool written(const Tile& tile, int slot) noexcept { return bit_set(tile.written_bits, slot); }
+    static bool doubtful(const Tile& tile, int slot) noexcept { return bit_set(tile.doubtful_bits, slot); }
 
     // f(address) for each texel of an allocated tile for which keep(tile, slot), in linear-index order.
     template <class Keep, class F>
@@ -778,8 +779,7 @@ private:
             if (any_written)
                 for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
             if (tile->stale.load(std::memory_order_relaxed)) {
-                std::size_t doubtful_count = 0;
-                for (const auto& bits : tile->doubtful_bits) doubtful_count += static_cast<std::size_t>(popcount(bits.load(std::memory_order_relaxed)));
+                const std::size_t doubtful_count = static_cast<std::size_t>(count_bits(tile->doubtful_bits));
                 state_->valid_texels.fetch_sub(tile->valid.load(std::memory_order_relaxed), std::memory_order_relaxed);
                 state_->doubtful_texels.fetch_sub(doubtful_count, std::memory_order_relaxed);
                 state_->tiles[i].store(nullptr, std::memory_order_relaxed);
@@ -830,21 +830,20 @@ private:
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         merge_path(*tile, path);
     }
-    static void merge_path(Tile& tile_ref, const PathRecord& path) noexcept {
-        Tile* tile = &tile_ref;
-        if ((tile->path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
-            tile->path_objects.fetch_or(path.objects, std::memory_order_relaxed);
+    static void merge_path(Tile& tile, const PathRecord& path) noexcept {
+        if ((tile.path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
+            tile.path_objects.fetch_or(path.objects, std::memory_order_relaxed);
         const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |
                                     (path.unbounded ? path_unbounded : 0u);
-        if ((tile->path_flags.load(std::memory_order_relaxed) & flags) != flags)
-            tile->path_flags.fetch_or(flags, std::memory_order_relaxed);
+        if ((tile.path_flags.load(std::memory_order_relaxed) & flags) != flags)
+            tile.path_flags.fetch_or(flags, std::memory_order_relaxed);
         if (!path.has_vertices()) return;
         for (int k = 0; k < 3; ++k) {
             const std::uint32_t lo_key = ordered(path.vertex_lo[k] + 0.0f), hi_key = ordered(path.vertex_hi[k] + 0.0f);
-            std::uint32_t lo = tile->vertex_min[k].load(std::memory_order_relaxed);
-            while (lo_key < lo && !tile->vertex_min[k].compare_exchange_weak(lo, lo_key, std::memory_order_relaxed)) {}
-            std::uint32_t hi = tile->vertex_max[k].load(std::memory_order_relaxed);
-            while (hi_key > hi && !tile->vertex_max[k].compare_exchange_weak(hi, hi_key, std::memory_order_relaxed)) {}
+            std::uint32_t lo = tile.vertex_min[k].load(std::memory_order_relaxed);
+            while (lo_key < lo && !tile.vertex_min[k].compare_exchange_weak(lo, lo_key, std::memory_order_relaxed)) {}
+            std::uint32_t hi = tile.vertex_max[k].load(std::memory_order_relaxed);
+            while (hi_key > hi && !tile.vertex_max[k].compare_exchange_weak(hi, hi_key, std::memory_order_relaxed)) {}
         }
     }
 

@@ -564,10 +564,7 @@ public:
 
     // Empties every cube (the objects keep their cubes).
     void clear() {
-        for (Entry& e : entries_) {
-            if (e.cct) e.cct->clear();
-            else e.cdct->clear(); // and its pyramid
-        }
+        for (Entry& e : entries_) empty_cube(e);
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
