@@ -31,6 +31,14 @@ typename Texel::Value cached_trace(CacheCube<Texel>& cube, const glm::vec3& dire
     return traced;
 }
 
+namespace detail {
+// The answer of a filtered CCT lookup whose own texel is visible: the bilinear mean of the visible texels
+// around `direction` (never empty, since the own texel is one of them).
+inline glm::vec3 filtered_answer(const CctCube& cube, const glm::vec3& direction) noexcept {
+    return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });
+}
+} // namespace detail
+
 // cached_trace() for a CCT cube with a filtered value: a hit exactly when cached_trace() would hit (the
 // direction's own texel is visible), answered by the bilinear mean of the visible texels around
 // `direction` (raycache/filtered_lookup.hpp) rather than by the own texel alone. Gating on the own texel
@@ -43,7 +51,7 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace
     const auto use = cube.in_frame();
     const bool hit = cube.peek(direction).has_value();
     cube.record_lookup(hit);
-    if (hit) return *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); });
+    if (hit) return detail::filtered_answer(cube, direction);
     glm::vec3 traced = std::forward<Trace>(trace)();
     cube.store(direction, traced);
     return traced;
@@ -77,7 +85,7 @@ glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm:
     }
     const std::optional<glm::vec3> cached = tolerance ? cube.lookup_at(*texel, origin, *tolerance) : cube.lookup_at(*texel);
     if (cached)
-        return filtered ? *filtered_value(direction, cube.face_size(), [&](const TexelAddress& t) { return cube.peek_at(t); })
+        return filtered ? detail::filtered_answer(cube, direction)
                         : *cached;
     const auto traced = run();
     const glm::vec3 colour = traced.color;
