@@ -102,6 +102,37 @@ TEST_CASE("direction coverage counts the 16 x 16 cells per face that rays took, 
     CHECK(coverage.fraction() == 1.0);
 }
 
+TEST_CASE("direction coverage marked by texel: a texel of a face of 16 or more marks the cell its centre falls in; smaller faces' texels mark every cell they span") {
+    for (int n : {1, 2, 3, 5, 8, 16, 17, 20, 48, 64, 100}) {
+        CAPTURE(n);
+        for (int face = 0; face < 6; face += 5)
+            for (int row = 0; row < n; row += (n > 20 ? 7 : 1))
+                for (int column = 0; column < n; column += (n > 20 ? 5 : 1)) {
+                    const TexelAddress t{face, column, row};
+                    DirectionCoverage by_texel, by_direction;
+                    by_texel.mark(t, n);
+                    if (n >= 16) { // one cell: the one the direction through the texel's centre marks
+                        by_direction.mark(texel_direction(t, n));
+                        CHECK(by_texel.fraction() == doctest::Approx(1.0 / 1536.0));
+                        CHECK(by_texel.marked_cells() == by_direction.marked_cells());
+                    } else { // the cells [column * 16 / n, ceil((column + 1) * 16 / n)) by hand, and rows alike
+                        const int c0 = column * 16 / n, c1 = ((column + 1) * 16 + n - 1) / n;
+                        const int r0 = row * 16 / n, r1 = ((row + 1) * 16 + n - 1) / n;
+                        CHECK(by_texel.fraction() == doctest::Approx((c1 - c0) * (r1 - r0) / 1536.0));
+                        for (int r = r0; r < r1; ++r)
+                            for (int c = c0; c < c1; ++c) by_direction.mark(texel_direction(TexelAddress{face, c, r}, 16));
+                        CHECK(by_texel.marked_cells() == by_direction.marked_cells());
+                    }
+                }
+        // Every texel of the cube covers the whole sphere, whatever the size.
+        DirectionCoverage all;
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column) all.mark(TexelAddress{face, column, row}, n);
+        CHECK(all.fraction() == 1.0);
+    }
+}
+
 TEST_CASE("resampling takes, for each coarse texel, the fine texel whose centre is nearest its centre") {
     // 48 -> 16: each coarse texel covers 3 x 3 fine texels; the middle one's centre is the coarse centre.
     CctCube fine(48), coarse(16);

@@ -20,6 +20,7 @@
 #include "raycache/requires_cpp17.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
@@ -73,10 +74,26 @@ public:
     void mark(const glm::vec3& direction) noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, cells_per_edge);
         if (a.face == RAYCACHE_NO_FACE) return;
-        const unsigned cell = shared::raycache_texel_linear_index(a, cells_per_edge);
-        const std::uint64_t bit = std::uint64_t{1} << (cell % 64);
-        std::atomic<std::uint64_t>& word = words_[cell / 64];
-        if (!(word.load(std::memory_order_relaxed) & bit)) word.fetch_or(bit, std::memory_order_relaxed);
+        mark_cell(a.face, a.column, a.row);
+    }
+    // mark() for a ray already found to fall in texel `t` of a cube of `face_size`: spares the second face
+    // choice. A texel of a face of 16 texels or more marks the cell its centre falls in; a larger texel
+    // every cell it overlaps.
+    void mark(const TexelAddress& t, int face_size) noexcept {
+        if (face_size >= cells_per_edge) {
+            mark_cell(t.face, (2 * t.column + 1) * (cells_per_edge / 2) / face_size, (2 * t.row + 1) * (cells_per_edge / 2) / face_size);
+            return;
+        }
+        const int c0 = t.column * cells_per_edge / face_size, c1 = ((t.column + 1) * cells_per_edge + face_size - 1) / face_size;
+        const int r0 = t.row * cells_per_edge / face_size, r1 = ((t.row + 1) * cells_per_edge + face_size - 1) / face_size;
+        for (int row = r0; row < r1; ++row)
+            for (int column = c0; column < c1; ++column) mark_cell(t.face, column, row);
+    }
+    // The marked cells as bits (cell (face, column, row) is bit (face * 16 + row) * 16 + column).
+    std::array<std::uint64_t, cell_count / 64> marked_cells() const noexcept {
+        std::array<std::uint64_t, cell_count / 64> bits{};
+        for (std::size_t i = 0; i < bits.size(); ++i) bits[i] = words_[i].load(std::memory_order_relaxed);
+        return bits;
     }
     // The share of the cells marked since the last reset(), 0..1.
     double fraction() const noexcept {
@@ -92,6 +109,12 @@ public:
     }
 
 private:
+    void mark_cell(int face, int column, int row) noexcept {
+        const unsigned cell = static_cast<unsigned>((face * cells_per_edge + row) * cells_per_edge + column);
+        const std::uint64_t bit = std::uint64_t{1} << (cell % 64);
+        std::atomic<std::uint64_t>& word = words_[cell / 64];
+        if (!(word.load(std::memory_order_relaxed) & bit)) word.fetch_or(bit, std::memory_order_relaxed);
+    }
     std::atomic<std::uint64_t> words_[cell_count / 64] = {};
 };
 

@@ -57,18 +57,11 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace
     return traced;
 }
 
-// The CCT's whole ray path for a ray leaving from `origin`, as SceneCache runs it: a lookup with the origin
-// test (tolerance; null: none, the direction alone keys the texel), else trace() and a store of its colour
-// with the origin and the hit distance. trace() returns anything with members `color` and `distance` (as
-// raycache::TracedRay; infinity when the ray escaped) and is callable either as `trace()` or as
-// `trace(PathRecord&)`: the second form reports what the path hit after leaving (raycache/path_record.hpp),
-// and the colour is stored with that record, so raycache/invalidation.hpp can drop exactly the texels a
-// moved object can have changed. filtered: a hit answers with the bilinear mean of the visible texels
-// around `direction` instead of its own texel. The texel is found once for the lookup and the store.
-// Thread-safe as CacheCube::lookup/store.
+// cct_cached_trace() below, for a ray whose texel the caller already found (cube.texel_of(direction)):
+// the Embree adapter uses the texel for its direction statistics too.
 template <class Trace>
-glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance* tolerance,
-                           bool filtered, Trace&& trace) {
+glm::vec3 cct_cached_trace_at(CctCube& cube, const std::optional<TexelAddress>& texel, const glm::vec3& direction,
+                              const glm::vec3& origin, const OriginTolerance* tolerance, bool filtered, Trace&& trace) {
     constexpr bool records = std::is_invocable_v<Trace&, PathRecord&>;
     static_assert(records || std::is_invocable_v<Trace&>,
                   "RayCache cct_cached_trace: trace must be callable as `TracedRay trace()` or `TracedRay trace(raycache::PathRecord&)`");
@@ -78,7 +71,6 @@ glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm:
         if constexpr (records) return trace(path);
         else return trace();
     };
-    const std::optional<TexelAddress> texel = cube.texel_of(direction);
     if (!texel) { // not a direction: a miss, nothing stored
         cube.record_lookup(false);
         return run().color;
@@ -93,6 +85,21 @@ glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm:
     else if (records) cube.store_at(*texel, colour, path);
     else cube.store_at(*texel, colour);
     return colour;
+}
+
+// The CCT's whole ray path for a ray leaving from `origin`, as SceneCache runs it: a lookup with the origin
+// test (tolerance; null: none, the direction alone keys the texel), else trace() and a store of its colour
+// with the origin and the hit distance. trace() returns anything with members `color` and `distance` (as
+// raycache::TracedRay; infinity when the ray escaped) and is callable either as `trace()` or as
+// `trace(PathRecord&)`: the second form reports what the path hit after leaving (raycache/path_record.hpp),
+// and the colour is stored with that record, so raycache/invalidation.hpp can drop exactly the texels a
+// moved object can have changed. filtered: a hit answers with the bilinear mean of the visible texels
+// around `direction` instead of its own texel. The texel is found once for the lookup and the store.
+// Thread-safe as CacheCube::lookup/store.
+template <class Trace>
+glm::vec3 cct_cached_trace(CctCube& cube, const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance* tolerance,
+                           bool filtered, Trace&& trace) {
+    return cct_cached_trace_at(cube, cube.texel_of(direction), direction, origin, tolerance, filtered, std::forward<Trace>(trace));
 }
 
 } // namespace raycache

@@ -426,12 +426,14 @@ public:
             else return trace().color;
         }
         Entry& e = entries_[static_cast<std::size_t>(index)];
-        if (e.coverage) e.coverage->mark(direction);
         if (technique_ == Technique::cct) {
             // The recording form lets exact invalidation keep what a move cannot have changed.
             const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
-            return cct_cached_trace(*e.cct, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
+            const std::optional<TexelAddress> texel = e.cct->texel_of(direction); // found once, for both
+            if (e.coverage && texel) e.coverage->mark(*texel, e.cct->face_size());
+            return cct_cached_trace_at(*e.cct, texel, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
         }
+        if (e.coverage) e.coverage->mark(direction);
         int read = 0;
         PathRecord unused; // the CDCT keeps no path records
         const glm::vec3 color = e.cdct->cached_trace(
