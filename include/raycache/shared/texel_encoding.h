@@ -59,14 +59,15 @@ RAYCACHE_FN uint raycache_pack_rgb9e5(vec3 color) {
     float brightest = max(r, max(g, b));
     int floor_log2 = int((floatBitsToUint(brightest) >> 23) & 0xFFu) - 127; /* -127 for 0 and subnormals */
     int shared_exponent = max(-16, floor_log2) + 16;                     /* biased, in [0, 31] */
-    float step = raycache_exp2i(shared_exponent - 24);                   /* one mantissa unit */
-    if (raycache_round_half_up(brightest / step) == 512u) {
+    /* 1 / (one mantissa unit), a power of two: x * units is exactly x / unit, without a division. */
+    float units = raycache_exp2i(24 - shared_exponent);
+    if (raycache_round_half_up(brightest * units) == 512u) {
         shared_exponent += 1;
-        step *= 2.0f;
+        units *= 0.5f;
     }
-    uint rm = raycache_round_half_up(r / step);
-    uint gm = raycache_round_half_up(g / step);
-    uint bm = raycache_round_half_up(b / step);
+    uint rm = raycache_round_half_up(r * units);
+    uint gm = raycache_round_half_up(g * units);
+    uint bm = raycache_round_half_up(b * units);
     return rm | (gm << 9) | (bm << 18) | (uint(shared_exponent) << 27);
 }
 
