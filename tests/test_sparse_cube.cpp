@@ -6,7 +6,9 @@
 #include <doctest/doctest.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "raycache/raycache.hpp"
 
@@ -132,4 +134,43 @@ TEST_CASE("try_reserve takes bytes only when they fit, and release gives them ba
     budget.reserve_always(150); // the fixed part of a cube: granted past the limit
     CHECK(budget.used() == 150u);
     CHECK_FALSE(budget.try_reserve(1));
+}
+
+// The texel walks skip tiles never stored into and read whole rows of a tile's written bits at once; what
+// they visit, and in which order, must stay what a walk over every texel of every face finds.
+TEST_CASE("for_each_written_texel and for_each_valid_texel visit, in linear-index order, exactly the texels a walk over every texel finds") {
+    for (int n : {5, 16, 37, 64}) {
+        CAPTURE(n);
+        CctCube cube(n);
+        std::uint32_t seed = 12345u;
+        auto next = [&seed] { return seed = seed * 1664525u + 1013904223u; };
+        // Texels stored in an earlier frame (valid, not written) and this frame (valid and written), scattered.
+        for (int i = 0; i < 3 * n; ++i) {
+            const TexelAddress t{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)};
+            cube.store_at(t, grey);
+        }
+        cube.begin_frame();
+        for (int i = 0; i < 2 * n; ++i) {
+            const TexelAddress t{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)};
+            cube.store_at(t, grey);
+        }
+        std::vector<std::uint64_t> expected_written, expected_valid, written, valid;
+        auto index = [n](const TexelAddress& t) {
+            return (static_cast<std::uint64_t>(t.face) * n + t.row) * n + t.column;
+        };
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column) {
+                    const TexelAddress t{face, column, row};
+                    if (!cube.load(t)) continue;
+                    expected_valid.push_back(index(t));
+                    if (!cube.peek_at(t)) expected_written.push_back(index(t)); // holds a value no lookup sees yet
+                }
+        cube.for_each_written_texel([&](const TexelAddress& t) { written.push_back(index(t)); });
+        cube.for_each_valid_texel([&](const TexelAddress& t) { valid.push_back(index(t)); });
+        CHECK(written.size() > 0u);
+        CHECK(valid.size() > written.size());
+        CHECK(written == expected_written); // same texels, same (linear) order
+        CHECK(valid == expected_valid);
+    }
 }

@@ -542,15 +542,21 @@ public:
     template <class F>
     void for_each_written_texel(F&& f) const {
         if (!state_->written_this_frame.load(std::memory_order_relaxed)) return;
-        for_each_texel_where([](const Tile& tile, int slot) { return written(tile, slot); }, f);
+        // A tile row's 16 written bits at once: bits (row % 4) * 16 .. + 15 of word row / 4.
+        for_each_texel_where(
+            [](const Tile& tile, int row) {
+                return static_cast<std::uint32_t>(tile.written_bits[row / 4].load(std::memory_order_relaxed) >> (row % 4 * 16)) & 0xFFFFu;
+            },
+            [](const Tile&, int) { return true; }, f);
     }
 
     // Calls f(address) for every texel holding a value (visible or written this frame), in linear-index
     // order. Between frames only.
     template <class F>
     void for_each_valid_texel(F&& f) const {
-        for_each_texel_where(
-            [](const Tile& tile, int slot) { return Texel::is_valid(tile.texels[slot].load(std::memory_order_relaxed)); }, f);
+        for_each_texel_where([](const Tile& tile, int) { return tile.valid.load(std::memory_order_relaxed) ? 0xFFFFu : 0u; },
+                             [](const Tile& tile, int slot) { return Texel::is_valid(tile.texels[slot].load(std::memory_order_relaxed)); },
+                             f);
     }
 
     // Texels holding a value, visible or written this frame.
@@ -734,6 +740,15 @@ private:
     static bool bit_set(const TileBits& bits, int slot) noexcept {
         return (bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
     }
+    static int count_trailing_zeros(std::uint32_t bits) noexcept { // bits != 0
+#if defined(__GNUC__) || defined(__clang__)
+        return __builtin_ctz(bits);
+#else
+        int n = 0;
+        for (; !(bits & 1u); bits >>= 1) ++n;
+        return n;
+#endif
+    }
     // How many of a tile's bits are set.
     static int count_bits(const TileBits& bits) noexcept {
         int n = 0;
@@ -751,22 +766,33 @@ private:
     static bool written(const Tile& tile, int slot) noexcept { return bit_set(tile.written_bits, slot); }
     static bool doubtful(const Tile& tile, int slot) noexcept { return bit_set(tile.doubtful_bits, slot); }
 
-    // f(address) for each texel of an allocated tile for which keep(tile, slot), in linear-index order.
-    template <class Keep, class F>
-    void for_each_texel_where(Keep&& keep, F&& f) const {
+    // f(address) for each texel of an allocated tile that candidates(tile, row within the tile) names (a
+    // mask of the row's 16 columns) and keep(tile, slot) accepts, in linear-index order. Tile rows whose
+    // mask is empty cost one call, and a face's row of unallocated tiles one pointer load each; so the walk
+    // costs what the cube holds, not its 6 N^2 texels.
+    template <class Candidates, class Keep, class F>
+    void for_each_texel_where(Candidates&& candidates, Keep&& keep, F&& f) const {
+        const Tile* row_tiles[(RAYCACHE_MAX_FACE_SIZE + tile_edge - 1) / tile_edge]; // one tile row's tiles
         for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-            for (int row = 0; row < face_size_; ++row) {
-                const int tile_row = row / tile_edge;
+            for (int tile_row = 0; tile_row < tiles_per_edge_; ++tile_row) {
+                bool any = false;
                 for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
-                    const TexelAddress first{face, tile_column * tile_edge, row};
-                    const Tile* tile = tile_of(first);
-                    if (!tile) continue;
-                    const int end = std::min(face_size_, (tile_column + 1) * tile_edge);
-                    for (int column = first.column; column < end; ++column) {
-                        const int slot = (row - tile_row * tile_edge) * tile_edge + column % tile_edge;
-                        if (keep(*tile, slot)) f(TexelAddress{face, column, row});
-                    }
+                    row_tiles[tile_column] = tile_of(TexelAddress{face, tile_column * tile_edge, tile_row * tile_edge});
+                    any = any || row_tiles[tile_column];
                 }
+                if (!any) continue;
+                const int row_end = std::min(face_size_, (tile_row + 1) * tile_edge);
+                for (int row = tile_row * tile_edge; row < row_end; ++row)
+                    for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
+                        const Tile* tile = row_tiles[tile_column];
+                        if (!tile) continue;
+                        const int r = row - tile_row * tile_edge;
+                        const int columns = std::min(tile_edge, face_size_ - tile_column * tile_edge); // on the face
+                        for (std::uint32_t mask = candidates(*tile, r) & ((1u << columns) - 1u); mask; mask &= mask - 1) {
+                            const int c = count_trailing_zeros(mask);
+                            if (keep(*tile, r * tile_edge + c)) f(TexelAddress{face, tile_column * tile_edge + c, row});
+                        }
+                    }
             }
     }
 
