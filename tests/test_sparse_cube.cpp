@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "raycache/raycache.hpp"
@@ -88,7 +89,7 @@ TEST_CASE("clear gives every tile back to the cube and to its budget") {
     CHECK_FALSE(cube.load(TexelAddress{0, 0, 0}));
 }
 
-TEST_CASE("a budget that holds one tile refuses the second tile's stores and keeps the first tile's") {
+TEST_CASE("a budget that holds one tile refuses the second tile's stores; the frame's first tile comes back empty, and fills") {
     auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + cct_tile);
     {
         CctCube cube(32, budget);
@@ -100,8 +101,13 @@ TEST_CASE("a budget that holds one tile refuses the second tile's stores and kee
         CHECK(cube.statistics().stores == 2u);
         CHECK(cube.allocated_tiles() == 1u);
         CHECK(budget->used() == budget->limit());
-        cube.begin_frame();
+        cube.begin_frame(); // a refused frame: its tile is given back, and tile 0 (the first wanted) allocated empty
+        CHECK(cube.allocated_tiles() == 1u);
+        CHECK(budget->used() == budget->limit());
         CHECK_FALSE(cube.lookup(texel_direction(TexelAddress{0, 16, 0}, 32)));
+        CHECK_FALSE(cube.lookup(texel_direction(TexelAddress{0, 15, 15}, 32)));
+        CHECK(cube.store_at(TexelAddress{0, 15, 15}, grey)); // the next frame's stores fill it
+        cube.begin_frame();
         CHECK(cube.lookup(texel_direction(TexelAddress{0, 15, 15}, 32)));
     }
     CHECK(budget->used() == 0u); // the destroyed cube gave everything back
@@ -172,5 +178,75 @@ TEST_CASE("for_each_written_texel and for_each_valid_texel visit, in linear-inde
         CHECK(valid.size() > written.size());
         CHECK(written == expected_written); // same texels, same (linear) order
         CHECK(valid == expected_valid);
+    }
+}
+
+// Under a full budget, which tiles a frame's stores allocate first depends on thread timing. So a frame in
+// which the budget refused a tile keeps none of the tiles it allocated: they are given back between frames,
+// and the tiles the frame wanted are allocated again, empty, in tile order, as far as the budget goes.
+TEST_CASE("a frame the budget refused gives back its new tiles and allocates the tiles it wanted, empty, in tile order") {
+    const TexelAddress a{0, 16, 0}, b{0, 0, 0}, c{4, 3, 3}; // tiles 1, 0 and 16 of a 32-texel cube
+    for (const bool reversed : {false, true}) {
+        CAPTURE(reversed);
+        auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + 2u * cct_tile); // the table and two tiles
+        CctCube cube(32, budget);
+        const TexelAddress order[3] = {reversed ? c : a, b, reversed ? a : c};
+        int stored = 0;
+        for (const TexelAddress& t : order) stored += cube.store_at(t, grey);
+        CHECK(stored == 2); // the third tile does not fit, whichever it is
+        cube.begin_frame();
+        // Tiles 0 and 1 (the first two of the three wanted, in tile order) are held, empty.
+        CHECK(cube.allocated_tiles() == 2u);
+        CHECK(cube.valid_texels() == 0u);
+        CHECK(budget->used() == budget->limit());
+        for (const TexelAddress& t : {a, b, c}) CHECK_FALSE(cube.lookup(texel_direction(t, 32)));
+        // The next frame's stores land in them; tile 16 is still refused.
+        CHECK(cube.store_at(a, grey));
+        CHECK(cube.store_at(b, grey));
+        CHECK_FALSE(cube.store_at(c, grey));
+        cube.begin_frame();
+        CHECK(cube.lookup(texel_direction(a, 32)));
+        CHECK(cube.lookup(texel_direction(b, 32)));
+        CHECK_FALSE(cube.lookup(texel_direction(c, 32)));
+        CHECK(cube.valid_texels() == 2u);
+    }
+}
+
+TEST_CASE("under a full budget the texels a cube keeps are the same with one thread or four, in any order") {
+    constexpr int n = 64; // 96 tiles; the budget holds 20
+    std::vector<TexelAddress> texels;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 1; row < n; row += 7)
+            for (int column = 2; column < n; column += 9) texels.push_back(TexelAddress{face, column, row});
+    // Two frames of the same stores; returns the valid texels' linear indices after them.
+    auto run = [&](int threads, std::uint32_t seed) {
+        auto budget = std::make_shared<MemoryBudget>(std::size_t{6} * 16 * sizeof(void*) + 20 * cct_tile);
+        CctCube cube(n, budget);
+        std::vector<TexelAddress> mine = texels;
+        for (std::size_t i = mine.size(); i > 1; --i) { // a shuffle of its own per run
+            seed = seed * 1664525u + 1013904223u;
+            std::swap(mine[i - 1], mine[seed % i]);
+        }
+        for (int frame = 0; frame < 2; ++frame) {
+            std::vector<std::thread> pool;
+            for (int k = 0; k < threads; ++k)
+                pool.emplace_back([&, k] {
+                    for (std::size_t i = static_cast<std::size_t>(k); i < mine.size(); i += static_cast<std::size_t>(threads))
+                        cube.store_at(mine[i], grey);
+                });
+            for (std::thread& t : pool) t.join();
+            cube.begin_frame();
+        }
+        std::vector<std::uint64_t> kept;
+        cube.for_each_valid_texel([&](const TexelAddress& t) { kept.push_back((std::uint64_t(t.face) * n + t.row) * n + t.column); });
+        return kept;
+    };
+    const std::vector<std::uint64_t> reference = run(1, 1u);
+    CHECK(reference.size() > 0u);
+    CHECK(reference.size() < texels.size());
+    for (std::uint32_t seed = 2; seed < 10; ++seed) {
+        CAPTURE(seed);
+        CHECK(run(4, seed) == reference);
+        CHECK(run(1, seed) == reference);
     }
 }

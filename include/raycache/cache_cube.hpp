@@ -12,7 +12,11 @@
 // Memory. Texels live in tiles of 16 x 16 (smaller faces: one tile per face), allocated on a tile's
 // first store, so a cube costs what its rays have touched, not 6 N^2 texels: most of a large cube is
 // never reached. With a MemoryBudget, a tile that does not fit is not allocated and its stores are
-// refused (the ray is traced as without a cache). clear() gives every tile back.
+// refused (the ray is traced as without a cache). Which tiles of a frame fit would then depend on thread
+// timing, so after a frame in which the budget refused anything, begin_frame() (or settle_budget()) gives
+// back every tile that frame allocated and allocates the tiles the frame wanted (those and the refused
+// ones) again, empty, in tile order while they fit: their rays fill them from the next frame on, and what
+// the cube holds depends on the rays alone. clear() gives every tile back.
 //
 // Origins. The CCT keys texels by direction alone and so assumes the surroundings are far away; when the
 // camera circles a mirror, the point a direction leaves from drifts and the cached colour goes stale.
@@ -49,6 +53,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include <glm/glm.hpp>
@@ -91,7 +96,10 @@ public:
           tiles_per_edge_((face_size + tile_edge - 1) / tile_edge),
           state_(new State(tile_count())),
           budget_(std::move(budget)) {
-        if (budget_) budget_->reserve_always(table_bytes());
+        if (budget_) {
+            budget_->reserve_always(table_bytes());
+            state_->refusals_seen = budget_->refusals();
+        }
     }
     ~CacheCube() { give_back(); }
     CacheCube(const CacheCube&) = delete;
@@ -115,8 +123,11 @@ public:
     // Bytes that 6 * N * N texels take, 6 * N * N * sizeof(Word): the thesis's memory per cube, and what this
     // cube would hold with every tile allocated (see allocated_bytes() for what it holds).
     std::size_t texel_bytes() const noexcept { return texel_count() * sizeof(Word); }
-    // Every byte the cube holds now: its allocated tiles, its tile table, counters.
-    std::size_t bytes() const noexcept { return sizeof(*this) + sizeof(State) + table_bytes() + allocated_bytes(); }
+    // Every byte the cube holds now: its allocated tiles, its tile table and two bits a tile (settle_budget()),
+    // counters. (The budget is charged the tiles and the table.)
+    std::size_t bytes() const noexcept {
+        return sizeof(*this) + sizeof(State) + table_bytes() + 2 * (tile_count() + 63) / 64 * sizeof(std::uint64_t) + allocated_bytes();
+    }
     // Bytes of the tiles allocated so far (each tile_bytes()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * sizeof(Tile); }
     std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
@@ -515,10 +526,53 @@ public:
     CubeStatistics begin_frame() noexcept {
         assert_between_frames();
         const CubeStatistics finished = statistics();
+        settle_budget();
         end_frame_tiles(state_->written_this_frame.exchange(false, std::memory_order_relaxed));
         state_->counters.reset();
         return finished;
     }
+    // If the budget refused a tile to anyone since the last call (so which tiles this frame got depended on
+    // thread timing), gives back every tile allocated since the last begin_frame() and allocates the tiles
+    // wanted since (those and the refused ones) again, empty, in tile order while the budget allows. Runs in
+    // begin_frame(); call it first where this frame's stores are read before begin_frame() (the confidence
+    // test, the depth pyramid and invalidation do). Cubes sharing a budget: call give_back_refused_frame()
+    // on all of them, then allocate_wanted_tiles() on all (as SceneCache does), so that what one cube gets
+    // does not depend on the other cubes' tiles still held. Between frames only.
+    void settle_budget() noexcept {
+        give_back_refused_frame();
+        allocate_wanted_tiles();
+    }
+    // The first half of settle_budget(): the frame's new tiles given back, if the budget refused any tile.
+    void give_back_refused_frame() noexcept {
+        assert_between_frames();
+        if (!budget_ || budget_->refusals() == state_->refusals_seen) return;
+        state_->refusals_seen = budget_->refusals();
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
+            for (std::uint64_t bits = state_->fresh[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros64(bits));
+                state_->wanted[w].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
+                drop_tile(i);
+            }
+    }
+    // The second half: the tiles wanted in a refused frame allocated, empty, in tile order while they fit
+    // (not counted as refusals when they do not).
+    void allocate_wanted_tiles() noexcept {
+        assert_between_frames();
+        if (!budget_) return;
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
+            for (std::uint64_t bits = state_->wanted[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros64(bits));
+                if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) continue;
+                Tile* tile = new (std::nothrow) Tile();
+                if (!tile) {
+                    budget_->release(sizeof(Tile));
+                    continue;
+                }
+                state_->tiles[i].store(tile, std::memory_order_relaxed);
+                state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+            }
+    }
+
     // Tiles dropped as stale since the cube was made.
     std::size_t dropped_tiles() const noexcept { return state_->dropped_tiles.load(std::memory_order_relaxed); }
 
@@ -662,9 +716,19 @@ private:
     };
 
     struct State {
-        explicit State(std::size_t tiles) : tiles(new std::atomic<Tile*>[tiles]) {
+        explicit State(std::size_t tiles)
+            : tiles(new std::atomic<Tile*>[tiles]), fresh(new std::atomic<std::uint64_t>[(tiles + 63) / 64]),
+              wanted(new std::atomic<std::uint64_t>[(tiles + 63) / 64]) {
             for (std::size_t i = 0; i < tiles; ++i) this->tiles[i].store(nullptr, std::memory_order_relaxed);
+            for (std::size_t i = 0; i < (tiles + 63) / 64; ++i) {
+                fresh[i].store(0, std::memory_order_relaxed);
+                wanted[i].store(0, std::memory_order_relaxed);
+            }
         }
+        // One bit per tile each (settle_budget()): allocated by a store since the last begin_frame(); a store
+        // wanted it and the budget refused.
+        std::unique_ptr<std::atomic<std::uint64_t>[]> fresh, wanted;
+        std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
         std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
         std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<bool> written_this_frame{false};
@@ -695,26 +759,44 @@ private:
     }
     static int slot_of(const TexelAddress& t) noexcept { return (t.row % tile_edge) * tile_edge + t.column % tile_edge; }
 
-    Tile* tile_of(const TexelAddress& t) const noexcept { return state_->tiles[tile_index(t)].load(std::memory_order_acquire); }
+    Tile* tile_of(const TexelAddress& t) const noexcept {
+        Tile* tile = state_->tiles[tile_index(t)].load(std::memory_order_acquire);
+        return tile == claimed() ? nullptr : tile;
+    }
 
-    // The tile of `t`, allocated (within the budget) if it has none yet; null when it does not fit.
+    // A table entry's value while one thread reserves and allocates its tile (never dereferenced).
+    static Tile* claimed() noexcept { return reinterpret_cast<Tile*>(std::uintptr_t{1}); }
+
+    // The tile of `t`, allocated (within the budget) if it has none yet; null when it does not fit. One
+    // thread claims an empty entry and alone asks the budget, so a tile is refused only when the budget
+    // has no room for it (two threads racing for one tile cannot make the loser's request fail), and the
+    // frame's refusals depend on the tiles its rays want, not on timing (settle_budget()). Stores to a
+    // claimed tile wait the allocation out; lookups read a claimed tile as empty.
     Tile* tile_for_store(const TexelAddress& t) noexcept {
         std::atomic<Tile*>& entry = state_->tiles[tile_index(t)];
-        Tile* tile = entry.load(std::memory_order_acquire);
-        if (tile) return tile;
-        if (budget_ && !budget_->try_reserve(sizeof(Tile))) return nullptr;
-        Tile* fresh = new (std::nothrow) Tile();
-        if (!fresh) {
-            if (budget_) budget_->release(sizeof(Tile));
-            return nullptr;
+        for (;;) {
+            Tile* tile = entry.load(std::memory_order_acquire);
+            if (tile == claimed()) {
+                std::this_thread::yield();
+                continue;
+            }
+            if (tile) return tile;
+            if (entry.compare_exchange_weak(tile, claimed(), std::memory_order_acq_rel, std::memory_order_acquire)) break;
         }
-        if (entry.compare_exchange_strong(tile, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) {
+        const std::size_t i = tile_index(t);
+        Tile* fresh = nullptr;
+        if (!budget_ || budget_->try_reserve(sizeof(Tile))) {
+            fresh = new (std::nothrow) Tile();
+            if (!fresh && budget_) budget_->release(sizeof(Tile));
+        } else {
+            state_->wanted[i / 64].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed); // settle_budget()
+        }
+        if (fresh) {
             state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
-            return fresh;
+            state_->fresh[i / 64].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
         }
-        delete fresh; // another thread allocated it first
-        if (budget_) budget_->release(sizeof(Tile));
-        return tile;
+        entry.store(fresh, std::memory_order_release);
+        return fresh;
     }
 
     // Frees every tile and returns the table's bytes to the budget (destruction, move-assignment).
@@ -733,6 +815,10 @@ private:
             if (budget_) budget_->release(sizeof(Tile));
         }
         state_->allocated_tiles.store(0, std::memory_order_relaxed);
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w) {
+            state_->fresh[w].store(0, std::memory_order_relaxed);
+            state_->wanted[w].store(0, std::memory_order_relaxed);
+        }
     }
 
     using TileBits = std::atomic<std::uint64_t>[bit_words]; // one bit per texel of a tile, by slot
@@ -743,6 +829,15 @@ private:
     static int count_trailing_zeros(std::uint32_t bits) noexcept { // bits != 0
 #if defined(__GNUC__) || defined(__clang__)
         return __builtin_ctz(bits);
+#else
+        int n = 0;
+        for (; !(bits & 1u); bits >>= 1) ++n;
+        return n;
+#endif
+    }
+    static int count_trailing_zeros64(std::uint64_t bits) noexcept { // bits != 0
+#if defined(__GNUC__) || defined(__clang__)
+        return __builtin_ctzll(bits);
 #else
         int n = 0;
         for (; !(bits & 1u); bits >>= 1) ++n;
@@ -796,22 +891,28 @@ private:
             }
     }
 
+    // Frees tile `i` (allocated) with its texels and marks, and gives its bytes back. Between frames.
+    void drop_tile(std::size_t i) noexcept {
+        Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
+        state_->valid_texels.fetch_sub(tile->valid.load(std::memory_order_relaxed), std::memory_order_relaxed);
+        state_->doubtful_texels.fetch_sub(static_cast<std::size_t>(count_bits(tile->doubtful_bits)), std::memory_order_relaxed);
+        state_->tiles[i].store(nullptr, std::memory_order_relaxed);
+        delete tile;
+        if (budget_) budget_->release(sizeof(Tile));
+        state_->allocated_tiles.fetch_sub(1, std::memory_order_relaxed);
+    }
+
     // One pass over the tiles: clears the written bits (when anything was written), drops stale tiles and
     // makes pending origin boxes and nearest distances visible.
     void end_frame_tiles(bool any_written) noexcept {
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w) state_->fresh[w].store(0, std::memory_order_relaxed);
         for (std::size_t i = 0; i < tile_count(); ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
             if (any_written)
                 for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
             if (tile->stale.load(std::memory_order_relaxed)) {
-                const std::size_t doubtful_count = static_cast<std::size_t>(count_bits(tile->doubtful_bits));
-                state_->valid_texels.fetch_sub(tile->valid.load(std::memory_order_relaxed), std::memory_order_relaxed);
-                state_->doubtful_texels.fetch_sub(doubtful_count, std::memory_order_relaxed);
-                state_->tiles[i].store(nullptr, std::memory_order_relaxed);
-                delete tile;
-                if (budget_) budget_->release(sizeof(Tile));
-                state_->allocated_tiles.fetch_sub(1, std::memory_order_relaxed);
+                drop_tile(i);
                 state_->dropped_tiles.fetch_add(1, std::memory_order_relaxed);
                 continue;
             }

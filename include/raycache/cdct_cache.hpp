@@ -72,6 +72,7 @@ public:
     // Ends a frame: brings the pyramid up to this frame's stores, then makes them visible (CacheCube::
     // begin_frame). Between frames.
     CubeStatistics begin_frame() {
+        cube_->settle_budget(); // the tiles the frame keeps, before the pyramid reads them
         if (pyramid_) pyramid_->update(*cube_); // before the frame's stores stop being marked
         return cube_->begin_frame();
     }

@@ -41,6 +41,7 @@ inline const glm::vec3& colour_of(const DepthSample& sample) noexcept { return s
 template <class Texel>
 std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
     if (!shared::raycache_edge_test_enabled(threshold)) return 0;
+    cube.settle_budget(); // which new tiles the frame keeps must not depend on thread timing
     const int n = cube.face_size();
     const std::size_t before = cube.doubtful_texels();
     cube.for_each_written_texel([&](const TexelAddress& t) {

@@ -130,6 +130,7 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
 template <class Texel>
 InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
     cube.assert_between_frames();
+    cube.settle_budget(); // the tiles this frame keeps, before their records are read
     InvalidationCounts counts;
     counts.valid_before = cube.valid_texels();
     const int n = cube.face_size();

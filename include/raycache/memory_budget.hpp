@@ -5,12 +5,18 @@
 // store is refused (counted in CubeStatistics::refused_stores) and the ray is simply traced, as without
 // a cache. Nothing already stored is dropped to make room: what a budget protects is the user's memory,
 // not the hit rate. A cube's fixed part (its tile table) is charged too, and is always granted.
+//
+// Which tiles of a frame get the last bytes depends on which thread asked first, so a frame in which the
+// budget refused anything keeps none of the tiles it allocated (CacheCube::begin_frame(): they are given
+// back, and the tiles the frame wanted are allocated again, empty, in tile order while they fit); the
+// budget counts its refusals so that every cube drawing on it can tell.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 namespace raycache {
@@ -24,10 +30,14 @@ public:
 
     // Takes `bytes` from the budget when they fit under the limit; false (and nothing taken) otherwise.
     // Thread-safe, lock-free.
-    bool try_reserve(std::size_t bytes) noexcept {
+    // A refusal is counted (refusals()) unless count_refusal is false.
+    bool try_reserve(std::size_t bytes, bool count_refusal = true) noexcept {
         std::size_t used = used_.load(std::memory_order_relaxed);
         do {
-            if (bytes > limit_ || used > limit_ - bytes) return false;
+            if (bytes > limit_ || used > limit_ - bytes) {
+                if (count_refusal) refusals_.fetch_add(1, std::memory_order_relaxed);
+                return false;
+            }
         } while (!used_.compare_exchange_weak(used, used + bytes, std::memory_order_relaxed));
         return true;
     }
@@ -38,10 +48,13 @@ public:
 
     std::size_t limit() const noexcept { return limit_; }
     std::size_t used() const noexcept { return used_.load(std::memory_order_relaxed); }
+    // Counted refusals since the budget was made.
+    std::uint64_t refusals() const noexcept { return refusals_.load(std::memory_order_relaxed); }
 
 private:
     const std::size_t limit_;
     std::atomic<std::size_t> used_{0};
+    std::atomic<std::uint64_t> refusals_{0};
 };
 
 } // namespace raycache

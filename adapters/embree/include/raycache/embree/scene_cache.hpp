@@ -515,6 +515,11 @@ public:
     // the old cube (resample_into), a larger one starts empty.
     SceneCacheStatistics begin_frame() {
         SceneCacheStatistics total;
+        // First, before anything reads the frame's stores or allocates between frames: if the budget refused
+        // tiles this frame, none of the frame's new tiles is kept (which ones fit depended on thread timing):
+        // every cube gives them back, then the tiles the frame wanted are allocated, empty, cube by cube.
+        for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.give_back_refused_frame(); });
+        for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.allocate_wanted_tiles(); });
         for (Entry& e : entries_) {
             with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
             const CubeStatistics frame = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
