@@ -30,7 +30,8 @@
 // order-independent (min, max, or), read only from frame-constant state.
 //
 // Threads. lookup(), peek() and store() may run on any number of threads at once, on one cube, without
-// locks (lookups are wait-free; a tile's first store allocates it and publishes it with one CAS).
+// locks (lookups are wait-free; a tile's first store claims its table entry with one CAS, allocates the
+// tile and publishes it; other stores to that tile wait for it meanwhile).
 // begin_frame(), clear() and invalidate() must run between frames, when no other thread uses the cube.
 // Debug builds check that rule (RAYCACHE_CHECK_FRAME_RULE, on unless NDEBUG): lookups, stores and the
 // helpers that wrap them (cached_trace, the CDCT searches, SceneCache::leaving_ray: across the caller's
