@@ -550,7 +550,7 @@ public:
         state_->refusals_seen = budget_->refusals();
         for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
             for (std::uint64_t bits = state_->fresh[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros64(bits));
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
                 state_->wanted[w].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
                 drop_tile(i);
             }
@@ -562,7 +562,7 @@ public:
         if (!budget_) return;
         for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
             for (std::uint64_t bits = state_->wanted[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros64(bits));
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
                 if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) continue;
                 Tile* tile = new (std::nothrow) Tile();
                 if (!tile) {
@@ -726,11 +726,11 @@ private:
                 wanted[i].store(0, std::memory_order_relaxed);
             }
         }
+        std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
         // One bit per tile each (settle_budget()): allocated by a store since the last begin_frame(); a store
         // wanted it and the budget refused.
         std::unique_ptr<std::atomic<std::uint64_t>[]> fresh, wanted;
         std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
-        std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
         std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<bool> written_this_frame{false};
         std::atomic<std::int64_t> valid_texels{0};
@@ -827,16 +827,7 @@ private:
     static bool bit_set(const TileBits& bits, int slot) noexcept {
         return (bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & 1u;
     }
-    static int count_trailing_zeros(std::uint32_t bits) noexcept { // bits != 0
-#if defined(__GNUC__) || defined(__clang__)
-        return __builtin_ctz(bits);
-#else
-        int n = 0;
-        for (; !(bits & 1u); bits >>= 1) ++n;
-        return n;
-#endif
-    }
-    static int count_trailing_zeros64(std::uint64_t bits) noexcept { // bits != 0
+    static int count_trailing_zeros(std::uint64_t bits) noexcept { // bits != 0
 #if defined(__GNUC__) || defined(__clang__)
         return __builtin_ctzll(bits);
 #else
