@@ -527,7 +527,8 @@ public:
     CubeStatistics begin_frame() noexcept {
         assert_between_frames();
         const CubeStatistics finished = statistics();
-        settle_budget();
+        give_back_if_refused();
+        allocate_wanted();
         end_frame_tiles(state_->written_this_frame.exchange(false, std::memory_order_relaxed));
         state_->counters.reset();
         return finished;
@@ -540,38 +541,20 @@ public:
     // on all of them, then allocate_wanted_tiles() on all (as SceneCache does), so that what one cube gets
     // does not depend on the other cubes' tiles still held. Between frames only.
     void settle_budget() noexcept {
-        give_back_refused_frame();
-        allocate_wanted_tiles();
+        assert_between_frames();
+        give_back_if_refused();
+        allocate_wanted();
     }
     // The first half of settle_budget(): the frame's new tiles given back, if the budget refused any tile.
     void give_back_refused_frame() noexcept {
         assert_between_frames();
-        if (!budget_ || budget_->refusals() == state_->refusals_seen) return;
-        state_->refusals_seen = budget_->refusals();
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
-            for (std::uint64_t bits = state_->fresh[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
-                state_->wanted[w].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
-                drop_tile(i);
-            }
+        give_back_if_refused();
     }
     // The second half: the tiles wanted in a refused frame allocated, empty, in tile order while they fit
     // (not counted as refusals when they do not).
     void allocate_wanted_tiles() noexcept {
         assert_between_frames();
-        if (!budget_) return;
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
-            for (std::uint64_t bits = state_->wanted[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
-                if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) continue;
-                Tile* tile = new (std::nothrow) Tile();
-                if (!tile) {
-                    budget_->release(sizeof(Tile));
-                    continue;
-                }
-                state_->tiles[i].store(tile, std::memory_order_relaxed);
-                state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
-            }
+        allocate_wanted();
     }
 
     // Tiles dropped as stale since the cube was made.
@@ -880,6 +863,33 @@ private:
                             if (keep(*tile, r * tile_edge + c)) f(TexelAddress{face, tile_column * tile_edge + c, row});
                         }
                     }
+            }
+    }
+
+    // settle_budget()'s halves (unchecked: the callers assert the frame rule).
+    void give_back_if_refused() noexcept {
+        if (!budget_ || budget_->refusals() == state_->refusals_seen) return;
+        state_->refusals_seen = budget_->refusals();
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
+            for (std::uint64_t bits = state_->fresh[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
+                state_->wanted[w].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
+                drop_tile(i);
+            }
+    }
+    void allocate_wanted() noexcept {
+        if (!budget_) return;
+        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
+            for (std::uint64_t bits = state_->wanted[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
+                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
+                if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) continue;
+                Tile* tile = new (std::nothrow) Tile();
+                if (!tile) {
+                    budget_->release(sizeof(Tile));
+                    continue;
+                }
+                state_->tiles[i].store(tile, std::memory_order_relaxed);
+                state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
             }
     }
 
