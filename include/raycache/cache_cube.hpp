@@ -127,7 +127,7 @@ public:
     // Every byte the cube holds now: its allocated tiles, its tile table and two bits a tile (settle_budget()),
     // counters. (The budget is charged the tiles and the table.)
     std::size_t bytes() const noexcept {
-        return sizeof(*this) + sizeof(State) + table_bytes() + 2 * (tile_count() + 63) / 64 * sizeof(std::uint64_t) + allocated_bytes();
+        return sizeof(*this) + sizeof(State) + table_bytes() + state_->fresh.bytes() + state_->wanted.bytes() + allocated_bytes();
     }
     // Bytes of the tiles allocated so far (each tile_bytes()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * sizeof(Tile); }
@@ -699,20 +699,38 @@ private:
         std::atomic<std::uint32_t> valid{0}; // texels holding a value (so passes over tiles need not read them)
     };
 
+    // One bit per tile of the cube: set from any thread, taken (read and cleared) between frames.
+    class TileBitmap {
+    public:
+        explicit TileBitmap(std::size_t tiles) : size_((tiles + 63) / 64), words_(new std::atomic<std::uint64_t>[size_]) { clear(); }
+        void set(std::size_t tile) noexcept {
+            words_[tile / 64].fetch_or(std::uint64_t{1} << (tile % 64), std::memory_order_relaxed);
+        }
+        void clear() noexcept {
+            for (std::size_t w = 0; w < size_; ++w) words_[w].store(0, std::memory_order_relaxed);
+        }
+        // Clears the bitmap, calling f(tile) for each bit that was set, in tile order.
+        template <class F>
+        void take_each(F&& f) noexcept {
+            for (std::size_t w = 0; w < size_; ++w)
+                for (std::uint64_t bits = words_[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1)
+                    f(w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits)));
+        }
+        std::size_t bytes() const noexcept { return size_ * sizeof(std::uint64_t); }
+
+    private:
+        std::size_t size_;
+        std::unique_ptr<std::atomic<std::uint64_t>[]> words_;
+    };
+
     struct State {
-        explicit State(std::size_t tiles)
-            : tiles(new std::atomic<Tile*>[tiles]), fresh(new std::atomic<std::uint64_t>[(tiles + 63) / 64]),
-              wanted(new std::atomic<std::uint64_t>[(tiles + 63) / 64]) {
+        explicit State(std::size_t tiles) : tiles(new std::atomic<Tile*>[tiles]), fresh(tiles), wanted(tiles) {
             for (std::size_t i = 0; i < tiles; ++i) this->tiles[i].store(nullptr, std::memory_order_relaxed);
-            for (std::size_t i = 0; i < (tiles + 63) / 64; ++i) {
-                fresh[i].store(0, std::memory_order_relaxed);
-                wanted[i].store(0, std::memory_order_relaxed);
-            }
         }
         std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
         // One bit per tile each (settle_budget()): allocated by a store since the last begin_frame(); a store
         // wanted it and the budget refused.
-        std::unique_ptr<std::atomic<std::uint64_t>[]> fresh, wanted;
+        TileBitmap fresh, wanted;
         std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
         std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<bool> written_this_frame{false};
@@ -773,11 +791,11 @@ private:
             fresh = new (std::nothrow) Tile();
             if (!fresh && budget_) budget_->release(sizeof(Tile));
         } else {
-            state_->wanted[i / 64].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed); // settle_budget()
+            state_->wanted.set(i); // settle_budget()
         }
         if (fresh) {
             state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
-            state_->fresh[i / 64].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
+            state_->fresh.set(i);
         }
         entry.store(fresh, std::memory_order_release);
         return fresh;
@@ -799,10 +817,8 @@ private:
             if (budget_) budget_->release(sizeof(Tile));
         }
         state_->allocated_tiles.store(0, std::memory_order_relaxed);
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w) {
-            state_->fresh[w].store(0, std::memory_order_relaxed);
-            state_->wanted[w].store(0, std::memory_order_relaxed);
-        }
+        state_->fresh.clear();
+        state_->wanted.clear();
     }
 
     using TileBits = std::atomic<std::uint64_t>[bit_words]; // one bit per texel of a tile, by slot
@@ -870,27 +886,23 @@ private:
     void give_back_if_refused() noexcept {
         if (!budget_ || budget_->refusals() == state_->refusals_seen) return;
         state_->refusals_seen = budget_->refusals();
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
-            for (std::uint64_t bits = state_->fresh[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
-                state_->wanted[w].fetch_or(std::uint64_t{1} << (i % 64), std::memory_order_relaxed);
-                drop_tile(i);
-            }
+        state_->fresh.take_each([&](std::size_t i) {
+            state_->wanted.set(i);
+            drop_tile(i);
+        });
     }
     void allocate_wanted() noexcept {
         if (!budget_) return;
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w)
-            for (std::uint64_t bits = state_->wanted[w].exchange(0, std::memory_order_relaxed); bits; bits &= bits - 1) {
-                const std::size_t i = w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits));
-                if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) continue;
-                Tile* tile = new (std::nothrow) Tile();
-                if (!tile) {
-                    budget_->release(sizeof(Tile));
-                    continue;
-                }
-                state_->tiles[i].store(tile, std::memory_order_relaxed);
-                state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+        state_->wanted.take_each([&](std::size_t i) {
+            if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) return;
+            Tile* tile = new (std::nothrow) Tile();
+            if (!tile) {
+                budget_->release(sizeof(Tile));
+                return;
             }
+            state_->tiles[i].store(tile, std::memory_order_relaxed);
+            state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+        });
     }
 
     // Frees tile `i` (allocated) with its texels and marks, and gives its bytes back. Between frames.
@@ -907,7 +919,7 @@ private:
     // One pass over the tiles: clears the written bits (when anything was written), drops stale tiles and
     // makes pending origin boxes and nearest distances visible.
     void end_frame_tiles(bool any_written) noexcept {
-        for (std::size_t w = 0; w < (tile_count() + 63) / 64; ++w) state_->fresh[w].store(0, std::memory_order_relaxed);
+        state_->fresh.clear(); // the frame's tiles are kept
         for (std::size_t i = 0; i < tile_count(); ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
