@@ -1,6 +1,6 @@
-// Exact invalidation of a CCT cube (raycache/invalidation.hpp) in an analytic world: spheres of distinct
-// colours lit by a point light with shadows, a mirror ball of radius 1 at the origin whose cube is filled
-// with traced rays and their path records. After a sphere moves, an oracle retraces, for every texel still
+// Exact invalidation of a CCT cube (raycache/invalidation.hpp) in an analytic world (analytic_world.hpp:
+// spheres of distinct colours lit by a point light with shadows, a mirror ball of radius 1 at the origin)
+// whose cube is filled with traced rays and their path records. After a sphere moves, an oracle retraces, for every texel still
 // valid, rays from random points of the cube's box through random directions of the texel, in the world
 // before and after the move: a texel is stale when any of them sees a different colour. `exact` must leave
 // no stale texel (and skipping the invalidation must leave some); texels whose cone (computed here
@@ -18,74 +18,12 @@
 #include "raycache/invalidation.hpp"
 #include "raycache/path_record.hpp"
 
+#include "analytic_world.hpp"
+
 namespace {
 
+using namespace analytic;
 using raycache::CctCube;
-using raycache::PathRecord;
-using raycache::TexelAddress;
-
-struct Ball {
-    glm::vec3 centre;
-    float radius;
-    glm::vec3 colour;
-};
-
-struct World {
-    std::vector<Ball> balls;
-    glm::vec3 light{0.0f, 8.0f, 0.0f};
-
-    // Nearest ball hit by o + t d (t > 0), or -1.
-    int nearest(glm::vec3 o, glm::vec3 d, float* t_hit, float t_max = INFINITY) const {
-        int best = -1;
-        float best_t = t_max;
-        for (std::size_t i = 0; i < balls.size(); ++i) {
-            const glm::vec3 oc = o - balls[i].centre;
-            const float b = glm::dot(oc, d), c = glm::dot(oc, oc) - balls[i].radius * balls[i].radius;
-            const float disc = b * b - c;
-            if (disc < 0.0f) continue;
-            const float t = -b - std::sqrt(disc);
-            if (t > 1e-4f && t < best_t) best_t = t, best = static_cast<int>(i);
-        }
-        if (t_hit) *t_hit = best_t;
-        return best;
-    }
-
-    // The colour seen along o + t d (d unit): the ball's colour, dimmed when the light is shadowed; black
-    // sky. Fills `path` when given.
-    glm::vec3 trace(glm::vec3 o, glm::vec3 d, PathRecord* path = nullptr) const {
-        float t = 0.0f;
-        const int i = nearest(o, d, &t);
-        if (i < 0) return glm::vec3(0.0f);
-        const glm::vec3 p = o + t * d;
-        if (path) {
-            path->hit(static_cast<std::uint64_t>(i), p);
-            path->lit = true;
-        }
-        const glm::vec3 n = glm::normalize(p - balls[static_cast<std::size_t>(i)].centre);
-        const glm::vec3 q = p + 1e-3f * n;
-        const glm::vec3 to_light = light - q;
-        const float dist = glm::length(to_light);
-        const bool shadowed = nearest(q, to_light / dist, nullptr, dist) >= 0;
-        return balls[static_cast<std::size_t>(i)].colour * (shadowed ? 0.25f : 1.0f);
-    }
-};
-
-World make_world() {
-    World w;
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    for (int i = 0; i < 12; ++i) {
-        const float a = 6.2831853f * static_cast<float>(i) / 12.0f;
-        const float r = 3.0f + 2.0f * u(rng);
-        w.balls.push_back({glm::vec3(r * std::cos(a), -0.6f + 1.2f * u(rng), r * std::sin(a)), 0.35f + 0.35f * u(rng),
-                           glm::vec3(0.2f + 0.8f * u(rng), 0.2f + 0.8f * u(rng), 0.2f + 0.8f * u(rng))});
-    }
-    // A ball above, between the others and the light: its shadow falls on them.
-    w.balls.push_back({glm::vec3(3.5f, 3.0f, 0.2f), 0.5f, glm::vec3(0.9f, 0.9f, 0.9f)});
-    return w;
-}
-
-const raycache::CubeBounds box{glm::vec3(0.0f), 1.0f};
 
 // Fills a cube as a mirror ball of radius 1 at the origin would: rays from points of its surface into the
 // half-space of their normal, traced in `w` with their path records. `stores` rays.
@@ -113,21 +51,6 @@ void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up
     cube.begin_frame();
 }
 
-// A random direction through texel `a` and a random point of the cube's box (corners now and then).
-struct Sampler {
-    std::mt19937 rng{17};
-    std::uniform_real_distribution<float> u{0.0f, 1.0f};
-    glm::vec3 direction(const TexelAddress& a, int n) {
-        const float sc = 2.0f * ((static_cast<float>(a.column) + u(rng)) / static_cast<float>(n)) - 1.0f;
-        const float tc = 2.0f * ((static_cast<float>(a.row) + u(rng)) / static_cast<float>(n)) - 1.0f;
-        return glm::normalize(raycache::shared::raycache_face_point(a.face, 1.0f, sc, tc));
-    }
-    glm::vec3 origin(int k) {
-        if (k < 8) return box.half_size * glm::vec3((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
-        return box.half_size * glm::vec3(2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f);
-    }
-};
-
 // Valid texels for which some sampled ray sees a different colour in `after` than in `before`.
 std::size_t stale_texels(const CctCube& cube, const World& before, const World& after) {
     Sampler s;
@@ -142,13 +65,6 @@ std::size_t stale_texels(const CctCube& cube, const World& before, const World& 
         }
     });
     return stale;
-}
-
-raycache::SceneChanges move_of(const World& before, const World& after, std::size_t i) {
-    raycache::SceneChanges changes;
-    changes.moved.push_back({i, {before.balls[i].centre, before.balls[i].radius}, {after.balls[i].centre, after.balls[i].radius}});
-    changes.lights.push_back(before.light);
-    return changes;
 }
 
 } // namespace
