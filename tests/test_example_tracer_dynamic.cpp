@@ -1,10 +1,12 @@
-// The Embree tracer on a dynamic scene (dynamic-N) with CCT caches: the tracer moves the objects (its BVH
-// follows them), and SceneCache::scene_changed() drops what moved objects can have changed. An oracle
-// retraces, after each move, every texel still valid: rays through random directions of the texel from
-// random origins the texel answers (within the origin test's drift of its tile's origin box, or anywhere
-// in the cube's box), traced with the cache off in the scene before and after the move. A texel is stale
-// when some ray's colour changed by more than 1e-4 in a channel (the tolerance; stale texels differ by
-// 0.01 and more). `exact` must leave none, `none` must leave some.
+// The Embree tracer on a dynamic scene (dynamic-N) with CCT and CDCT caches: the tracer moves the objects
+// (its BVH follows them), and SceneCache::scene_changed() drops what moved objects can have changed. An
+// oracle retraces, after each move, every texel still valid, with the cache off in the scene before and
+// after the move. CCT: rays through random directions of the texel from random origins the texel answers
+// (within the origin test's drift of its tile's origin box, or anywhere in the cube's box). CDCT: rays from
+// random points of the cube's box toward points at the texel's stored distance in random directions of the
+// texel, counted when, before the move, they met a surface within 2% of that distance (or, for a stored
+// escape, nothing). A texel is stale when some ray's colour changed by more than 1e-4 in a channel (the
+// tolerance; stale texels differ by 0.01 and more). `exact` must leave none, `none` must leave some.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -60,20 +62,62 @@ std::size_t stale_texels(const SceneCache& caches, const rcx::embree::Tracer& be
     return stale;
 }
 
+// The same for every CDCT cube.
+std::size_t stale_cdct_texels(const SceneCache& caches, const rcx::embree::Tracer& before, const rcx::embree::Tracer& after,
+                              std::size_t* checked) {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::size_t stale = 0;
+    *checked = 0;
+    caches.for_each_cdct_cache([&](raycache::embree::ObjectId, const raycache::CdctCache* cache) {
+        REQUIRE(cache);
+        const raycache::CubeBounds& bounds = cache->bounds();
+        const raycache::CdctCube& cube = cache->cube();
+        const int n = cube.face_size();
+        cube.for_each_valid_texel([&](const raycache::TexelAddress& a) {
+            const raycache::DepthSample stored = *cube.load(a);
+            const bool escape = stored.distance >= cache->parameters().max_depth;
+            bool counted = false;
+            for (int k = 0; k < 32; ++k) {
+                const glm::vec3 o = bounds.centre + bounds.half_size * glm::vec3(2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f);
+                const float sc = 2.0f * ((static_cast<float>(a.column) + u(rng)) / static_cast<float>(n)) - 1.0f;
+                const float tc = 2.0f * ((static_cast<float>(a.row) + u(rng)) / static_cast<float>(n)) - 1.0f;
+                const glm::vec3 point = bounds.centre + stored.distance * glm::normalize(raycache::shared::raycache_face_point(a.face, 1.0f, sc, tc));
+                const float length = glm::length(point - o);
+                const glm::vec3 d = (point - o) / length;
+                const raycache::TracedRay was = before.trace_uncached(o, d, 1);
+                const bool hit = std::isfinite(was.distance);
+                if (escape ? hit : (!hit || std::abs(was.distance - length) > 0.02f * length)) continue;
+                counted = true;
+                const glm::vec3 diff = glm::abs(was.color - after.trace_uncached(o, d, 1).color);
+                if (std::max(diff.x, std::max(diff.y, diff.z)) > tolerance) {
+                    ++stale;
+                    break;
+                }
+            }
+            *checked += counted;
+        });
+    });
+    return stale;
+}
+
 struct Run {
     std::size_t stale = 0, checked = 0;
     double kept = 0.0;
 };
 
-// Renders `frames` frames of `scene` (fixed camera, objects moving) with CCT caches on 32-texel faces,
-// invalidating with `policy` after each move, and runs the oracle after each move.
-Run run(const rcx::Scene& scene, Invalidation policy, int frames) {
+// Renders `frames` frames of `scene` (fixed camera, objects moving) with CCT or CDCT caches on 32-texel
+// faces, invalidating with `policy` after each move, and runs the oracle after each move.
+Run run(const rcx::Scene& scene, Invalidation policy, int frames, raycache::embree::Technique technique = raycache::embree::Technique::cct) {
+    const bool cdct = technique == raycache::embree::Technique::cdct;
     rcx::embree::Tracer tracer(scene);
-    SceneCache caches(raycache::embree::Technique::cct);
+    raycache::ReliefParameters search; // the Embree tracer's: crossings over 0.5 behind a surface miss
+    search.max_gap = 0.5f;             // (so a CDCT texel's rays end there, and farther moves keep it)
+    SceneCache caches(technique, search);
     tracer.attach_caches(caches, 32);
     rcx::embree::RenderSettings s;
     s.width = s.height = 96;
-    s.mode = rcx::CacheMode::cct;
+    s.mode = cdct ? rcx::CacheMode::cdct : rcx::CacheMode::cct;
     s.caches = &caches;
     s.threads = 2;
     Run r;
@@ -85,7 +129,7 @@ Run run(const rcx::Scene& scene, Invalidation policy, int frames) {
             REQUIRE(!change.moved.empty());
             kept_sum += caches.scene_changed(change, policy).kept_fraction();
             std::size_t checked = 0;
-            r.stale += stale_texels(caches, before, tracer, &checked);
+            r.stale += cdct ? stale_cdct_texels(caches, before, tracer, &checked) : stale_texels(caches, before, tracer, &checked);
             r.checked += checked;
         }
         tracer.render(scene.camera_at(0), s);
@@ -126,6 +170,26 @@ TEST_CASE("dynamic-N with CCT caches: after each move the oracle finds no stale 
     rcx::Scene one = scene;
     one.motions.resize(1);
     const Run single = run(one, Invalidation::exact, 4);
+    MESSAGE("one moving object: " << single.stale << " stale of " << single.checked << ", kept " << 100.0 * single.kept << "% a move");
+    CHECK(single.stale == 0);
+    CHECK(single.kept > 0.5);
+}
+
+TEST_CASE("dynamic-N with CDCT caches: after each move the oracle finds no stale texel under exact, and finds some under none") {
+    if (wuson_missing()) return;
+    rcx::Scene scene = rcx::make_scene("dynamic-8");
+    const auto cdct = raycache::embree::Technique::cdct;
+    const Run none = run(scene, Invalidation::none, 4, cdct);
+    const Run exact = run(scene, Invalidation::exact, 4, cdct);
+    MESSAGE("none: " << none.stale << " stale of " << none.checked << " texels checked; exact: " << exact.stale << " stale of "
+                     << exact.checked << ", kept " << 100.0 * exact.kept << "% a move");
+    CHECK(none.stale > 0);
+    CHECK(exact.checked > 500); // exact keeps 40% a move with 8 movers, of fewer texels than the CCT fills
+    CHECK(exact.stale == 0);
+
+    rcx::Scene one = scene;
+    one.motions.resize(1);
+    const Run single = run(one, Invalidation::exact, 4, cdct);
     MESSAGE("one moving object: " << single.stale << " stale of " << single.checked << ", kept " << 100.0 * single.kept << "% a move");
     CHECK(single.stale == 0);
     CHECK(single.kept > 0.5);

@@ -16,6 +16,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/depth_pyramid.hpp"
+#include "raycache/path_record.hpp"
 #include "raycache/pyramid_walk.hpp"
 #include "raycache/shared/cdct_store.h"
 #include "raycache/shared/depth_secant.h"
@@ -150,31 +151,47 @@ struct TracedRay {
 // Stores what a ray traced from `origin` along `direction` brought back (shared/cdct_store.h): its hit
 // (store_hit at origin + distance * unit(direction)), or, for an infinite or NaN distance, an escape
 // (store_escape). Nothing for a negative distance or a direction that is not one (false, no store made).
+// `path`, when given, is what the traced path saw (raycache/path_record.hpp): the texel's tile keeps it
+// for exact invalidation (raycache/invalidation.hpp); without it the texel counts as having seen anything.
 // Thread-safe as CacheCube::store.
 inline bool store_traced(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
-                         const glm::vec3& direction, const TracedRay& traced, const ReliefParameters& p) noexcept {
+                         const glm::vec3& direction, const TracedRay& traced, const ReliefParameters& p,
+                         const PathRecord* path = nullptr) noexcept {
     const shared::raycache_cdct_store_key k = shared::raycache_cdct_traced_store(
         origin, direction, traced.distance, bounds.centre, bounds.half_size, p.max_depth);
-    return k.store && cube.store(k.key, DepthSample{traced.color, k.distance});
+    if (!k.store) return false;
+    const DepthSample sample{traced.color, k.distance};
+    return path ? cube.store(k.key, sample, *path) : cube.store(k.key, sample);
 }
 
 // Algorithm 1 with the CDCT: the search p.search names (depth_search) answers when it can; otherwise trace() runs, its hit is
 // stored (store_traced: store_hit, or store_escape when it escaped; nothing for a negative distance, which
 // would key the hit by a point behind the ray) and its colour returned unchanged.
-// trace: callable `TracedRay trace()`. `texels_read`, when given, receives the search's texel count.
+// trace: callable `TracedRay trace()`, or `TracedRay trace(PathRecord&)`, which also reports what the path
+// hit (raycache/path_record.hpp), stored with the texel so exact invalidation can keep it when nothing it
+// saw moved. `texels_read`, when given, receives the search's texel count.
 // `pyramid`, when given, speeds up the relief search (see relief_search); the secant search needs none.
 template <class Trace>
 glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                             const glm::vec3& direction, const ReliefParameters& p, Trace&& trace,
                             int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr) {
-    static_assert(std::is_invocable_r_v<TracedRay, Trace&>, "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()`");
+    constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
+    static_assert(records || std::is_invocable_r_v<TracedRay, Trace&>,
+                  "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()` or `TracedRay trace(raycache::PathRecord&)`");
     const auto use = cube.in_frame();
     const ReliefResult found = depth_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
-    const TracedRay traced = std::forward<Trace>(trace)();
-    store_traced(cube, bounds, origin, direction, traced, p);
-    return traced.color;
+    if constexpr (records) {
+        PathRecord path;
+        const TracedRay traced = trace(path);
+        store_traced(cube, bounds, origin, direction, traced, p, &path);
+        return traced.color;
+    } else {
+        const TracedRay traced = trace();
+        store_traced(cube, bounds, origin, direction, traced, p);
+        return traced.color;
+    }
 }
 
 } // namespace raycache

@@ -51,8 +51,9 @@ public:
     }
 
     // Algorithm 1: the search the parameters name answers when it can; otherwise trace() (`TracedRay
-    // trace()`) runs, what it brought back is stored (store()) and its colour returned. `texels_read`, when
-    // given, receives the search's texel count. Thread-safe.
+    // trace()`, or `TracedRay trace(PathRecord&)` to record what the path saw for exact invalidation) runs,
+    // what it brought back is stored (store()) and its colour returned. `texels_read`, when given, receives
+    // the search's texel count. Thread-safe.
     template <class Trace>
     glm::vec3 cached_trace(const glm::vec3& origin, const glm::vec3& direction, Trace&& trace, int* texels_read = nullptr) {
         return cdct_cached_trace(*cube_, bounds_, origin, direction, parameters_, std::forward<Trace>(trace), texels_read,
@@ -67,6 +68,10 @@ public:
     // Stores what a ray traced from origin along direction brought back (store_traced). Thread-safe.
     bool store(const glm::vec3& origin, const glm::vec3& direction, const TracedRay& traced) noexcept {
         return store_traced(*cube_, bounds_, origin, direction, traced, parameters_);
+    }
+    // store() with what the traced path saw (raycache/path_record.hpp). Thread-safe.
+    bool store(const glm::vec3& origin, const glm::vec3& direction, const TracedRay& traced, const PathRecord& path) noexcept {
+        return store_traced(*cube_, bounds_, origin, direction, traced, parameters_, &path);
     }
 
     // Ends a frame: brings the pyramid up to this frame's stores, then makes them visible (CacheCube::

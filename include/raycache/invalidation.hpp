@@ -1,10 +1,16 @@
-// raycache/invalidation.hpp: between two frames, empties exactly the texels of a direction-keyed cube (the
-// CCT) that moved objects or a moved light can have changed, and keeps every other one.
+// raycache/invalidation.hpp: between two frames, empties exactly the texels of a cube (CCT or CDCT) that
+// moved objects or a moved light can have changed, and keeps every other one.
 //
-// A texel answers rays leaving the cube's box (or, with the origin test, within `origin_drift` of its tile's
-// origin box) in its directions. Its value is stale after object X moved from sphere A to sphere B when
+// A CCT texel answers rays leaving the cube's box (or, with the origin test, within `origin_drift` of its
+// tile's origin box) in its directions. A CDCT texel holds a point P seen in its directions from the cube's
+// centre and answers rays from the box that meet P; every point of such a ray's segment up to P is a point
+// of the ball around the box plus a multiple of P's direction (a convex combination of the origin and P,
+// both in that set), so it lies in the texel's cone from the box's ball too: one test serves both.
+// A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
-//     (raycache/shared/cone_sphere.h; tested top-down: a face, then a 16 x 16 tile, then each texel);
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, then a 16 x 16 tile, then each texel), and,
+//     for a CDCT texel, the sphere comes nearer the centre than the texel's rays reach (its distance plus
+//     the search's gap limit: the segments end there);
 //   - or the rest of a path stored into its tile can have met X (the tile's PathRecord union,
 //     raycache/path_record.hpp): X among the objects hit (Bloom mask), A or B in the cone from a light to
 //     the box of hit points (shadow rays), A or B in that box (bounces between hit points), a bounce that
@@ -15,15 +21,19 @@
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/cdct.hpp"
+#include "raycache/cdct_cache.hpp"
 #include "raycache/path_record.hpp"
 #include "raycache/shared/cone_sphere.h"
 
@@ -84,12 +94,20 @@ inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm:
     return ball;
 }
 
+// Whether rays from `ball` in the cone's directions can meet a moved sphere. `reach`: how far from the
+// cube's centre the rays end (infinity: they do not); a segment between two points of a ball around the
+// centre stays in that ball, so rays from the cube's ball ending within `reach` stay within the larger
+// of the two radii, and a sphere beyond that cannot meet them.
 inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_direction_cone& cone,
-                               const std::vector<SceneChanges::Move>& moved) {
+                               const std::vector<SceneChanges::Move>& moved, const OriginBall& cube_ball,
+                               float reach = std::numeric_limits<float>::infinity()) {
+    const float bound = std::max(cube_ball.radius, reach);
+    auto meets = [&](const BoundingSphere& s) {
+        if (glm::length(s.centre - cube_ball.centre) - s.radius > bound) return false;
+        return shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, s.centre, s.radius);
+    };
     for (const SceneChanges::Move& m : moved)
-        if (shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, m.before.centre, m.before.radius) ||
-            shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, m.after.centre, m.after.radius))
-            return true;
+        if (meets(m.before) || meets(m.after)) return true;
     return false;
 }
 
@@ -122,13 +140,10 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
     return false;
 }
 
-} // namespace detail
-
-// One pass of exact invalidation over a direction-keyed cube (the CCT: texels keyed by the ray's direction,
-// not the CDCT's depth images). Between frames only. Deterministic: the result depends on the cube's
-// contents and `changes` alone.
-template <class Texel>
-InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
+// invalidate_changes() below; reach(texel): how far from the cube's centre the rays a texel answers end
+// (infinity for the CCT).
+template <class Texel, class Reach>
+InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach) {
     cube.assert_between_frames();
     cube.settle_budget(); // the tiles this frame keeps, before their records are read
     InvalidationCounts counts;
@@ -138,35 +153,66 @@ InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& ra
     if (nothing) return counts;
     // Top level: which faces' cones, from the whole cube's ball, can meet a moved sphere at all.
     bool face_meets[RAYCACHE_FACE_COUNT];
-    const detail::OriginBall cube_ball = detail::origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
+    const OriginBall cube_ball = origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
     for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-        face_meets[face] = detail::any_sphere_in_cone(cube_ball, shared::raycache_region_cone(face, 0, 0, n, n, n), changes.moved);
+        face_meets[face] = any_sphere_in_cone(cube_ball, shared::raycache_region_cone(face, 0, 0, n, n, n), changes.moved, cube_ball);
 
     using Tile = typename CacheCube<Texel>::TileState;
     std::vector<Tile> tiles;
     cube.for_each_tile_state([&](const Tile& t) { tiles.push_back(t); });
     counts.tiles = tiles.size();
     for (const Tile& t : tiles) {
-        if (detail::paths_meet(t, changes)) {
+        if (paths_meet(t, changes)) {
             ++counts.tiles_by_path;
             counts.dropped += cube.invalidate_in_tile(t.index, [](const TexelAddress&, bool) { return true; });
             continue;
         }
         // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
         if (changes.moved.empty() && !changes.light_moved) continue;
-        const detail::OriginBall ball = detail::origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi);
+        const OriginBall ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi);
         const bool cone_meets =
             face_meets[t.face] &&
-            detail::any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved);
+            any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved, cube_ball);
         if (cone_meets) ++counts.tiles_by_texel;
         else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
         counts.dropped += cube.invalidate_in_tile(t.index, [&](const TexelAddress& a, bool recorded) {
             if (!recorded) return true; // nothing known about the rest of its path
-            return cone_meets && detail::any_sphere_in_cone(
-                                     ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
-                                     changes.moved);
+            return cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
+                                                    changes.moved, cube_ball, reach(a));
         });
     }
+    return counts;
+}
+
+} // namespace detail
+
+// One pass of exact invalidation over a cube: a CCT cube (`rays` with its origin test), or a CDCT cube
+// (rays from anywhere in its box: origin_drift < 0; a CdctCache: the overload below). Between frames only.
+// Deterministic: the result depends on the cube's contents and `changes` alone.
+template <class Texel>
+InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
+    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return std::numeric_limits<float>::infinity(); });
+}
+
+// invalidate_changes() over a CDCT cube in `bounds`, searched with `p`: its rays leave from anywhere in the
+// box, and a texel holding distance s answers only rays that meet the stored surface at most
+// max(p.max_gap, p.epsilon) behind it (the searches' gap test), so its rays end within s + that of the
+// centre: a moved sphere farther out cannot have changed it (none for an escape, or with no gap limit).
+inline InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p,
+                                             const SceneChanges& changes) {
+    const float gap = std::max(p.max_gap, p.epsilon);
+    return detail::invalidate(cube, CubeRays{bounds, -1.0f}, changes, [&](const TexelAddress& a) {
+        const std::optional<DepthSample> texel = cube.load(a);
+        if (!texel || !(texel->distance < p.max_depth)) return std::numeric_limits<float>::infinity(); // an escape, or clamped
+        return (texel->distance + gap) * 1.0001f + 1e-4f;
+    });
+}
+
+// invalidate_changes() over a CDCT cache's cube (its rays leave from anywhere in its box), then its depth
+// pyramid follows when texels were dropped. Between frames only.
+inline InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChanges& changes) {
+    const InvalidationCounts counts = invalidate_changes(cache.cube(), cache.bounds(), cache.parameters(), changes);
+    if (counts.dropped > 0) cache.rebuild_pyramid();
     return counts;
 }
 

@@ -435,14 +435,7 @@ public:
         }
         if (e.coverage) e.coverage->mark(direction);
         int read = 0;
-        PathRecord unused; // the CDCT keeps no path records
-        const glm::vec3 color = e.cdct->cached_trace(
-            origin, direction,
-            [&] {
-                if constexpr (records) return trace(unused);
-                else return trace();
-            },
-            &read);
+        const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read);
         texels_read_.add(0, static_cast<std::uint64_t>(read));
         // A rarely-taken CAS: only a search that reads more than every one before it writes.
         std::uint64_t most = max_texels_read_.load(std::memory_order_relaxed);
@@ -454,10 +447,10 @@ public:
 
     // Between frames, after objects (or lights) moved: cubes of moved objects move with them, emptied
     // (except under Invalidation::none); the other cubes lose what `policy` says. Under exact, a CCT cube
-    // loses the texels the moves can have changed (raycache/invalidation.hpp: their rays' cones, and what
-    // their paths saw as leaving_ray's recording callback reported it; texels filled through the plain
-    // callback, resampled or loaded count as having seen everything), then, transitively, the texels whose
-    // paths hit a cached object whose cube lost texels. CDCT cubes keep no path records: exact empties them.
+    // or CDCT cube loses the texels the moves can have changed (raycache/invalidation.hpp: their rays'
+    // cones, and what their paths saw as leaving_ray's recording callback reported it; texels filled through
+    // the plain callback or loaded count as having seen everything), then, transitively, the texels whose
+    // paths hit a cached object whose cube lost texels.
     // Deterministic; between frames only (before or after begin_frame()).
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy) {
         const auto started = std::chrono::steady_clock::now();
@@ -488,7 +481,7 @@ public:
                     next.push_back(i);
                     continue;
                 }
-                const std::size_t dropped = entries_[i].cct ? invalidate_entry(entries_[i], changes) : empty_cube(entries_[i]);
+                const std::size_t dropped = invalidate_entry(entries_[i], changes);
                 stats.dropped += dropped;
                 if (dropped) changed[i] = 1, next.push_back(i);
             }
@@ -498,7 +491,7 @@ public:
                 for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
                 next.clear();
                 for (std::size_t i = 0; i < entries_.size(); ++i) {
-                    if (changed[i] || !entries_[i].cct) continue;
+                    if (changed[i]) continue;
                     const std::size_t dropped = invalidate_entry(entries_[i], seen);
                     stats.dropped += dropped;
                     if (dropped) changed[i] = 1, next.push_back(i);
@@ -560,6 +553,11 @@ public:
     template <class F>
     void for_each_cct_cube(F&& f) const {
         for (const Entry& e : entries_) f(e.id, e.bounds, static_cast<const CctCube*>(e.cct.get()));
+    }
+    // f(ObjectId, const CdctCache*) likewise for the CDCT (null for the CCT); the cache holds the bounds.
+    template <class F>
+    void for_each_cdct_cache(F&& f) const {
+        for (const Entry& e : entries_) f(e.id, static_cast<const CdctCache*>(e.cdct.get()));
     }
 
     // Where object `id`'s cube sits; std::nullopt when it has none.
@@ -632,8 +630,9 @@ private:
         else e.cdct->clear(); // and its pyramid
         return valid;
     }
-    // One exact pass over a CCT entry; the texels it emptied.
+    // One exact pass over an entry's cube; the texels it emptied.
     std::size_t invalidate_entry(Entry& e, const SceneChanges& changes) {
+        if (!e.cct) return invalidate_changes(*e.cdct, changes).dropped; // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
         return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes).dropped;
     }
@@ -760,8 +759,10 @@ private:
             if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
                 carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
-            } else
+            } else {
                 resample_into(old.cdct->cube(), e.cdct->cube());
+                carry_path_records(old.cdct->cube(), e.cdct->cube());
+            }
             with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
             if (e.cdct) e.cdct->rebuild_pyramid();

@@ -1,0 +1,254 @@
+// Exact invalidation of a CDCT cube (raycache/invalidation.hpp) in the analytic world of analytic_world.hpp:
+// the mirror ball's CDCT cube is filled with traced rays (their hit points, keyed by direction from the
+// centre, with their path records). A CDCT texel holding point P at distance s answers rays from the box
+// that meet the stored surface there, so the oracle retraces, for every texel still valid, rays from random
+// points of the box toward points at distance s in random directions of the texel, in the world before and
+// after the move; a sample counts when, before the move, the ray met a surface within 2% of that distance
+// (the texel's surface, not something in front of it or a miss beside it), or, for a stored escape, met
+// nothing. A texel is stale when a counted sample sees another colour after the move.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raycache/cdct.hpp"
+#include "raycache/cdct_cache.hpp"
+#include "raycache/cube_face.hpp"
+#include "raycache/invalidation.hpp"
+#include "raycache/path_record.hpp"
+
+#include "analytic_world.hpp"
+
+namespace {
+
+using namespace analytic;
+using raycache::CdctCache;
+using raycache::CdctCube;
+
+// The Embree tracer's search: a crossing more than 0.5 behind the stored surface is a miss, so a texel's
+// rays end within its distance + 0.5 of the centre.
+raycache::ReliefParameters search_parameters() {
+    raycache::ReliefParameters p;
+    p.max_gap = 0.5f;
+    return p;
+}
+const raycache::ReliefParameters parameters = search_parameters();
+
+// Fills a cube as the mirror ball's rays would: from points of its surface into their normal's half-space,
+// traced in `w`, stored with their path records (store_traced, as cdct_cached_trace stores a miss).
+void fill(CdctCube& cube, const World& w, int stores, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> g;
+    for (int k = 0; k < stores; ++k) {
+        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        if (glm::dot(d, n) < 0.0f) d = -d;
+        PathRecord path;
+        const raycache::TracedRay t = w.traced(n, d, &path);
+        raycache::store_traced(cube, box, n, d, t, parameters, &path);
+    }
+    cube.begin_frame();
+}
+
+struct Oracle {
+    std::size_t stale = 0;   // texels with a counted sample whose colour changed
+    std::size_t samples = 0; // counted samples
+};
+
+Oracle stale_texels(const CdctCube& cube, const World& before, const World& after) {
+    Sampler s;
+    Oracle o;
+    const int n = cube.face_size();
+    cube.for_each_valid_texel([&](const TexelAddress& a) {
+        const raycache::DepthSample stored = *cube.load(a);
+        const bool escape = stored.distance >= parameters.max_depth;
+        for (int k = 0; k < 48; ++k) {
+            const glm::vec3 origin = s.origin(k), point = box.centre + stored.distance * s.direction(a, n);
+            const float length = glm::length(point - origin);
+            const glm::vec3 d = (point - origin) / length;
+            float t = 0.0f;
+            const bool hit = before.nearest(origin, d, &t) >= 0;
+            if (escape ? hit : (!hit || std::abs(t - length) > 0.02f * length)) continue;
+            ++o.samples;
+            if (glm::any(glm::greaterThan(glm::abs(before.trace(origin, d) - after.trace(origin, d)), glm::vec3(1e-6f)))) {
+                ++o.stale;
+                return;
+            }
+        }
+    });
+    return o;
+}
+
+std::size_t tile_of(const TexelAddress& a, int n) {
+    const int per_edge = (n + 15) / 16;
+    return static_cast<std::size_t>((a.face * per_edge + a.row / 16) * per_edge + a.column / 16);
+}
+
+} // namespace
+
+TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
+    const World before = make_world();
+    for (std::size_t moved : {std::size_t{0}, std::size_t{4}, std::size_t{12}}) {
+        CAPTURE(moved);
+        World after = before;
+        after.balls[moved].centre += glm::vec3(0.3f, 0.25f, -0.2f);
+        CdctCube kept(32), exact(32);
+        fill(kept, before, 30000, 1);
+        fill(exact, before, 30000, 1);
+        const std::size_t valid = exact.valid_texels();
+        REQUIRE(valid > 2000);
+
+        const Oracle without = stale_texels(kept, before, after);
+        const raycache::InvalidationCounts counts = raycache::invalidate_changes(exact, box, parameters, move_of(before, after, moved));
+        const Oracle with = stale_texels(exact, before, after);
+        MESSAGE("ball " << moved << ": " << valid << " texels, " << without.stale << " stale without invalidation ("
+                        << without.samples << " samples), " << counts.dropped << " dropped by exact (" << counts.tiles_by_path
+                        << " tiles by path, " << counts.tiles_by_texel << " tested per texel), " << with.stale << " stale after ("
+                        << with.samples << " samples)");
+        CHECK(without.stale > 0);
+        CHECK(with.samples > 20 * exact.valid_texels()); // most texels' samples meet their surface
+        CHECK(with.stale == 0);
+        CHECK(counts.dropped == valid - exact.valid_texels());
+        CHECK(counts.dropped < valid / 2); // it keeps most of the cube
+    }
+}
+
+TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the texels whose cones can reach it") {
+    const World w = make_world();
+    CdctCube cube(32);
+    fill(cube, w, 30000, 5);
+    // Far to the side, below the light's cone over the hit points; never hit by a stored path.
+    const std::uint64_t key = 99;
+    raycache::SceneChanges changes;
+    const raycache::BoundingSphere from{glm::vec3(30.0f, 0.0f, 0.0f), 4.0f}, to{glm::vec3(30.0f, 2.0f, 0.0f), 4.0f};
+    changes.moved.push_back({key, from, to});
+    changes.lights.push_back(w.light);
+
+    // Tiles whose Bloom masks happen to hold the key's bits are dropped whole: leave them out.
+    std::vector<char> bloom_says_maybe(6 * 2 * 2, 0);
+    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
+        bloom_says_maybe[t.index] = (t.objects & raycache::object_bits(key)) == raycache::object_bits(key);
+    });
+    // From angles: a texel's rays (origins within the box's ball, radius sqrt(3)) reach a sphere only
+    // within its angular radius grown by that ball, plus half the texel's diagonal (< 3 degrees at 32).
+    auto angle_to = [](const TexelAddress& a, const raycache::BoundingSphere& s) {
+        const glm::vec3 d = glm::normalize(raycache::texel_direction(a, 32));
+        const float dist = glm::length(s.centre);
+        return std::acos(glm::clamp(glm::dot(d, s.centre / dist), -1.0f, 1.0f)) -
+               std::asin(std::min(1.0f, (s.radius + 1.7321f) / dist));
+    };
+    const float margin = 3.0f * 3.14159265f / 180.0f;
+    std::vector<TexelAddress> must_keep, must_drop;
+    cube.for_each_valid_texel([&](const TexelAddress& a) {
+        if (bloom_says_maybe[tile_of(a, 32)]) return;
+        const float nearest = std::min(angle_to(a, from), angle_to(a, to));
+        if (nearest > margin) must_keep.push_back(a);
+        // The centre direction itself, from the centre, passes through a sphere: some ray of the texel does,
+        // unless it ends at a surface nearer than the sphere (only escapes reach it here).
+        else if (nearest < -std::asin(1.7321f / 30.0f) && cube.load(a)->distance >= parameters.max_depth) must_drop.push_back(a);
+    });
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, box, parameters, changes);
+    std::size_t kept = 0, dropped = 0;
+    for (const TexelAddress& a : must_keep) kept += cube.load(a).has_value();
+    for (const TexelAddress& a : must_drop) dropped += !cube.load(a).has_value();
+    MESSAGE(counts.valid_before << " texels: " << must_keep.size() << " clearly away, " << kept << " kept; " << must_drop.size()
+                                << " clearly in a cone, " << dropped << " dropped; " << counts.dropped << " dropped in all");
+    CHECK(must_keep.size() > 3000);
+    CHECK(kept == must_keep.size());
+    CHECK(!must_drop.empty());
+    CHECK(dropped == must_drop.size());
+    CHECK(counts.tiles_by_path == 0);
+}
+
+TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the texel; the escapes it blocks go") {
+    // Ball 3 seen from the centre; a new sphere moves further out in the same direction, behind it. Texels
+    // holding ball 3's surface end their rays within distance + 0.5 of the centre, short of the sphere; the
+    // texels whose rays escaped past ball 3 toward the sphere now meet it.
+    const World w = make_world();
+    CdctCube cube(32), without_reach(32);
+    fill(cube, w, 30000, 6);
+    fill(without_reach, w, 30000, 6);
+    const glm::vec3 toward = glm::normalize(w.balls[3].centre);
+    const float far = glm::length(w.balls[3].centre) + 9.0f, radius = 3.0f;
+    raycache::SceneChanges changes;
+    changes.moved.push_back({77, {far * toward, radius}, {far * toward + glm::vec3(0.0f, 0.5f, 0.0f), radius}});
+    changes.lights.push_back(w.light);
+
+    std::vector<char> bloom_says_maybe(6 * 2 * 2, 0);
+    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
+        bloom_says_maybe[t.index] = (t.objects & raycache::object_bits(77)) == raycache::object_bits(77);
+    });
+    std::vector<TexelAddress> short_of_it, escapes_toward_it;
+    // Toward it: the texel's centre direction from the centre passes through the sphere (so some ray of
+    // the texel meets it).
+    const float inside = std::asin(radius / far);
+    cube.for_each_valid_texel([&](const TexelAddress& a) {
+        if (bloom_says_maybe[tile_of(a, 32)]) return;
+        const glm::vec3 d = glm::normalize(raycache::texel_direction(a, 32));
+        const raycache::DepthSample v = *cube.load(a);
+        if (std::acos(glm::clamp(glm::dot(d, toward), -1.0f, 1.0f)) > inside) return;
+        if (v.distance >= parameters.max_depth) escapes_toward_it.push_back(a);
+        else if (v.distance + 0.5f < far - radius - 2.0f) short_of_it.push_back(a);
+    });
+    raycache::invalidate_changes(cube, box, parameters, changes);
+    raycache::invalidate_changes(without_reach, {box, -1.0f}, changes); // every ray taken as unbounded
+    std::size_t kept = 0, kept_without_reach = 0, escapes_kept = 0;
+    for (const TexelAddress& a : short_of_it) kept += cube.load(a).has_value(), kept_without_reach += without_reach.load(a).has_value();
+    for (const TexelAddress& a : escapes_toward_it) escapes_kept += cube.load(a).has_value();
+    MESSAGE(short_of_it.size() << " texels toward the sphere hold nearer surfaces: " << kept << " kept (" << kept_without_reach
+                               << " when rays are taken as unbounded); " << escapes_toward_it.size() << " escapes toward it, "
+                               << escapes_kept << " kept");
+    CHECK(short_of_it.size() >= 10); // ball 3 covers a dozen texels at 32 a face
+    CHECK(kept == short_of_it.size());
+    CHECK(kept_without_reach == 0);
+    CHECK(escapes_kept == 0);
+}
+
+TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invalidation of a CdctCache keeps its searches valid") {
+    // Through the cache's own path: misses traced with their records, then a move of one ball; afterwards
+    // every search that still answers gives the colour the moved world shows (within the CDCT's own
+    // error: compared with the unmoved cache's answers, which must equal them where the move changed nothing).
+    const World before = make_world();
+    World after = before;
+    const std::size_t moved = 4;
+    after.balls[moved].centre += glm::vec3(0.0f, 0.6f, 0.0f);
+    raycache::ReliefParameters p = parameters;
+    p.search = raycache::DepthSearch::relief;
+    CdctCache cache(32, box, p);
+    std::mt19937 rng(8);
+    std::normal_distribution<float> g;
+    std::vector<std::pair<glm::vec3, glm::vec3>> rays;
+    for (int k = 0; k < 30000; ++k) {
+        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        if (glm::dot(d, n) < 0.0f) d = -d;
+        rays.push_back({n, d});
+        cache.cached_trace(n, d, [&](PathRecord& path) { return before.traced(n, d, &path); });
+        if (k % 5000 == 4999) cache.begin_frame();
+    }
+    cache.begin_frame();
+    // No tile may hold an unrecorded texel: every store came with its record.
+    std::size_t unrecorded = 0;
+    cache.cube().for_each_tile_state([&](const CdctCube::TileState& t) { unrecorded += t.unrecorded_texels; });
+    CHECK(unrecorded == 0);
+
+    const std::size_t valid = cache.cube().valid_texels();
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cache, move_of(before, after, moved));
+    CHECK(counts.dropped > 0);
+    CHECK(counts.dropped < valid / 2);
+    // Rays aimed at the moved ball (before or after) are no longer answered by the cache.
+    std::size_t answered_at_ball = 0, aimed = 0;
+    for (const auto& [o, d] : rays) {
+        const int before_hit = before.nearest(o, d, nullptr), after_hit = after.nearest(o, d, nullptr);
+        if (before_hit != static_cast<int>(moved) && after_hit != static_cast<int>(moved)) continue;
+        ++aimed;
+        answered_at_ball += cache.lookup(o, d).hit;
+    }
+    MESSAGE(valid << " texels, " << counts.dropped << " dropped; " << aimed << " rays aimed at the moved ball, " << answered_at_ball
+                  << " answered");
+    CHECK(aimed > 100);
+    CHECK(answered_at_ball == 0);
+}
