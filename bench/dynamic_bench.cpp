@@ -1,7 +1,7 @@
 // raycache_dynamic_bench: caches in dynamic scenes. Along dynamic-N's orbit (objects moving every frame)
-// every frame is rendered with the cache off and with CCT caches under the three invalidation policies
-// (none, all, exact: SceneCache::scene_changed), interleaved in one process in a rotating order, one Tracer
-// moved once per frame for all of them. Per frame: fraction of the valid texels kept by the invalidation,
+// every frame is rendered with the cache off and with CCT and CDCT caches under the three invalidation
+// policies each (none, all, exact: SceneCache::scene_changed), interleaved in one process in a rotating
+// order, one Tracer moved once per frame for all of them. Per frame: fraction of the valid texels kept by the invalidation,
 // hit rate, speed-up over the cache off (a cached frame's time includes its invalidation and begin_frame()),
 // PSNR against the uncached frame, invalidation time. Scenarios: every object moving, one object moving,
 // and behind-32 with one of its spheres moving (the invalidation time for behind-32-sized caches).
@@ -49,8 +49,17 @@ struct Policy {
 };
 constexpr Policy policies[] = {{"none", Invalidation::none}, {"all", Invalidation::all}, {"exact", Invalidation::exact}};
 
+struct Technique {
+    const char* label;
+    raycache::embree::Technique technique;
+    rcx::CacheMode mode;
+};
+constexpr Technique techniques[] = {{"CCT", raycache::embree::Technique::cct, rcx::CacheMode::cct},
+                                    {"CDCT", raycache::embree::Technique::cdct, rcx::CacheMode::cdct}};
+
 struct Track {
     rcx::bench::Variant variant;
+    const char* technique = "";
     Invalidation policy = Invalidation::none;
     std::vector<double> kept, hit, speedup, psnr, inval_ms, ms_per_moved;
 };
@@ -76,28 +85,31 @@ double maximum(const std::vector<double>& v) {
 struct Outputs {
     std::ofstream frames_csv, summary_csv;
     std::vector<std::vector<std::string>> rows;
-    std::string exact_vs_all; // per scenario: frames where exact's PSNR is more than 0.5 dB under all's
+    std::string exact_vs_all; // per scenario and technique: frames where exact's PSNR is more than 0.5 dB under all's
 };
 
-// One scenario: `scene` along its orbit, off and the three policies.
+// One scenario: `scene` along its orbit, off and each technique under the three policies.
 void scenario(const Options& o, const std::string& label, const rcx::Scene& scene, Outputs& out) {
     rcx::bench::progress("dynamic: " + label);
     rcx::embree::Tracer tracer(scene);
-    std::vector<Track> tracks(1 + std::size(policies));
+    constexpr std::size_t per_technique = std::size(policies);
+    std::vector<Track> tracks(1 + std::size(techniques) * per_technique);
     tracks[0].variant.label = "off";
-    for (std::size_t k = 0; k < std::size(policies); ++k) {
-        Track& t = tracks[k + 1];
-        t.variant.label = policies[k].label;
-        t.variant.mode = rcx::CacheMode::cct;
-        t.policy = policies[k].policy;
-        t.variant.caches = std::make_unique<SceneCache>(raycache::embree::Technique::cct);
-        tracer.attach_caches(*t.variant.caches, 0);
-    }
+    for (std::size_t i = 0; i < std::size(techniques); ++i)
+        for (std::size_t k = 0; k < per_technique; ++k) {
+            Track& t = tracks[1 + i * per_technique + k];
+            t.variant.label = std::string(techniques[i].label) + " " + policies[k].label;
+            t.variant.mode = techniques[i].mode;
+            t.technique = techniques[i].label;
+            t.policy = policies[k].policy;
+            t.variant.caches = std::make_unique<SceneCache>(techniques[i].technique, rcx::bench::our_relief); // the tracer's search
+            tracer.attach_caches(*t.variant.caches, 0);
+        }
     std::vector<rcx::bench::Variant*> order;
     for (Track& t : tracks) order.push_back(&t.variant);
-    std::vector<double> extra(tracks.size(), 0.0);
-    int below = 0, compared = 0;
-    double worst_gap = -std::numeric_limits<double>::infinity();
+    std::vector<int> below(std::size(techniques), 0);
+    int compared = 0;
+    std::vector<double> worst_gap(std::size(techniques), -std::numeric_limits<double>::infinity());
     for (int f = 0; f < o.frames; ++f) {
         std::vector<double> kept(tracks.size(), 1.0), inval(tracks.size(), 0.0);
         std::size_t moved = 0;
@@ -112,13 +124,13 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
         }
         rcx::bench::render_round(tracer, order, scene.camera_at(f), o.size, o.size, static_cast<std::size_t>(f));
         const double off_ms = tracks[0].variant.ms.back();
-        double psnr_all = 0.0, psnr_exact = 0.0;
+        std::vector<double> psnr_all(std::size(techniques), 0.0), psnr_exact(std::size(techniques), 0.0);
         for (std::size_t k = 1; k < tracks.size(); ++k) {
             Track& t = tracks[k];
             const double ms = t.variant.ms.back() + inval[k];
             const double psnr = rcx::compare(tracks[0].variant.last, t.variant.last).psnr_db;
             const double hit = t.variant.last_stats.hit_rate();
-            out.frames_csv << label << "," << f << "," << t.variant.label << "," << moved << "," << kept[k] << "," << hit << "," << ms
+            out.frames_csv << label << "," << f << "," << t.technique << "," << policies[(k - 1) % per_technique].label << "," << moved << "," << kept[k] << "," << hit << "," << ms
                            << "," << off_ms << "," << off_ms / ms << "," << psnr << "," << inval[k] << "\n";
             if (f == 0) continue; // cold for everyone
             t.kept.push_back(kept[k]);
@@ -127,28 +139,32 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.psnr.push_back(psnr);
             t.inval_ms.push_back(inval[k]);
             if (moved) t.ms_per_moved.push_back(inval[k] / static_cast<double>(moved));
-            if (t.policy == Invalidation::all) psnr_all = psnr;
-            if (t.policy == Invalidation::exact) psnr_exact = psnr;
+            if (t.policy == Invalidation::all) psnr_all[(k - 1) / per_technique] = psnr;
+            if (t.policy == Invalidation::exact) psnr_exact[(k - 1) / per_technique] = psnr;
         }
         if (f > 0) {
-            // Infinite PSNR (identical to uncached) compares as very high.
-            const double a = std::isfinite(psnr_all) ? psnr_all : 200.0, e = std::isfinite(psnr_exact) ? psnr_exact : 200.0;
             ++compared;
-            below += e < a - 0.5 ? 1 : 0;
-            worst_gap = std::max(worst_gap, a - e);
+            for (std::size_t i = 0; i < std::size(techniques); ++i) {
+                // Infinite PSNR (identical to uncached) compares as very high.
+                const double a = std::isfinite(psnr_all[i]) ? psnr_all[i] : 200.0, e = std::isfinite(psnr_exact[i]) ? psnr_exact[i] : 200.0;
+                below[i] += e < a - 0.5 ? 1 : 0;
+                worst_gap[i] = std::max(worst_gap[i], a - e);
+            }
         }
     }
     for (std::size_t k = 1; k < tracks.size(); ++k) {
         const Track& t = tracks[k];
-        out.summary_csv << label << "," << t.variant.label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
+        out.summary_csv << label << "," << t.technique << "," << policies[(k - 1) % per_technique].label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
                         << mean(t.speedup) << "," << mean(t.psnr) << "," << minimum(t.psnr) << "," << mean(t.inval_ms) << ","
                         << maximum(t.inval_ms) << "," << mean(t.ms_per_moved) << "\n";
-        out.rows.push_back({label, t.variant.label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
+        out.rows.push_back({label, t.technique, policies[(k - 1) % per_technique].label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
                             fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean(t.psnr), 1), fmt(minimum(t.psnr), 1),
                             fmt(mean(t.inval_ms), 3), fmt(maximum(t.inval_ms), 3), fmt(mean(t.ms_per_moved), 3)});
     }
-    out.exact_vs_all += "- " + label + ": exact's PSNR is more than 0.5 dB under all's on " + std::to_string(below) + " of " +
-                        std::to_string(compared) + " frames (largest shortfall " + fmt(worst_gap, 2) + " dB; 200 dB stands for identical).\n";
+    for (std::size_t i = 0; i < std::size(techniques); ++i)
+        out.exact_vs_all += "- " + label + ", " + techniques[i].label + ": exact's PSNR is more than 0.5 dB under all's on " +
+                            std::to_string(below[i]) + " of " + std::to_string(compared) + " frames (largest shortfall " +
+                            fmt(worst_gap[i], 2) + " dB; 200 dB stands for identical).\n";
 }
 
 } // namespace
@@ -187,9 +203,9 @@ int main(int argc, char** argv) {
         const auto started = Clock::now();
         Outputs out;
         out.frames_csv.open(o.out + "/dynamic_frames.csv");
-        out.frames_csv << "scenario,frame,policy,moved_objects,kept_fraction,hit_rate,ms,off_ms,speedup,psnr,invalidate_ms\n";
+        out.frames_csv << "scenario,frame,technique,policy,moved_objects,kept_fraction,hit_rate,ms,off_ms,speedup,psnr,invalidate_ms\n";
         out.summary_csv.open(o.out + "/dynamic_summary.csv");
-        out.summary_csv << "scenario,policy,kept_mean,kept_min,hit_rate,speedup,psnr_mean,psnr_min,invalidate_ms_mean,"
+        out.summary_csv << "scenario,technique,policy,kept_mean,kept_min,hit_rate,speedup,psnr_mean,psnr_min,invalidate_ms_mean,"
                            "invalidate_ms_max,invalidate_ms_per_moved_object\n";
 
         const rcx::Scene all = rcx::make_scene(o.scene);
@@ -214,13 +230,13 @@ int main(int argc, char** argv) {
            << "Generated by `raycache_dynamic_bench` in "
            << fmt(std::chrono::duration<double>(Clock::now() - started).count(), 0) << " s.\n\n"
            << o.size << "x" << o.size << " pixels, " << o.frames << " frames of an orbit (1 degree a frame), objects moving along "
-           << "their paths every frame; CCT with adaptive faces, the cache off and the three policies of "
-           << "`SceneCache::scene_changed` rendered every frame, interleaved in one process (one Tracer, moved once a frame, "
+           << "their paths every frame; the cache off, and CCT and CDCT caches (adaptive faces) under each of the three "
+           << "policies of `SceneCache::scene_changed`, rendered every frame, interleaved in one process (one Tracer, moved once a frame, "
            << "its BVH rebuilt). Over frames 1.." << o.frames - 1 << ": *kept* = valid texels the invalidation kept (mean, "
            << "minimum), hit rate of the frame's leaving rays, *speed-up* = mean over frames of off ms / ms (a cached frame's "
            << "ms includes its invalidation and `begin_frame()`), PSNR against the uncached frame, invalidation time of the "
            << "frame and per moved object. Per frame: `dynamic_frames.csv`.\n\n"
-           << rcx::bench::markdown_table({"scenario", "policy", "kept mean", "kept min", "hit rate", "speed-up", "PSNR mean dB",
+           << rcx::bench::markdown_table({"scenario", "technique", "policy", "kept mean", "kept min", "hit rate", "speed-up", "PSNR mean dB",
                                           "PSNR min dB", "invalidate ms", "max ms", "ms per moved object"},
                                          out.rows)
            << "\n" << out.exact_vs_all;
