@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -67,6 +68,35 @@ TEST_CASE("the first sizing, after the first counted frame, goes straight to the
     CHECK(raycache::first_face_size(256, 1536, 0.5, two) == 16);
     // No rays: keep the size.
     CHECK(raycache::first_face_size(256, 0, 0.0, a) == 256);
+}
+
+TEST_CASE("the first face size is the largest step at which every cube sharing the budget could fill all its tiles") {
+    const raycache::AdaptiveResolution a; // first 256, min 8
+    // By hand: a cube of N texels a face has 6 ceil(N/16)^2 tiles; with 1000-byte tiles and 8-byte table
+    // entries, N = 64 takes 96 x 1008 = 96768 bytes, N = 91 (the next step) 216 x 1008 = 217728, N = 256
+    // 1536 x 1008 = 1548288.
+    CHECK(raycache::full_cube_bytes(64, 1000, 8) == 96768u);
+    CHECK(raycache::full_cube_bytes(91, 1000, 8) == 217728u);
+    CHECK(raycache::full_cube_bytes(256, 1000, 8) == 1548288u);
+    CHECK(raycache::full_cube_bytes(1, 1000, 8) == 6048u);
+    // Ten cubes: a budget of ten full 64-cubes gives 64; one byte less, the step below (45: 3 x 3 tiles).
+    CHECK(raycache::first_face_size_within(a, 10, 967680, 1000, 8) == 64);
+    CHECK(raycache::first_face_size_within(a, 10, 967679, 1000, 8) == 45);
+    CHECK(raycache::first_face_size_within(a, 10, 2177280, 1000, 8) == 91);
+    // Room for the configured first size: it stays, and so for one cube or no cube counted.
+    CHECK(raycache::first_face_size_within(a, 10, 15482880, 1000, 8) == 256);
+    CHECK(raycache::first_face_size_within(a, 1, 1548288, 1000, 8) == 256);
+    CHECK(raycache::first_face_size_within(a, 0, 1548288, 1000, 8) == 256);
+    // Not even the smallest step fits: the minimum (8: one tile a face, 6048 bytes).
+    CHECK(raycache::first_face_size_within(a, 1000, 1000, 1000, 8) == 8);
+    // A share just short of 32's 24 tiles: 16 (23 has 24 tiles too); with a minimum of 32, the minimum.
+    CHECK(raycache::first_face_size_within(a, 10, 241910, 1000, 8) == 16);
+    raycache::AdaptiveResolution b;
+    b.min_face_size = 32;
+    CHECK(raycache::first_face_size_within(b, 10, 241910, 1000, 8) == 32);
+    CHECK(raycache::first_face_size_within(b, 10, 967679, 1000, 8) == 45);
+    // No limit: the configured size.
+    CHECK(raycache::first_face_size_within(a, 1000, std::numeric_limits<std::size_t>::max(), 1000, 8) == 256);
 }
 
 TEST_CASE("adaptive settings are validated with a message naming the field") {

@@ -278,6 +278,48 @@ TEST_CASE("a cube attached with an explicit face size keeps it whatever the rays
     CHECK(caches.face_size({w.mirror}) == 128);
 }
 
+TEST_CASE("adaptive cubes start small enough that every cube sharing the budget could fill all its tiles") {
+    // By hand, with t = tile + table entry bytes: a full cube of N has 6 ceil(N/16)^2 tiles, so 181 takes
+    // 864 t, 128 384 t, 91 216 t, 64 96 t, 45 54 t. A budget of 960 t: one cube's share fits 181 (not
+    // 256: 1536 t); two cubes 128; three and four 91; five to ten 64; eleven 45.
+    const std::size_t t = raycache::CctCube::tile_bytes() + sizeof(void*);
+    raycache::embree::SceneCacheSettings settings;
+    settings.budget_bytes = 960 * t;
+    SceneCache caches(Technique::cct, settings);
+    const raycache::CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    const std::vector<std::pair<unsigned, int>> expected{{1, 181}, {2, 128}, {3, 91}, {4, 91}, {5, 64}, {10, 64}, {11, 45}};
+    unsigned attached = 0;
+    for (const auto& [cubes, size] : expected) {
+        while (attached < cubes) caches.attach({attached++}, raycache::embree::adaptive_face_size, bounds);
+        CAPTURE(cubes);
+        for (unsigned id = 0; id < attached; ++id) CHECK(caches.face_size({id}) == size); // earlier ones shrink too
+    }
+    // A cube of an explicit size keeps it, and counts: twelve cubes' shares still fit 45 (54 t < 80 t).
+    caches.attach({100}, 128, bounds);
+    CHECK(caches.face_size({100}) == 128);
+    CHECK(caches.face_size({0}) == 45);
+
+    // A cold frame that stores into every tile of every adaptive cube fits: nothing refused.
+    std::vector<glm::vec3> tile_centres;
+    for (int face = 0; face < 6; ++face)
+        for (int row : {8, 24, 40})
+            for (int column : {8, 24, 40})
+                tile_centres.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 45)));
+    for (unsigned id = 0; id < attached; ++id)
+        for (const glm::vec3& d : tile_centres)
+            caches.leaving_ray({id}, glm::vec3(0.0f), d, [] { return TracedRay{glm::vec3(0.5f), 1.0f}; });
+    const auto frame = caches.begin_frame();
+    CHECK(caches.budget().refusals() == 0u);
+    CHECK(frame.stores == 11u * 54u);
+
+    // Cubes a frame has sized are not started over when more cubes come.
+    std::vector<int> sized;
+    for (unsigned id = 0; id < attached; ++id) sized.push_back(caches.face_size({id}));
+    for (unsigned id = 200; id < 240; ++id) caches.attach({id}, raycache::embree::adaptive_face_size, bounds);
+    for (unsigned id = 0; id < attached; ++id) CHECK(caches.face_size({id}) == sized[id]);
+    CHECK(caches.face_size({200}) < 45);
+}
+
 TEST_CASE("an instance attached by its own id caches every geometry reached through it") {
     World w;
     // A second scene holding one sphere, instanced into a new top-level scene.

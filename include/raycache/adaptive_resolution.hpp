@@ -45,7 +45,8 @@ struct AdaptiveResolution {
     float rays_per_texel = 1.0f; // leaving rays of one frame per covered texel aimed at (> 0)
     int min_face_size = 8;       // never coarser
     int max_face_size = 1024;    // never finer (the largest step <= this)
-    int first_face_size = 256;   // before any frame has been counted
+    int first_face_size = 256;   // before any frame has been counted (SceneCache lowers it when its cubes
+                                 // could not all fill theirs within the budget: first_face_size_within)
     // The face size moves only when the ideal size is this many half-octave steps away (>= 1): a
     // change costs the finer texels (a shrink keeps the rest) or a cold frame (a growth), so a size
     // hovering between two steps must not flip back and forth.
@@ -160,6 +161,31 @@ inline int next_face_size(int current, std::uint64_t rays, double covered_fracti
 inline int first_face_size(int current, std::uint64_t rays, double covered_fraction, const AdaptiveResolution& a) noexcept {
     const double ideal = ideal_face_size(rays, covered_fraction, a.rays_per_texel);
     return ideal > 0.0 ? nearest_face_size_step(ideal, a) : current;
+}
+
+// The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile
+// table (`entry_bytes` a tile) and its tiles (`tile_bytes` each, 16 x 16 texels).
+inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+    const std::size_t per_edge = (static_cast<std::size_t>(face_size) + 15) / 16;
+    return std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge * (tile_bytes + entry_bytes);
+}
+
+// The face size adaptive cubes start at when `cubes` of them share a budget of `budget_bytes`:
+// a.first_face_size, or the largest ladder step below it (not below a.min_face_size) at which each
+// cube could fill every tile within an equal share of the budget. So a cold frame's stores fit however the
+// rays spread (a frame that outgrows the budget keeps none of its new tiles: raycache/memory_budget.hpp);
+// after it, each cube takes the size its rays call for. a.min_face_size when even that does not fit.
+inline int first_face_size_within(const AdaptiveResolution& a, std::size_t cubes, std::size_t budget_bytes,
+                                  std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+    const std::size_t share = budget_bytes / std::max<std::size_t>(cubes, 1);
+    if (full_cube_bytes(a.first_face_size, tile_bytes, entry_bytes) <= share) return a.first_face_size;
+    int best = a.min_face_size;
+    for (int i = 0;; ++i) {
+        const int size = face_size_step(i);
+        if (size >= a.first_face_size) break;
+        if (size >= a.min_face_size && full_cube_bytes(size, tile_bytes, entry_bytes) <= share) best = size;
+    }
+    return best;
 }
 
 // Fills the empty texels of `coarse` from `fine` (a cube of a larger face size): each coarse texel takes

@@ -310,7 +310,7 @@ public:
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax),
-          budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)) {
+          budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
         validate(adaptive_);
         if (!(origin_parallax_ > 0.0f))
@@ -684,11 +684,26 @@ private:
     // A new entry for object `id` with a cube around `bounds` (face_size as in attach()); its index.
     int add_entry(ObjectId id, int face_size, const CubeBounds& bounds) {
         const bool adaptive = face_size == adaptive_face_size;
+        if (adaptive) shrink_first_face_size(entries_.size() + 1);
         Entry entry{id, bounds, nullptr, nullptr, nullptr};
-        make_cube(entry, adaptive ? adaptive_.first_face_size : face_size);
+        make_cube(entry, adaptive ? first_face_size_ : face_size);
         if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         entries_.push_back(std::move(entry));
         return static_cast<int>(entries_.size() - 1);
+    }
+
+    // With `cubes` cubes on the budget, adaptive cubes start at the largest step at which each could fill
+    // all its tiles within its share (first_face_size_within), so a cold frame fits however its rays spread.
+    // Adaptive cubes that are larger and still empty, never sized by a frame, start over at that size.
+    void shrink_first_face_size(std::size_t cubes) {
+        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
+        const int size = first_face_size_within(adaptive_, cubes, budget_->limit(), tile, sizeof(void*));
+        if (size >= first_face_size_) return;
+        first_face_size_ = size;
+        for (Entry& e : entries_) {
+            const bool empty = with_cube(e, [&](const auto& cube) { return cube.face_size() > size && cube.allocated_tiles() == 0; });
+            if (e.coverage && !e.sized && empty) make_cube(e, size);
+        }
     }
 
     // The primitive count of `geometry` (in `scene`), asked of Embree once per split geometry.
@@ -877,6 +892,7 @@ private:
     float origin_drift_;
     float origin_parallax_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
+    int first_face_size_;                  // adaptive cubes start here (shrink_first_face_size)
     std::vector<Entry> entries_;
     // Slots: an entry (>= 0), none (-1), or a geometry split into primitive ranges (-2 - its index in ranged_).
     std::vector<int> direct_;                                // geom_id -> slot, objects not instanced
