@@ -45,7 +45,7 @@ inline Image render(const rcx::embree::Tracer& tracer, Variant& v, const Camera&
     if (v.caches) {
         // Ending the frame (stores made visible, cube sizes, confidence marks) is part of a cached frame's cost.
         const auto start = std::chrono::steady_clock::now();
-        v.last_stats = v.caches->begin_frame();
+        v.last_stats = rcx::embree::end_frame(*v.caches);
         frame_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
     if (ms) *ms = frame_ms;

@@ -285,7 +285,7 @@ std::string single_image(const Options& o, const Report& report) {
                 rcx::embree::FrameStats stats;
                 images[v] = tracer.render(scene.camera_at(0), s, &stats);
                 const auto end_start = Clock::now();
-                if (caches) hit_rate[v] = caches->begin_frame().hit_rate();
+                if (caches) hit_rate[v] = rcx::embree::end_frame(*caches).hit_rate();
                 ms[v].push_back(stats.milliseconds + std::chrono::duration<double, std::milli>(Clock::now() - end_start).count());
             }
         const double off_ms = rcx::bench::median(ms[0]);

@@ -140,7 +140,7 @@ int run(const rcx::Options& o) {
         if (o.prefill) {
             double ms = 0.0;
             const std::size_t stored = tracer.prefill(*caches, o.threads, &ms);
-            caches->begin_frame();
+            rcx::embree::end_frame(*caches, o.threads);
             if (!o.quiet) std::printf("prefilled %zu texels in %.0f ms\n", stored, ms);
         }
     }
@@ -195,7 +195,7 @@ int run(const rcx::Options& o) {
         double filled = -1.0;
         if (settings.caches) {
             const auto end_start = std::chrono::steady_clock::now();
-            const raycache::embree::SceneCacheStatistics s = settings.caches->begin_frame();
+            const raycache::embree::SceneCacheStatistics s = rcx::embree::end_frame(*settings.caches, o.threads);
             // Ending the frame is part of a cached frame's cost.
             r.cached_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - end_start).count();
             r.hit_rate = s.hit_rate();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -477,6 +478,13 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
         stats->milliseconds = std::chrono::duration<double, std::milli>(end - start).count();
     }
     return image;
+}
+
+raycache::embree::SceneCacheStatistics end_frame(raycache::embree::SceneCache& caches, int threads) {
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    return caches.begin_frame([&](std::size_t count, const std::function<void(std::size_t)>& f) {
+        arena.execute([&] { tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); }); });
+    });
 }
 
 } // namespace rcx::embree

@@ -87,4 +87,8 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+// Ends a frame of `caches` (SceneCache::begin_frame) with each cube's end-of-frame work spread over TBB
+// (threads: 0 = every core); the same result as caches.begin_frame().
+raycache::embree::SceneCacheStatistics end_frame(raycache::embree::SceneCache& caches, int threads = 0);
+
 } // namespace rcx::embree

@@ -33,6 +33,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -507,17 +508,35 @@ public:
     // Adaptive cubes then take the face size their object's rays call for: a smaller one is filled from
     // the old cube (resample_into), a larger one starts empty.
     SceneCacheStatistics begin_frame() {
+        return begin_frame([](std::size_t count, const std::function<void(std::size_t)>& f) {
+            for (std::size_t i = 0; i < count; ++i) f(i);
+        });
+    }
+
+    // begin_frame() with each cube's own end-of-frame work (the confidence test, making the frame's stores
+    // visible, the CDCT's pyramid) spread over the caller's threads: parallel_for(count, f) must call f(i)
+    // once for each i in [0, count), on any threads, and return when all calls have (for example through
+    // tbb::parallel_for). There the cubes share only the budget's byte counter, which they give bytes back
+    // to, so the result is begin_frame()'s; what allocates from the budget (the passes before, resizing
+    // adaptive cubes after) runs on the calling thread, in attach order.
+    template <class ParallelFor>
+    SceneCacheStatistics begin_frame(ParallelFor&& parallel_for) {
         SceneCacheStatistics total;
         // First, before anything reads the frame's stores or allocates between frames: if the budget refused
         // tiles this frame, none of the frame's new tiles is kept (which ones fit depended on thread timing):
         // every cube gives them back, then the tiles the frame wanted are allocated, empty, cube by cube.
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.give_back_refused_frame(); });
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.allocate_wanted_tiles(); });
-        for (Entry& e : entries_) {
+        std::vector<CubeStatistics> frames(entries_.size());
+        const std::function<void(std::size_t)> end_cube = [&](std::size_t i) {
+            Entry& e = entries_[i];
             with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
-            const CubeStatistics frame = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
-            add(total, frame);
-            if (e.coverage) total.resized_cubes += adapt(e, frame.lookups);
+            frames[i] = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
+        };
+        parallel_for(entries_.size(), end_cube);
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            add(total, frames[i]);
+            if (entries_[i].coverage) total.resized_cubes += adapt(entries_[i], frames[i].lookups);
         }
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
