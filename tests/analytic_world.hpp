@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -100,6 +101,33 @@ struct Sampler {
         return box.half_size * glm::vec3(2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f);
     }
 };
+
+// Rays leaving the mirror ball (radius 1 at the origin): from a random point of its surface into the
+// half-space of its normal. The same seed gives the same rays.
+struct LeavingRays {
+    std::mt19937 rng;
+    std::normal_distribution<float> g;
+    explicit LeavingRays(unsigned seed) : rng(seed) {}
+    // One ray: its origin (the surface point, which is also its normal) and its unit direction.
+    std::pair<glm::vec3, glm::vec3> next() {
+        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        if (glm::dot(d, n) < 0.0f) d = -d;
+        return {n, d};
+    }
+};
+
+// The moves the oracle tests make, one at a time: ball 0 and ball 4 of the ring, and ball 12, the shadow
+// caster above, each shifted by (0.3, 0.25, -0.2). The world after each, with the moved ball's index.
+inline std::vector<std::pair<std::size_t, World>> test_moves(const World& before) {
+    std::vector<std::pair<std::size_t, World>> moves;
+    for (std::size_t moved : {std::size_t{0}, std::size_t{4}, std::size_t{12}}) {
+        World after = before;
+        after.balls[moved].centre += glm::vec3(0.3f, 0.25f, -0.2f);
+        moves.push_back({moved, after});
+    }
+    return moves;
+}
 
 inline raycache::SceneChanges move_of(const World& before, const World& after, std::size_t i) {
     raycache::SceneChanges changes;

@@ -34,12 +34,9 @@ struct StoredRay {
 
 // Only directions with d.y <= max_up are stored; `rays`, when given, gets every ray stored.
 void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up = 1.0f, std::vector<StoredRay>* rays = nullptr) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<float> g;
+    LeavingRays leaving(seed);
     for (int k = 0; k < stores; ++k) {
-        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        if (glm::dot(d, n) < 0.0f) d = -d;
+        const auto [n, d] = leaving.next();
         if (d.y > max_up) continue;
         PathRecord path;
         const glm::vec3 c = w.trace(n, d, &path);
@@ -71,10 +68,8 @@ std::size_t stale_texels(const CctCube& cube, const World& before, const World& 
 
 TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
     const World before = make_world();
-    for (std::size_t moved : {std::size_t{0}, std::size_t{4}, std::size_t{12}}) {
+    for (const auto& [moved, after] : test_moves(before)) {
         CAPTURE(moved);
-        World after = before;
-        after.balls[moved].centre += glm::vec3(0.3f, 0.25f, -0.2f);
         CctCube kept(32), exact(32);
         fill(kept, before, 30000, 1);
         fill(exact, before, 30000, 1);
@@ -106,12 +101,9 @@ TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are ke
     // same rays): a tile whose paths hit the ball, or whose hit points' shadow rays can pass it.
     std::vector<char> tile_met(6 * 2 * 2, 0);
     {
-        std::mt19937 rng(2);
-        std::normal_distribution<float> g;
+        LeavingRays leaving(2);
         for (int k = 0; k < 30000; ++k) {
-            const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-            glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-            if (glm::dot(d, n) < 0.0f) d = -d;
+            const auto [n, d] = leaving.next();
             PathRecord path;
             before.trace(n, d, &path);
             const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, 32);

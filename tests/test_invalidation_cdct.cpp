@@ -40,12 +40,9 @@ const raycache::ReliefParameters parameters = search_parameters();
 // Fills a cube as the mirror ball's rays would: from points of its surface into their normal's half-space,
 // traced in `w`, stored with their path records (store_traced, as cdct_cached_trace stores a miss).
 void fill(CdctCube& cube, const World& w, int stores, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<float> g;
+    LeavingRays leaving(seed);
     for (int k = 0; k < stores; ++k) {
-        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        if (glm::dot(d, n) < 0.0f) d = -d;
+        const auto [n, d] = leaving.next();
         PathRecord path;
         const raycache::TracedRay t = w.traced(n, d, &path);
         raycache::store_traced(cube, box, n, d, t, parameters, &path);
@@ -91,10 +88,8 @@ std::size_t tile_of(const TexelAddress& a, int n) {
 
 TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
     const World before = make_world();
-    for (std::size_t moved : {std::size_t{0}, std::size_t{4}, std::size_t{12}}) {
+    for (const auto& [moved, after] : test_moves(before)) {
         CAPTURE(moved);
-        World after = before;
-        after.balls[moved].centre += glm::vec3(0.3f, 0.25f, -0.2f);
         CdctCube kept(32), exact(32);
         fill(kept, before, 30000, 1);
         fill(exact, before, 30000, 1);
@@ -218,14 +213,12 @@ TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invali
     raycache::ReliefParameters p = parameters;
     p.search = raycache::DepthSearch::relief;
     CdctCache cache(32, box, p);
-    std::mt19937 rng(8);
-    std::normal_distribution<float> g;
+    LeavingRays leaving(8);
     std::vector<std::pair<glm::vec3, glm::vec3>> rays;
     for (int k = 0; k < 30000; ++k) {
-        const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        glm::vec3 d = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
-        if (glm::dot(d, n) < 0.0f) d = -d;
-        rays.push_back({n, d});
+        const std::pair<glm::vec3, glm::vec3> ray = leaving.next();
+        const glm::vec3 n = ray.first, d = ray.second; // (a lambda below captures them)
+        rays.push_back(ray);
         cache.cached_trace(n, d, [&](PathRecord& path) { return before.traced(n, d, &path); });
         if (k % 5000 == 4999) cache.begin_frame();
     }
