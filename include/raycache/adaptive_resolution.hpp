@@ -111,7 +111,7 @@ public:
 
 private:
     void mark_cell(int face, int column, int row) noexcept {
-        const unsigned cell = static_cast<unsigned>((face * cells_per_edge + row) * cells_per_edge + column);
+        const unsigned cell = shared::raycache_texel_linear_index({face, column, row}, cells_per_edge);
         const std::uint64_t bit = std::uint64_t{1} << (cell % 64);
         std::atomic<std::uint64_t>& word = words_[cell / 64];
         if (!(word.load(std::memory_order_relaxed) & bit)) word.fetch_or(bit, std::memory_order_relaxed);

@@ -786,19 +786,29 @@ private:
             if (entry.compare_exchange_weak(tile, claimed(), std::memory_order_acq_rel, std::memory_order_acquire)) break;
         }
         const std::size_t i = tile_index(t);
-        Tile* fresh = nullptr;
-        if (!budget_ || budget_->try_reserve(sizeof(Tile))) {
-            fresh = new (std::nothrow) Tile();
-            if (!fresh && budget_) budget_->release(sizeof(Tile));
-        } else {
-            state_->wanted.set(i); // settle_budget()
-        }
-        if (fresh) {
-            state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
-            state_->fresh.set(i);
-        }
+        bool refused = false;
+        Tile* fresh = new_tile(true, &refused);
+        if (fresh) state_->fresh.set(i); // settle_budget()
+        else if (refused) state_->wanted.set(i);
         entry.store(fresh, std::memory_order_release);
         return fresh;
+    }
+
+    // A new, empty tile, its bytes taken from the budget (a refusal counted when count_refusal) and counted
+    // in allocated_tiles; null when the budget (*refused set) or the heap has no room for it. The caller
+    // puts it in the table.
+    Tile* new_tile(bool count_refusal, bool* refused = nullptr) noexcept {
+        if (budget_ && !budget_->try_reserve(sizeof(Tile), count_refusal)) {
+            if (refused) *refused = true;
+            return nullptr;
+        }
+        Tile* tile = new (std::nothrow) Tile();
+        if (!tile) {
+            if (budget_) budget_->release(sizeof(Tile));
+            return nullptr;
+        }
+        state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+        return tile;
     }
 
     // Frees every tile and returns the table's bytes to the budget (destruction, move-assignment).
@@ -894,14 +904,8 @@ private:
     void allocate_wanted() noexcept {
         if (!budget_) return;
         state_->wanted.take_each([&](std::size_t i) {
-            if (state_->tiles[i].load(std::memory_order_relaxed) || !budget_->try_reserve(sizeof(Tile), false)) return;
-            Tile* tile = new (std::nothrow) Tile();
-            if (!tile) {
-                budget_->release(sizeof(Tile));
-                return;
-            }
-            state_->tiles[i].store(tile, std::memory_order_relaxed);
-            state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
+            if (state_->tiles[i].load(std::memory_order_relaxed)) return;
+            if (Tile* tile = new_tile(false)) state_->tiles[i].store(tile, std::memory_order_relaxed);
         });
     }
 
