@@ -25,6 +25,7 @@ struct Ball {
     glm::vec3 centre;
     float radius;
     glm::vec3 colour;
+    bool mirror = false; // reflects (colour x what its reflected ray sees), unlit
 };
 
 struct World {
@@ -51,22 +52,33 @@ struct World {
     // sky. Fills `path` when given.
     glm::vec3 trace(glm::vec3 o, glm::vec3 d, PathRecord* path = nullptr) const { return traced(o, d, path).color; }
 
-    // trace() with the distance to the hit (infinity for the sky), as a CDCT store takes it.
-    raycache::TracedRay traced(glm::vec3 o, glm::vec3 d, PathRecord* path = nullptr) const {
+    // trace() with the distance to the hit (infinity for the sky), as a CDCT store takes it. Mirror balls
+    // reflect up to 3 bounces deep; the path records what a tracer would report: every hit, shadow rays
+    // (lit), bounces from a hit point that hit something (chained) or escaped (escaped(direction)).
+    raycache::TracedRay traced(glm::vec3 o, glm::vec3 d, PathRecord* path = nullptr, int bounce = 0) const {
         float t = 0.0f;
         const int i = nearest(o, d, &t);
-        if (i < 0) return {glm::vec3(0.0f), INFINITY};
+        if (i < 0) {
+            if (path && bounce > 0) path->escaped(d);
+            return {glm::vec3(0.0f), INFINITY};
+        }
         const glm::vec3 p = o + t * d;
+        const Ball& ball = balls[static_cast<std::size_t>(i)];
         if (path) {
             path->hit(static_cast<std::uint64_t>(i), p);
-            path->lit = true;
+            if (bounce > 0) path->chained = true;
         }
-        const glm::vec3 n = glm::normalize(p - balls[static_cast<std::size_t>(i)].centre);
+        const glm::vec3 n = glm::normalize(p - ball.centre);
         const glm::vec3 q = p + 1e-3f * n;
+        if (ball.mirror) {
+            if (bounce >= 3) return {glm::vec3(0.0f), t};
+            return {ball.colour * traced(q, glm::reflect(d, n), path, bounce + 1).color, t};
+        }
+        if (path) path->lit = true;
         const glm::vec3 to_light = light - q;
         const float dist = glm::length(to_light);
         const bool shadowed = nearest(q, to_light / dist, nullptr, dist) >= 0;
-        return {balls[static_cast<std::size_t>(i)].colour * (shadowed ? 0.25f : 1.0f), t};
+        return {ball.colour * (shadowed ? 0.25f : 1.0f), t};
     }
 };
 

@@ -182,3 +182,45 @@ TEST_CASE("sphere against box: inside, touching a face, past a corner") {
     CHECK(!raycache::shared::raycache_box_meets_sphere(lo, hi, {2, 2, 2}, 1.70f));
     CHECK(raycache::shared::raycache_box_meets_sphere(lo, hi, {2, 2, 2}, 1.75f));
 }
+
+TEST_CASE("the cone of a box of unit directions holds every direction in the box; a box around zero is every direction") {
+    using raycache::shared::raycache_cone_of_direction_box;
+    // Box [-0.2, 0.2] x [-0.2, 0.2] x [0.9, 1]: axis +z; the widest corners (+-0.2, +-0.2, 0.9) lie at
+    // cos = 0.9 / sqrt(0.89) = 0.95400 (17.45 degrees); (+-0.2, +-0.2, 1) only at 1 / sqrt(1.08) = 0.96225.
+    const raycache_direction_cone c = raycache_cone_of_direction_box({-0.2f, -0.2f, 0.9f}, {0.2f, 0.2f, 1.0f});
+    CHECK(c.axis.z == doctest::Approx(1.0f));
+    CHECK(c.cos_spread == doctest::Approx(0.95400).epsilon(1e-4));
+    CHECK(c.cos_spread <= 0.9540042f); // widened, never narrowed
+    // Brute force: every unit vector inside a random box lies within the cone.
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    int boxes = 0, narrow = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const glm::vec3 a = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+        const glm::vec3 b = glm::normalize(a + 0.6f * glm::vec3(u(rng), u(rng), u(rng)));
+        const glm::vec3 lo = glm::min(a, b), hi = glm::max(a, b);
+        const raycache_direction_cone cone = raycache_cone_of_direction_box(lo, hi);
+        ++boxes;
+        narrow += cone.cos_spread > 0.0f;
+        for (int k = 0; k < 2000; ++k) {
+            const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+            if (glm::any(glm::lessThan(d, lo)) || glm::any(glm::greaterThan(d, hi))) continue;
+            REQUIRE(glm::dot(d, cone.axis) >= cone.cos_spread - 1e-6f);
+        }
+        // Its two defining directions in particular.
+        CHECK(glm::dot(a, cone.axis) >= cone.cos_spread - 1e-6f);
+        CHECK(glm::dot(b, cone.axis) >= cone.cos_spread - 1e-6f);
+    }
+    CHECK(narrow > boxes / 2); // mostly a real bound, not "every direction"
+    // One direction: a cone of about the slack around it.
+    const glm::vec3 one = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
+    const raycache_direction_cone single = raycache_cone_of_direction_box(one, one);
+    CHECK(glm::dot(single.axis, one) == doctest::Approx(1.0f));
+    CHECK(single.cos_spread > 0.9999f);
+    // Boxes holding (0, 0, 0), or reaching past 90 degrees from their centre: every direction.
+    CHECK(raycache_cone_of_direction_box({-1, -1, -1}, {1, 1, 1}).cos_spread <= -1.0f);
+    CHECK(raycache_cone_of_direction_box({-1, -1, -0.1f}, {1, 1, 1}).cos_spread <= -1.0f);
+    CHECK(raycache_cone_of_direction_box({0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}).cos_spread <= -1.0f);
+    // ... and such a cone meets every sphere.
+    CHECK(meets({0, 0, 0}, raycache_cone_of_direction_box({-1, -1, -1}, {1, 1, 1}), {0, 0, -50}, 0.1f));
+}

@@ -208,3 +208,84 @@ TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the ligh
     CHECK(counts.dropped > 0);
     CHECK(stale() == 0);
 }
+
+namespace {
+
+// fill() with each path record passed through `edit` before it is stored.
+template <class Edit>
+void fill_edited(CctCube& cube, const World& w, int stores, unsigned seed, Edit&& edit, std::vector<StoredRay>* rays) {
+    LeavingRays leaving(seed);
+    for (int k = 0; k < stores; ++k) {
+        const auto [n, d] = leaving.next();
+        PathRecord path;
+        const glm::vec3 c = w.trace(n, d, &path);
+        edit(path);
+        if (cube.store(d, c, path) && rays) {
+            const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
+            rays->push_back({{a.face, a.column, a.row}, n, d});
+        }
+    }
+    cube.begin_frame();
+}
+
+} // namespace
+
+TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflections drops the texels it now blocks; the "
+          "escape cone keeps more than treating escapes as unbounded") {
+    World before = make_world();
+    before.balls[2].mirror = true;
+    before.balls.push_back({glm::vec3(0.0f, -40.0f, 0.0f), 0.8f, glm::vec3(1.0f, 0.2f, 0.2f)}); // far below all
+    const std::size_t wanderer = before.balls.size() - 1;
+    // Onto one stored path that hit the mirror alone and escaped: its hit point + 8 along its escape.
+    glm::vec3 target(0.0f);
+    bool found = false;
+    {
+        LeavingRays leaving(31);
+        for (int k = 0; k < 40000 && !found; ++k) {
+            const auto [n, d] = leaving.next();
+            PathRecord path;
+            before.trace(n, d, &path);
+            if (path.objects != raycache::object_bits(2) || !path.has_escapes()) continue;
+            target = path.vertex_lo + 8.0f * path.escape_lo; // one hit, one escape: the boxes are points
+            found = true;
+        }
+    }
+    REQUIRE(found);
+    World after = before;
+    after.balls[wanderer].centre = target;
+    const raycache::SceneChanges changes = move_of(before, after, wanderer);
+
+    // Three cubes of the same stores: records as traced, with their escapes left out (as if not recorded),
+    // and with every escape recorded as unbounded (no bound on its segment).
+    auto as_traced = [](PathRecord&) {};
+    auto without_escapes = [](PathRecord& p) { p.escape_lo = glm::vec3(INFINITY), p.escape_hi = glm::vec3(-INFINITY); };
+    auto unbounded = [](PathRecord& p) {
+        if (p.has_escapes()) p.unbounded = true;
+        p.escape_lo = glm::vec3(INFINITY), p.escape_hi = glm::vec3(-INFINITY);
+    };
+    CctCube exact(128), stripped(128), bound_less(128);
+    std::vector<StoredRay> rays, rays_stripped, rays_bound_less;
+    fill_edited(exact, before, 40000, 31, as_traced, &rays);
+    fill_edited(stripped, before, 40000, 31, without_escapes, &rays_stripped);
+    fill_edited(bound_less, before, 40000, 31, unbounded, &rays_bound_less);
+    // The oracle retraces the stored rays (the records describe the stored paths).
+    auto stale = [&](const CctCube& cube, const std::vector<StoredRay>& stored) {
+        std::size_t n = 0;
+        for (const StoredRay& r : stored)
+            n += cube.load(r.texel).has_value() && before.trace(r.origin, r.direction) != after.trace(r.origin, r.direction);
+        return n;
+    };
+    const std::size_t stale_before = stale(exact, rays);
+    CHECK(stale_before > 0);
+    const std::size_t valid = exact.valid_texels();
+    raycache::invalidate_changes(exact, {box, -1.0f}, changes);
+    raycache::invalidate_changes(stripped, {box, -1.0f}, changes);
+    raycache::invalidate_changes(bound_less, {box, -1.0f}, changes);
+    MESSAGE(valid << " texels, " << stale_before << " stored rays stale before; kept with escape cones " << exact.valid_texels()
+                  << ", with escapes unbounded " << bound_less.valid_texels() << "; stale left without escape records "
+                  << stale(stripped, rays_stripped));
+    CHECK(stale(exact, rays) == 0);
+    CHECK(stale(stripped, rays_stripped) > 0); // what the escape records catch
+    CHECK(stale(bound_less, rays_bound_less) == 0);
+    CHECK(exact.valid_texels() > bound_less.valid_texels());
+}

@@ -139,7 +139,9 @@ struct Shader {
             ++stats.rays;
         }
         if (record) {
-            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) record->unbounded |= depth > record_depth; // a bounce escaped
+            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+                if (depth > record_depth) record->escaped(direction); // a bounce from a hit point escaped
+            }
             else {
                 record->hit(raycache::embree::path_key({rh.hit.geomID, rh.hit.instID[0]}), origin + rh.ray.tfar * direction);
                 record->chained |= depth > record_depth; // a segment from one hit point to another
@@ -193,7 +195,8 @@ struct Shader {
                 record_depth = outer_depth;
                 if (outer) { // this ray is a bounce of an enclosing cached path: what it saw is part of that path
                     outer->merge(path);
-                    (std::isinf(traced.distance) ? outer->unbounded : outer->chained) = true;
+                    if (std::isinf(traced.distance)) outer->escaped(direction); // from its hit point on this object
+                    else outer->chained = true;
                 }
                 return traced;
             });

@@ -316,6 +316,7 @@ public:
         int face, column0, row0, column1, row1; // texels [column0, column1) x [row0, row1) of the face
         std::uint64_t objects;           // Bloom mask of the objects the recorded paths hit
         glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
+        glm::vec3 escape_lo, escape_hi;  // box of their escaped bounces' unit directions; empty while lo.x > hi.x
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
         bool has_origins;
         glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
@@ -331,19 +332,13 @@ public:
             const TexelAddress first = first_texel_of_tile(i);
             TileState t{i, first.face, first.column, first.row,
                         std::min(face_size_, first.column + tile_edge), std::min(face_size_, first.row + tile_edge),
-                        tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f),
-                        tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f), glm::vec3(0.0f), 0};
+                        tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f),
+                        glm::vec3(0.0f), tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f),
+                        glm::vec3(0.0f), 0};
             // Recorded bits are set only on texels holding a value (and cleared when one is emptied).
             t.unrecorded_texels = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) - count_bits(tile->recorded_bits);
-            // record_path() widens all three axes at once, so one axis tells whether the box is empty.
-            if (tile->vertex_min[0].load(std::memory_order_relaxed) <= tile->vertex_max[0].load(std::memory_order_relaxed)) {
-                for (int k = 0; k < 3; ++k) {
-                    t.vertex_lo[k] = unordered(tile->vertex_min[k].load(std::memory_order_relaxed));
-                    t.vertex_hi[k] = unordered(tile->vertex_max[k].load(std::memory_order_relaxed));
-                }
-            } else {
-                t.vertex_lo = glm::vec3(1.0f), t.vertex_hi = glm::vec3(-1.0f);
-            }
+            read_box(tile->vertex_min, tile->vertex_max, t.vertex_lo, t.vertex_hi);
+            read_box(tile->escape_min, tile->escape_max, t.escape_lo, t.escape_hi);
             t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
                                                  tile->pending_max[0].load(std::memory_order_relaxed);
             if (t.has_origins) {
@@ -635,6 +630,8 @@ private:
             for (int k = 0; k < 3; ++k) {
                 vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 vertex_max[k].store(0u, std::memory_order_relaxed);
+                escape_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                escape_max[k].store(0u, std::memory_order_relaxed);
             }
             pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
         }
@@ -695,6 +692,7 @@ private:
         std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
         std::atomic<std::uint64_t> path_objects{0};
         std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
+        std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
         std::atomic<std::uint32_t> path_flags{0};
         std::atomic<std::uint32_t> valid{0}; // texels holding a value (so passes over tiles need not read them)
     };
@@ -982,14 +980,29 @@ private:
                                     (path.unbounded ? path_unbounded : 0u);
         if ((tile.path_flags.load(std::memory_order_relaxed) & flags) != flags)
             tile.path_flags.fetch_or(flags, std::memory_order_relaxed);
-        if (!path.has_vertices()) return;
+        if (path.has_vertices()) widen(tile.vertex_min, tile.vertex_max, path.vertex_lo, path.vertex_hi);
+        if (path.has_escapes()) widen(tile.escape_min, tile.escape_max, path.escape_lo, path.escape_hi);
+    }
+    // Widens the box of ordered floats [min, max] to hold [lo, hi] (atomic min and max per axis).
+    static void widen(std::atomic<std::uint32_t> (&min)[3], std::atomic<std::uint32_t> (&max)[3], const glm::vec3& lo,
+                      const glm::vec3& hi) noexcept {
         for (int k = 0; k < 3; ++k) {
-            const std::uint32_t lo_key = ordered(path.vertex_lo[k] + 0.0f), hi_key = ordered(path.vertex_hi[k] + 0.0f);
-            std::uint32_t lo = tile.vertex_min[k].load(std::memory_order_relaxed);
-            while (lo_key < lo && !tile.vertex_min[k].compare_exchange_weak(lo, lo_key, std::memory_order_relaxed)) {}
-            std::uint32_t hi = tile.vertex_max[k].load(std::memory_order_relaxed);
-            while (hi_key > hi && !tile.vertex_max[k].compare_exchange_weak(hi, hi_key, std::memory_order_relaxed)) {}
+            const std::uint32_t lo_key = ordered(lo[k] + 0.0f), hi_key = ordered(hi[k] + 0.0f);
+            std::uint32_t old_lo = min[k].load(std::memory_order_relaxed);
+            while (lo_key < old_lo && !min[k].compare_exchange_weak(old_lo, lo_key, std::memory_order_relaxed)) {}
+            std::uint32_t old_hi = max[k].load(std::memory_order_relaxed);
+            while (hi_key > old_hi && !max[k].compare_exchange_weak(old_hi, hi_key, std::memory_order_relaxed)) {}
         }
+    }
+    // The box [lo, hi] that widen() built in [min, max]; lo = 1, hi = -1 (empty) when nothing was added
+    // (widen() sets all three axes at once, so one axis tells).
+    static void read_box(const std::atomic<std::uint32_t> (&min)[3], const std::atomic<std::uint32_t> (&max)[3], glm::vec3& lo,
+                         glm::vec3& hi) noexcept {
+        if (min[0].load(std::memory_order_relaxed) > max[0].load(std::memory_order_relaxed)) {
+            lo = glm::vec3(1.0f), hi = glm::vec3(-1.0f);
+            return;
+        }
+        for (int k = 0; k < 3; ++k) lo[k] = unordered(min[k].load(std::memory_order_relaxed)), hi[k] = unordered(max[k].load(std::memory_order_relaxed));
     }
 
     // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and

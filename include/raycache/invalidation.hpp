@@ -13,8 +13,9 @@
 //     the search's gap limit: the segments end there);
 //   - or the rest of a path stored into its tile can have met X (the tile's PathRecord union,
 //     raycache/path_record.hpp): X among the objects hit (Bloom mask), A or B in the cone from a light to
-//     the box of hit points (shadow rays), A or B in that box (bounces between hit points), a bounce that
-//     escaped (unbounded), or a cached object whose own cube changed (transitively, by the caller);
+//     the box of hit points (shadow rays), A or B in that box (bounces between hit points), A or B met by
+//     rays from that box in the cone of the directions in which bounces escaped, a bounce that escaped with
+//     no such bound (unbounded), or a cached object whose own cube changed (transitively, by the caller);
 //   - or its store brought no PathRecord (nothing is known about the rest of its path).
 // A moved light empties every texel whose path hit something. A tile the path tests catch is emptied whole.
 #pragma once
@@ -115,6 +116,8 @@ inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_di
 template <class State>
 bool paths_meet(const State& t, const SceneChanges& changes) {
     const bool has_vertices = t.vertex_lo.x <= t.vertex_hi.x;
+    const bool has_escapes = t.escape_lo.x <= t.escape_hi.x;
+    if (has_escapes && !has_vertices) return true; // escapes from points not recorded: no bound
     if (t.path_flags & 4u) return true; // unbounded: a bounce escaped
     if (changes.light_moved && has_vertices) return true;
     auto tagged = [&](std::uint64_t key) {
@@ -128,7 +131,14 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
         if (!has_vertices) continue;
         const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
         const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
+        // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
+        const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
+        const shared::raycache_direction_cone escapes =
+            has_escapes ? shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi) : shared::raycache_direction_cone{};
         for (const BoundingSphere& s : {m.before, m.after}) {
+            if (has_escapes &&
+                shared::raycache_rays_from_ball_meet_sphere(centre, radius + 1e-3f * scale, escapes, s.centre, s.radius))
+                return true;
             if ((t.path_flags & 1u))
                 for (const glm::vec3& light : changes.lights)
                     if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
@@ -241,6 +251,8 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
             union_of.objects |= o.objects;
             if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
                                                 union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
+            if (o.escape_lo.x <= o.escape_hi.x) union_of.escape_lo = glm::min(union_of.escape_lo, o.escape_lo),
+                                                union_of.escape_hi = glm::max(union_of.escape_hi, o.escape_hi);
             union_of.lit |= (o.path_flags & 1u) != 0;
             union_of.chained |= (o.path_flags & 2u) != 0;
             union_of.unbounded |= (o.path_flags & 4u) != 0;

@@ -5,12 +5,13 @@
 // the rest of its path: the objects it hit, the shadow rays from its hit points to the light, and further
 // bounces. The tracer fills one PathRecord per traced leaving ray (SceneCache::leaving_ray with a callback
 // that takes a PathRecord&, or cct_cached_trace() with a trace taking a PathRecord&); each 16 x 16 tile of a cube keeps the union of
-// the records of the stores into it (CacheCube::store with a path: 8 + 24 + 4 bytes a tile, and a bit per
-// texel saying its store brought a record).
+// the records of the stores into it (CacheCube::store with a path: 8 + 24 + 24 + 4 bytes a tile, and a bit
+// per texel saying its store brought a record).
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -40,7 +41,13 @@ struct PathRecord {
     bool lit = false;
     // A bounce after the first hit was traced from one hit point to another (segments inside the box).
     bool chained = false;
-    // A bounce after the first hit escaped to infinity: no bound on its segment, any move may change it.
+    // Box of the unit directions of the bounces after the first hit that escaped to infinity, each from one
+    // of the path's hit points (empty while lo > hi): rays from the hit points' box within the cone of these
+    // directions, so a move far from that cone cannot have blocked them.
+    glm::vec3 escape_lo{std::numeric_limits<float>::infinity()};
+    glm::vec3 escape_hi{-std::numeric_limits<float>::infinity()};
+    // A bounce escaped with no bound known on its segment (not from a hit point, or no direction given):
+    // any move may change the path.
     bool unbounded = false;
 
     // The path hit object `key` at `point`.
@@ -49,12 +56,28 @@ struct PathRecord {
         vertex_lo = glm::min(vertex_lo, point);
         vertex_hi = glm::max(vertex_hi, point);
     }
+    // A bounce after the first hit, leaving one of the path's hit points (recorded with hit(); the tracer's
+    // surface offset of up to 1e-3 x max(1, |coordinates|) is allowed for), escaped in `direction` (any
+    // length; a zero or non-finite one records the path as unbounded).
+    void escaped(const glm::vec3& direction) noexcept {
+        const float l = glm::length(direction);
+        if (!(l > 0.0f) || !std::isfinite(l)) {
+            unbounded = true;
+            return;
+        }
+        const glm::vec3 d = direction / l;
+        escape_lo = glm::min(escape_lo, d);
+        escape_hi = glm::max(escape_hi, d);
+    }
     bool has_vertices() const noexcept { return vertex_lo.x <= vertex_hi.x; }
+    bool has_escapes() const noexcept { return escape_lo.x <= escape_hi.x; }
     // Adds what another record saw (a nested leaving ray's path is part of the outer one).
     void merge(const PathRecord& other) noexcept {
         objects |= other.objects;
         vertex_lo = glm::min(vertex_lo, other.vertex_lo);
         vertex_hi = glm::max(vertex_hi, other.vertex_hi);
+        escape_lo = glm::min(escape_lo, other.escape_lo);
+        escape_hi = glm::max(escape_hi, other.escape_hi);
         lit = lit || other.lit;
         chained = chained || other.chained;
         unbounded = unbounded || other.unbounded;

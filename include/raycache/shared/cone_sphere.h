@@ -110,6 +110,41 @@ RAYCACHE_FN raycache_direction_cone raycache_cone_toward_ball(vec3 apex, vec3 ce
     return raycache_widened_cone(v / d, sqrt(max(0.0f, 1.0f - s * s)));
 }
 
+/* The cosine of the angle between unit `axis` and the direction of `corner`; -1 for a corner at (0, 0, 0). */
+RAYCACHE_FN float raycache_corner_cos(vec3 axis, vec3 corner) {
+    float l = length(corner);
+    return l > 0.0f ? dot(axis, corner) / l : -1.0f;
+}
+
+/* A cone that holds every unit direction inside the box [lo, hi] (the componentwise bounds of a set of
+ * unit directions: where a path's bounces escaped). The directions of a box form the convex cone over it,
+ * and the angle from the axis is largest at one of its 8 corners while that cone stays within 90 degrees
+ * (a cap of at most 90 degrees is convex): so the spread reaches the farthest corner. A box reaching 90
+ * degrees or more from its centre's direction (one around (0, 0, 0) among them) gives every direction
+ * (cos_spread = -1, which meets every sphere). */
+RAYCACHE_FN raycache_direction_cone raycache_cone_of_direction_box(vec3 lo, vec3 hi) {
+    raycache_direction_cone every;
+    every.axis = vec3(0.0f, 1.0f, 0.0f);
+    every.cos_spread = -1.0f;
+    every.sin_spread = 0.0f;
+    vec3 middle = 0.5f * (lo + hi);
+    float l = length(middle);
+    if (!(l > 0.0f)) return every;
+    vec3 axis = middle / l;
+    float c = 1.0f;
+    c = min(c, raycache_corner_cos(axis, vec3(lo.x, lo.y, lo.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(hi.x, lo.y, lo.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(lo.x, hi.y, lo.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(hi.x, hi.y, lo.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(lo.x, lo.y, hi.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(hi.x, lo.y, hi.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(lo.x, hi.y, hi.z)));
+    c = min(c, raycache_corner_cos(axis, vec3(hi.x, hi.y, hi.z)));
+    /* 1e-5 below 0: a cap that reaches 90 degrees within rounding is not trusted to be convex. */
+    if (!(c > 1.0e-5f)) return every;
+    return raycache_widened_cone(axis, c - 1.0e-6f);
+}
+
 /* True when the sphere (centre, radius) meets the box [lo, hi] (distance from the centre to the box). */
 RAYCACHE_FN bool raycache_box_meets_sphere(vec3 lo, vec3 hi, vec3 centre, float radius) {
     vec3 nearest = vec3(clamp(centre.x, lo.x, hi.x), clamp(centre.y, lo.y, hi.y), clamp(centre.z, lo.z, hi.z));
