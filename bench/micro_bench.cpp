@@ -98,13 +98,16 @@ void cct_store(benchmark::State& state) {
 BENCHMARK(cct_store);
 
 // A CDCT cube filled by tracing 512 x 512 x 6 rays from the main sphere's centre (so every texel is
-// valid), then searched along the leaving rays of the main sphere: linear (thesis) or over the pyramid.
-void cdct_search(benchmark::State& state, bool pyramid, float step, float epsilon) {
+// valid), then searched along the leaving rays of the main sphere: linear (thesis), over the pyramid, or
+// the secant search (the default: a few reads and a consistency test, max_gap 0.5).
+void cdct_search(benchmark::State& state, raycache::DepthSearch search, bool pyramid, float step, float epsilon) {
     Fixture& f = fixture();
     static std::unique_ptr<raycache::CdctCube> cube;
     static std::unique_ptr<raycache::DepthPyramid> levels;
     static raycache::CubeBounds bounds;
-    const raycache::ReliefParameters relief{step, epsilon, 2048, 100.0f};
+    raycache::ReliefParameters relief{step, epsilon, 2048, 100.0f};
+    relief.search = search;
+    if (search == raycache::DepthSearch::secant) relief.max_gap = 0.5f;
     if (!cube) {
         bounds = raycache::embree::bounds_of(f.tracer.rtc_scene(), f.main_sphere);
         cube = std::make_unique<raycache::CdctCube>(512);
@@ -132,7 +135,7 @@ void cdct_search(benchmark::State& state, bool pyramid, float step, float epsilo
     for (auto _ : state) {
         const LeavingRay& r = main_rays[i++ % main_rays.size()];
         const raycache::ReliefResult result =
-            raycache::relief_search(*cube, bounds, r.origin, r.direction, relief, pyramid ? levels.get() : nullptr);
+            raycache::depth_search(*cube, bounds, r.origin, r.direction, relief, pyramid ? levels.get() : nullptr);
         reads += result.texels_read;
         hits += result.hit;
         benchmark::DoNotOptimize(result);
@@ -140,8 +143,9 @@ void cdct_search(benchmark::State& state, bool pyramid, float step, float epsilo
     state.counters["texels_per_search"] = benchmark::Counter(static_cast<double>(reads), benchmark::Counter::kAvgIterations);
     state.counters["hit_rate"] = benchmark::Counter(static_cast<double>(hits), benchmark::Counter::kAvgIterations);
 }
-BENCHMARK_CAPTURE(cdct_search, linear_thesis_0_2, false, 0.2f, 0.02f);
-BENCHMARK_CAPTURE(cdct_search, pyramid, true, 0.2f, 0.02f);
+BENCHMARK_CAPTURE(cdct_search, linear_thesis_0_2, raycache::DepthSearch::relief, false, 0.2f, 0.02f);
+BENCHMARK_CAPTURE(cdct_search, pyramid, raycache::DepthSearch::relief, true, 0.2f, 0.02f);
+BENCHMARK_CAPTURE(cdct_search, secant, raycache::DepthSearch::secant, false, 0.2f, 0.02f);
 
 } // namespace
 
