@@ -32,20 +32,28 @@ struct StoredRay {
     glm::vec3 origin, direction;
 };
 
-// Only directions with d.y <= max_up are stored; `rays`, when given, gets every ray stored.
-void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up = 1.0f, std::vector<StoredRay>* rays = nullptr) {
+// Only directions with d.y <= max_up are stored, each path record passed through `edit` first; `rays`,
+// when given, gets every ray stored.
+template <class Edit>
+void fill_edited(CctCube& cube, const World& w, int stores, unsigned seed, float max_up, Edit&& edit, std::vector<StoredRay>* rays) {
     LeavingRays leaving(seed);
     for (int k = 0; k < stores; ++k) {
         const auto [n, d] = leaving.next();
         if (d.y > max_up) continue;
         PathRecord path;
         const glm::vec3 c = w.trace(n, d, &path);
+        edit(path);
         if (cube.store(d, c, path) && rays) {
             const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
             rays->push_back({{a.face, a.column, a.row}, n, d});
         }
     }
     cube.begin_frame();
+}
+
+// fill_edited() with the records as traced.
+void fill(CctCube& cube, const World& w, int stores, unsigned seed, float max_up = 1.0f, std::vector<StoredRay>* rays = nullptr) {
+    fill_edited(cube, w, stores, seed, max_up, [](PathRecord&) {}, rays);
 }
 
 // Valid texels for which some sampled ray sees a different colour in `after` than in `before`.
@@ -209,27 +217,6 @@ TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the ligh
     CHECK(stale() == 0);
 }
 
-namespace {
-
-// fill() with each path record passed through `edit` before it is stored.
-template <class Edit>
-void fill_edited(CctCube& cube, const World& w, int stores, unsigned seed, Edit&& edit, std::vector<StoredRay>* rays) {
-    LeavingRays leaving(seed);
-    for (int k = 0; k < stores; ++k) {
-        const auto [n, d] = leaving.next();
-        PathRecord path;
-        const glm::vec3 c = w.trace(n, d, &path);
-        edit(path);
-        if (cube.store(d, c, path) && rays) {
-            const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, cube.face_size());
-            rays->push_back({{a.face, a.column, a.row}, n, d});
-        }
-    }
-    cube.begin_frame();
-}
-
-} // namespace
-
 TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflections drops the texels it now blocks; the "
           "escape cone keeps more than treating escapes as unbounded") {
     World before = make_world();
@@ -265,9 +252,9 @@ TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflection
     };
     CctCube exact(128), stripped(128), bound_less(128);
     std::vector<StoredRay> rays, rays_stripped, rays_bound_less;
-    fill_edited(exact, before, 40000, 31, as_traced, &rays);
-    fill_edited(stripped, before, 40000, 31, without_escapes, &rays_stripped);
-    fill_edited(bound_less, before, 40000, 31, unbounded, &rays_bound_less);
+    fill_edited(exact, before, 40000, 31, 1.0f, as_traced, &rays);
+    fill_edited(stripped, before, 40000, 31, 1.0f, without_escapes, &rays_stripped);
+    fill_edited(bound_less, before, 40000, 31, 1.0f, unbounded, &rays_bound_less);
     // The oracle retraces the stored rays (the records describe the stored paths).
     auto stale = [&](const CctCube& cube, const std::vector<StoredRay>& stored) {
         std::size_t n = 0;

@@ -141,8 +141,7 @@ struct Shader {
         if (record) {
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
                 if (depth > record_depth) record->escaped(direction); // a bounce from a hit point escaped
-            }
-            else {
+            } else {
                 record->hit(raycache::embree::path_key({rh.hit.geomID, rh.hit.instID[0]}), origin + rh.ray.tfar * direction);
                 record->chained |= depth > record_depth; // a segment from one hit point to another
             }

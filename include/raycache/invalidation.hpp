@@ -126,15 +126,17 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
     };
     for (std::uint64_t key : changes.changed)
         if (tagged(key)) return true;
+    if (changes.moved.empty()) return false;
+    // The ball around the hit points, and the cone of the escaped bounces' directions: once per tile.
+    const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
+    const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
+    // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
+    const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
+    const shared::raycache_direction_cone escapes =
+        has_escapes ? shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi) : shared::raycache_direction_cone{};
     for (const SceneChanges::Move& m : changes.moved) {
         if (tagged(m.key)) return true;
         if (!has_vertices) continue;
-        const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
-        const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
-        // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
-        const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
-        const shared::raycache_direction_cone escapes =
-            has_escapes ? shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi) : shared::raycache_direction_cone{};
         for (const BoundingSphere& s : {m.before, m.after}) {
             if (has_escapes &&
                 shared::raycache_rays_from_ball_meet_sphere(centre, radius + 1e-3f * scale, escapes, s.centre, s.radius))
