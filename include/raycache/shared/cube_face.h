@@ -117,7 +117,7 @@ RAYCACHE_FN int raycache_texel_index(float sc, float scale, int face_size) {
 
 /* The texel a direction s falls in, on a cube of face_size x face_size texels per face.
  * s need not be unit length; a non-direction gives face RAYCACHE_NO_FACE, column and row 0. */
-RAYCACHE_FN raycache_texel_address raycache_texel_of(vec3 s, int face_size) {
+RAYCACHE_HOT_FN raycache_texel_address raycache_texel_of(vec3 s, int face_size) {
     raycache_texel_address address;
     address.face = raycache_face_of(s);
     address.column = 0;
