@@ -9,6 +9,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -84,6 +85,16 @@ std::size_t tile_of(const TexelAddress& a, int n) {
     return static_cast<std::size_t>((a.face * per_edge + a.row / 16) * per_edge + a.column / 16);
 }
 
+// Per tile of a 32-texel cube: whether its Bloom mask holds the bits of object `key` (such tiles are
+// dropped whole by their path records, whatever their texels' cones).
+std::vector<char> tiles_maybe_tagged(const CdctCube& cube, std::uint64_t key) {
+    std::vector<char> maybe(6 * 2 * 2, 0);
+    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
+        maybe[t.index] = (t.objects & raycache::object_bits(key)) == raycache::object_bits(key);
+    });
+    return maybe;
+}
+
 } // namespace
 
 TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
@@ -123,10 +134,7 @@ TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the tex
     changes.lights.push_back(w.light);
 
     // Tiles whose Bloom masks happen to hold the key's bits are dropped whole: leave them out.
-    std::vector<char> bloom_says_maybe(6 * 2 * 2, 0);
-    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
-        bloom_says_maybe[t.index] = (t.objects & raycache::object_bits(key)) == raycache::object_bits(key);
-    });
+    const std::vector<char> bloom_says_maybe = tiles_maybe_tagged(cube, key);
     // From angles: a texel's rays (origins within the box's ball, radius sqrt(3)) reach a sphere only
     // within its angular radius grown by that ball, plus half the texel's diagonal (< 3 degrees at 32).
     auto angle_to = [](const TexelAddress& a, const raycache::BoundingSphere& s) {
@@ -172,10 +180,7 @@ TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the tex
     changes.moved.push_back({77, {far * toward, radius}, {far * toward + glm::vec3(0.0f, 0.5f, 0.0f), radius}});
     changes.lights.push_back(w.light);
 
-    std::vector<char> bloom_says_maybe(6 * 2 * 2, 0);
-    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
-        bloom_says_maybe[t.index] = (t.objects & raycache::object_bits(77)) == raycache::object_bits(77);
-    });
+    const std::vector<char> bloom_says_maybe = tiles_maybe_tagged(cube, 77);
     std::vector<TexelAddress> short_of_it, escapes_toward_it;
     // Toward it: the texel's centre direction from the centre passes through the sphere (so some ray of
     // the texel meets it).

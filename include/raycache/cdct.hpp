@@ -182,16 +182,13 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
     const ReliefResult found = depth_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
     if (found.hit) return found.color;
-    if constexpr (records) {
-        PathRecord path;
-        const TracedRay traced = trace(path);
-        store_traced(cube, bounds, origin, direction, traced, p, &path);
-        return traced.color;
-    } else {
-        const TracedRay traced = trace();
-        store_traced(cube, bounds, origin, direction, traced, p);
-        return traced.color;
-    }
+    PathRecord path;
+    const TracedRay traced = [&] {
+        if constexpr (records) return trace(path);
+        else return trace();
+    }();
+    store_traced(cube, bounds, origin, direction, traced, p, records ? &path : nullptr);
+    return traced.color;
 }
 
 } // namespace raycache
