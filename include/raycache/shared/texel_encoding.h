@@ -46,10 +46,11 @@ RAYCACHE_FN float raycache_storable_channel(float x) {
  * with floor(log2(max)) read from the float's exponent bits instead of computed with log2). */
 /* q rounded to the nearest whole number, halves up, for 0 <= q < 2^23. Not floor(q + 0.5): that sum rounds
  * to 1.0 in float for q = 0.5 - 2^-25, so values just under half a step would round up. q - floor(q) is
- * exact (Sterbenz), so comparing it with 0.5 is too. */
+ * exact (Sterbenz), so comparing it with 0.5 is too. floor(q) is the truncating conversion, q being
+ * non-negative (cheaper than floor() without SSE4.1). */
 RAYCACHE_FN uint raycache_round_half_up(float q) {
-    float whole = floor(q);
-    return uint(whole) + ((q - whole >= 0.5f) ? 1u : 0u);
+    uint whole = uint(q);
+    return whole + ((q - float(whole) >= 0.5f) ? 1u : 0u);
 }
 
 RAYCACHE_FN uint raycache_pack_rgb9e5(vec3 color) {
