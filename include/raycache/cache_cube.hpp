@@ -321,6 +321,10 @@ public:
         bool has_origins;
         glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
         int unrecorded_texels;           // texels holding a value whose store brought no path record
+
+        bool lit() const noexcept { return (path_flags & path_lit) != 0; }             // a path cast shadow rays
+        bool chained() const noexcept { return (path_flags & path_chained) != 0; }     // bounced between hit points
+        bool unbounded() const noexcept { return (path_flags & path_unbounded) != 0; } // escaped with no bound
     };
 
     // f(const TileState&) for every allocated tile, in index order. Between frames only.

@@ -118,7 +118,7 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
     const bool has_vertices = t.vertex_lo.x <= t.vertex_hi.x;
     const bool has_escapes = t.escape_lo.x <= t.escape_hi.x;
     if (has_escapes && !has_vertices) return true; // escapes from points not recorded: no bound
-    if (t.path_flags & 4u) return true; // unbounded: a bounce escaped
+    if (t.unbounded()) return true; // a bounce escaped with no bound known
     if (changes.light_moved && has_vertices) return true;
     auto tagged = [&](std::uint64_t key) {
         const std::uint64_t bits = object_bits(key);
@@ -141,12 +141,12 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
             if (has_escapes &&
                 shared::raycache_rays_from_ball_meet_sphere(centre, radius + 1e-3f * scale, escapes, s.centre, s.radius))
                 return true;
-            if ((t.path_flags & 1u))
+            if (t.lit())
                 for (const glm::vec3& light : changes.lights)
                     if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
                                                            s.radius))
                         return true;
-            if ((t.path_flags & 2u) && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
+            if (t.chained() && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
         }
     }
     return false;
@@ -255,9 +255,9 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
                                                 union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
             if (o.escape_lo.x <= o.escape_hi.x) union_of.escape_lo = glm::min(union_of.escape_lo, o.escape_lo),
                                                 union_of.escape_hi = glm::max(union_of.escape_hi, o.escape_hi);
-            union_of.lit |= (o.path_flags & 1u) != 0;
-            union_of.chained |= (o.path_flags & 2u) != 0;
-            union_of.unbounded |= (o.path_flags & 4u) != 0;
+            union_of.lit |= o.lit();
+            union_of.chained |= o.chained();
+            union_of.unbounded |= o.unbounded();
         }
         if (any && !unknown) to.record_texels_of_tile(t.index, union_of);
     });
