@@ -445,6 +445,6 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
     CHECK(one.first.dropped > 0);
     CHECK(one.first.dropped < one.first.valid_before);
     CHECK(one.first.dropped == four.first.dropped);
-    CHECK(one.first.tiles_by_path == four.first.tiles_by_path);
+    CHECK(one.first.blocks_by_path == four.first.blocks_by_path);
     CHECK(one.second == four.second);
 }

@@ -4,7 +4,7 @@
 // valid, rays from random points of the cube's box through random directions of the texel, in the world
 // before and after the move: a texel is stale when any of them sees a different colour. `exact` must leave
 // no stale texel (and skipping the invalidation must leave some); texels whose cone (computed here
-// independently, from angles) and whose tile's paths miss the moved sphere must be kept.
+// independently, from angles) and whose 8 x 8 block's paths miss the moved sphere must be kept.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -13,6 +13,7 @@
 
 #include <glm/glm.hpp>
 
+#include "raycache/adaptive_resolution.hpp"
 #include "raycache/cache_cube.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/invalidation.hpp"
@@ -88,7 +89,7 @@ TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel; witho
         const raycache::InvalidationCounts counts = raycache::invalidate_changes(exact, {box, -1.0f}, move_of(before, after, moved));
         const std::size_t stale_with = stale_texels(exact, before, after);
         MESSAGE("ball " << moved << ": " << valid << " texels, " << stale_without << " stale without invalidation, " << counts.dropped
-                        << " dropped by exact (" << counts.tiles_by_path << " tiles by path, " << counts.tiles_by_texel
+                        << " dropped by exact (" << counts.blocks_by_path << " blocks by path, " << counts.blocks_by_texel
                         << " tested per texel), " << stale_with << " stale after");
         CHECK(stale_without > 0);
         CHECK(stale_with == 0);
@@ -97,7 +98,7 @@ TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel; witho
     }
 }
 
-TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are kept") {
+TEST_CASE("texels whose cone and whose 8 x 8 block's paths miss the moved sphere are kept") {
     const World before = make_world();
     World after = before;
     const std::size_t moved = 3;
@@ -105,9 +106,10 @@ TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are ke
     CctCube cube(32);
     fill(cube, before, 30000, 2);
 
-    // Which tiles' stored paths met the ball, from the rays themselves (the same seed as fill(), so the
-    // same rays): a tile whose paths hit the ball, or whose hit points' shadow rays can pass it.
-    std::vector<char> tile_met(6 * 2 * 2, 0);
+    // Which 8 x 8 blocks' stored paths met the ball, from the rays themselves (the same seed as fill(), so
+    // the same rays): a block whose paths hit the ball, or whose hit points' shadow rays can pass it.
+    auto block_of = [](const TexelAddress& a) { return static_cast<std::size_t>((a.face * 4 + a.row / 8) * 4 + a.column / 8); };
+    std::vector<char> block_met(6 * 4 * 4, 0);
     {
         LeavingRays leaving(2);
         for (int k = 0; k < 30000; ++k) {
@@ -116,8 +118,8 @@ TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are ke
             before.trace(n, d, &path);
             const raycache::shared::raycache_texel_address a = raycache::shared::raycache_texel_of(d, 32);
             const bool hit_it = (path.objects & raycache::object_bits(moved)) == raycache::object_bits(moved);
-            if (hit_it || path.has_vertices()) // hit points shadowed by it: decided by the tile's light cone, so count
-                tile_met[static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16)] |= hit_it ? 1 : 2;
+            if (hit_it || path.has_vertices()) // hit points shadowed by it: decided by the block's light cone, so count
+                block_met[block_of({a.face, a.column, a.row})] |= hit_it ? 1 : 2;
         }
     }
     // A texel's rays can reach the ball only within this angle of its centre direction: half the texel's
@@ -131,8 +133,7 @@ TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are ke
     };
     std::vector<TexelAddress> must_keep;
     cube.for_each_valid_texel([&](const TexelAddress& a) {
-        const std::size_t tile = static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16);
-        if (tile_met[tile] & 1) return;
+        if (block_met[block_of(a)] & 1) return;
         if (clearly_away(a, before.balls[moved]) && clearly_away(a, after.balls[moved])) must_keep.push_back(a);
     });
     const std::size_t valid = cube.valid_texels();
@@ -141,17 +142,40 @@ TEST_CASE("texels whose cone and whose tile's paths miss the moved sphere are ke
     for (const TexelAddress& a : must_keep) {
         if (cube.load(a)) ++kept;
         else {
-            // The only other reason: its tile's shadow rays may pass the ball (tile_met bit 2); check that the
-            // light cone test really is what dropped it.
-            const std::size_t tile = static_cast<std::size_t>((a.face * 2 + a.row / 16) * 2 + a.column / 16);
-            REQUIRE((tile_met[tile] & 2));
+            // The only other reason: its block's shadow rays may pass the ball (block_met bit 2); check that
+            // the light cone test really is what dropped it.
+            REQUIRE((block_met[block_of(a)] & 2));
             ++lost_to_light_cone;
         }
     }
     MESSAGE(valid << " texels, " << must_keep.size() << " clearly away from the ball's cone and paths; " << kept << " kept, "
-                  << lost_to_light_cone << " dropped whole with tiles whose shadow rays may pass it; " << counts.dropped << " dropped in all");
+                  << lost_to_light_cone << " dropped whole with blocks whose shadow rays may pass it; " << counts.dropped << " dropped in all");
     CHECK(must_keep.size() > 1000);
     CHECK(kept > must_keep.size() / 2);
+}
+
+TEST_CASE("a path that hit a moved object costs the texels of its 8 x 8 record block, not the rest of its tile") {
+    // Face +X of a 16-texel cube is one tile of four 8 x 8 blocks. Block 0 (columns and rows 0..7) holds
+    // paths that hit object 5, the other blocks paths that hit object 6; object 5 moves far out along -X,
+    // where no ray of face +X can reach it, so only the path records can drop anything.
+    REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
+    CctCube cube(16);
+    PathRecord saw_5, saw_6;
+    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f)); // seen straight out along +X; no shadow ray, no bounce
+    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    for (int row = 0; row < 16; ++row)
+        for (int column = 0; column < 16; ++column)
+            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), column < 8 && row < 8 ? saw_5 : saw_6));
+    cube.begin_frame();
+    raycache::SceneChanges changes;
+    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(counts.dropped == 64);
+    CHECK(counts.blocks_by_path == 1);
+    CHECK(cube.valid_texels() == 256 - 64);
+    for (int row = 0; row < 16; ++row)
+        for (int column = 0; column < 16; ++column)
+            CHECK(cube.load({RAYCACHE_FACE_POSITIVE_X, column, row}).has_value() == !(column < 8 && row < 8));
 }
 
 TEST_CASE("a moved light drops every texel whose path hit something and keeps the rays that escaped") {
@@ -169,7 +193,7 @@ TEST_CASE("a moved light drops every texel whose path hit something and keeps th
     cube.for_each_valid_texel([&](const TexelAddress& a) { remaining_lit += *cube.load(a) != glm::vec3(0.0f); });
     CHECK(remaining_lit == 0);
     CHECK(cube.valid_texels() > 0);
-    CHECK(cube.valid_texels() <= sky); // whole tiles with a hit go, so at most the sky texels stay
+    CHECK(cube.valid_texels() <= sky); // whole blocks with a hit go, so at most the sky texels stay
     CHECK(counts.dropped + cube.valid_texels() == counts.valid_before);
 }
 
@@ -212,7 +236,7 @@ TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the ligh
     };
     CHECK(stale() > 0);
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, move_of(before, after, caster));
-    CHECK(counts.tiles_by_texel == 0); // no cone of stored rays reaches the caster
+    CHECK(counts.blocks_by_texel == 0); // no cone of stored rays reaches the caster
     CHECK(counts.dropped > 0);
     CHECK(stale() == 0);
 }
@@ -275,4 +299,39 @@ TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflection
     CHECK(stale(stripped, rays_stripped) > 0); // what the escape records catch
     CHECK(stale(bound_less, rays_bound_less) == 0);
     CHECK(exact.valid_texels() > bound_less.valid_texels());
+}
+
+TEST_CASE("a cube resampled to a coarser size keeps, per record block, the union of the records of the blocks it overlaps") {
+    // Every texel of a 32-texel cube holds a record naming its own block (face, block row, block column);
+    // after resample_into() and carry_path_records(), each block of the coarser cube must name exactly the
+    // old blocks whose rectangles of the face overlap its own, found here by testing every pair in integers.
+    CctCube from(32);
+    auto key_of = [](int face, int row, int column) { return static_cast<std::uint64_t>((face * 4 + row / 8) * 4 + column / 8); };
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 32; ++row)
+            for (int column = 0; column < 32; ++column) {
+                PathRecord path;
+                path.hit(key_of(face, row, column), glm::vec3(5.0f));
+                REQUIRE(from.store_at({face, column, row}, glm::vec3(0.5f), path));
+            }
+    from.begin_frame();
+    for (const int size : {24, 20, 13, 7}) {
+        CAPTURE(size);
+        CctCube to(size);
+        raycache::resample_into(from, to);
+        raycache::carry_path_records(from, to);
+        std::size_t blocks = 0;
+        to.for_each_block_state([&](const CctCube::BlockState& t) {
+            std::uint64_t expected = 0;
+            from.for_each_block_state([&](const CctCube::BlockState& o) {
+                const bool overlap = o.face == t.face && o.column0 * size < t.column1 * 32 && t.column0 * 32 < o.column1 * size &&
+                                     o.row0 * size < t.row1 * 32 && t.row0 * 32 < o.row1 * size;
+                if (overlap) expected |= raycache::object_bits(key_of(o.face, o.row0, o.column0));
+            });
+            CHECK(t.objects == expected);
+            CHECK(t.unrecorded_texels == 0);
+            ++blocks;
+        });
+        CHECK(blocks == static_cast<std::size_t>(6 * ((size + 7) / 8) * ((size + 7) / 8)));
+    }
 }

@@ -80,19 +80,20 @@ Oracle stale_texels(const CdctCube& cube, const World& before, const World& afte
     return o;
 }
 
-std::size_t tile_of(const TexelAddress& a, int n) {
-    const int per_edge = (n + 15) / 16;
-    return static_cast<std::size_t>((a.face * per_edge + a.row / 16) * per_edge + a.column / 16);
-}
 
-// Per tile of a 32-texel cube: whether its Bloom mask holds the bits of object `key` (such tiles are
-// dropped whole by their path records, whatever their texels' cones).
-std::vector<char> tiles_maybe_tagged(const CdctCube& cube, std::uint64_t key) {
-    std::vector<char> maybe(6 * 2 * 2, 0);
-    cube.for_each_tile_state([&](const CdctCube::TileState& t) {
-        maybe[t.index] = (t.objects & raycache::object_bits(key)) == raycache::object_bits(key);
+// The record blocks of a cube whose Bloom masks hold the bits of object `key` (such blocks are dropped
+// whole by their path records, whatever their texels' cones).
+std::vector<CdctCube::BlockState> blocks_maybe_tagged(const CdctCube& cube, std::uint64_t key) {
+    std::vector<CdctCube::BlockState> maybe;
+    cube.for_each_block_state([&](const CdctCube::BlockState& b) {
+        if ((b.objects & raycache::object_bits(key)) == raycache::object_bits(key)) maybe.push_back(b);
     });
     return maybe;
+}
+bool in_any(const std::vector<CdctCube::BlockState>& blocks, const TexelAddress& a) {
+    for (const CdctCube::BlockState& b : blocks)
+        if (a.face == b.face && a.column >= b.column0 && a.column < b.column1 && a.row >= b.row0 && a.row < b.row1) return true;
+    return false;
 }
 
 } // namespace
@@ -111,8 +112,8 @@ TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel;
         const raycache::InvalidationCounts counts = raycache::invalidate_changes(exact, box, parameters, move_of(before, after, moved));
         const Oracle with = stale_texels(exact, before, after);
         MESSAGE("ball " << moved << ": " << valid << " texels, " << without.stale << " stale without invalidation ("
-                        << without.samples << " samples), " << counts.dropped << " dropped by exact (" << counts.tiles_by_path
-                        << " tiles by path, " << counts.tiles_by_texel << " tested per texel), " << with.stale << " stale after ("
+                        << without.samples << " samples), " << counts.dropped << " dropped by exact (" << counts.blocks_by_path
+                        << " blocks by path, " << counts.blocks_by_texel << " tested per texel), " << with.stale << " stale after ("
                         << with.samples << " samples)");
         CHECK(without.stale > 0);
         CHECK(with.samples > 20 * exact.valid_texels()); // most texels' samples meet their surface
@@ -133,8 +134,8 @@ TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the tex
     changes.moved.push_back({key, from, to});
     changes.lights.push_back(w.light);
 
-    // Tiles whose Bloom masks happen to hold the key's bits are dropped whole: leave them out.
-    const std::vector<char> bloom_says_maybe = tiles_maybe_tagged(cube, key);
+    // Blocks whose Bloom masks happen to hold the key's bits are dropped whole: leave them out.
+    const std::vector<CdctCube::BlockState> bloom_says_maybe = blocks_maybe_tagged(cube, key);
     // From angles: a texel's rays (origins within the box's ball, radius sqrt(3)) reach a sphere only
     // within its angular radius grown by that ball, plus half the texel's diagonal (< 3 degrees at 32).
     auto angle_to = [](const TexelAddress& a, const raycache::BoundingSphere& s) {
@@ -146,7 +147,7 @@ TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the tex
     const float margin = 3.0f * 3.14159265f / 180.0f;
     std::vector<TexelAddress> must_keep, must_drop;
     cube.for_each_valid_texel([&](const TexelAddress& a) {
-        if (bloom_says_maybe[tile_of(a, 32)]) return;
+        if (in_any(bloom_says_maybe, a)) return;
         const float nearest = std::min(angle_to(a, from), angle_to(a, to));
         if (nearest > margin) must_keep.push_back(a);
         // The centre direction itself, from the centre, passes through a sphere: some ray of the texel does,
@@ -163,7 +164,7 @@ TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the tex
     CHECK(kept == must_keep.size());
     CHECK(!must_drop.empty());
     CHECK(dropped == must_drop.size());
-    CHECK(counts.tiles_by_path == 0);
+    CHECK(counts.blocks_by_path == 0);
 }
 
 TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the texel; the escapes it blocks go") {
@@ -180,13 +181,13 @@ TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the tex
     changes.moved.push_back({77, {far * toward, radius}, {far * toward + glm::vec3(0.0f, 0.5f, 0.0f), radius}});
     changes.lights.push_back(w.light);
 
-    const std::vector<char> bloom_says_maybe = tiles_maybe_tagged(cube, 77);
+    const std::vector<CdctCube::BlockState> bloom_says_maybe = blocks_maybe_tagged(cube, 77);
     std::vector<TexelAddress> short_of_it, escapes_toward_it;
     // Toward it: the texel's centre direction from the centre passes through the sphere (so some ray of
     // the texel meets it).
     const float inside = std::asin(radius / far);
     cube.for_each_valid_texel([&](const TexelAddress& a) {
-        if (bloom_says_maybe[tile_of(a, 32)]) return;
+        if (in_any(bloom_says_maybe, a)) return;
         const glm::vec3 d = glm::normalize(raycache::texel_direction(a, 32));
         const raycache::DepthSample v = *cube.load(a);
         if (std::acos(glm::clamp(glm::dot(d, toward), -1.0f, 1.0f)) > inside) return;
@@ -228,9 +229,9 @@ TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invali
         if (k % 5000 == 4999) cache.begin_frame();
     }
     cache.begin_frame();
-    // No tile may hold an unrecorded texel: every store came with its record.
+    // No block may hold an unrecorded texel: every store came with its record.
     std::size_t unrecorded = 0;
-    cache.cube().for_each_tile_state([&](const CdctCube::TileState& t) { unrecorded += t.unrecorded_texels; });
+    cache.cube().for_each_block_state([&](const CdctCube::BlockState& t) { unrecorded += t.unrecorded_texels; });
     CHECK(unrecorded == 0);
 
     const std::size_t valid = cache.cube().valid_texels();

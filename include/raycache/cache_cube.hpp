@@ -87,6 +87,10 @@ public:
 
     // Texels along a tile's edge (faces smaller than this have one tile each).
     static constexpr int tile_edge = 16;
+    // Path records (raycache/invalidation.hpp) are kept per block of record_edge x record_edge texels of a
+    // tile: a path that hit a moved object then costs the texels of its block, not the whole tile's.
+    static constexpr int record_edge = 8;
+    static constexpr int record_blocks = (tile_edge / record_edge) * (tile_edge / record_edge);
 
     // A cube of six face_size x face_size faces, every texel invalid and no tile allocated yet.
     // budget: optional, shared with other cubes; its limit bounds the tiles this cube allocates (the
@@ -306,13 +310,15 @@ public:
         return true;
     }
 
-    // Bits of TileState::path_flags: what a tile's recorded paths did (raycache/path_record.hpp).
+    // Bits of BlockState::path_flags: what a block's recorded paths did (raycache/path_record.hpp).
     static constexpr std::uint32_t path_lit = 1u, path_chained = 2u, path_unbounded = 4u;
 
-    // One allocated tile, for invalidation (raycache/invalidation.hpp): its texels, the union of the path
-    // records stored into it, and the box of the origins its texels were stored from (visible and pending).
-    struct TileState {
-        std::size_t index;               // for invalidate_in_tile()
+    // One record block (record_edge x record_edge texels) of an allocated tile, for invalidation
+    // (raycache/invalidation.hpp): its texels, the union of the path records stored into them, and the box
+    // of the origins its tile's texels were stored from (visible and pending).
+    struct BlockState {
+        std::size_t tile;                // the tile's index
+        int block;                       // the block within the tile
         int face, column0, row0, column1, row1; // texels [column0, column1) x [row0, row1) of the face
         std::uint64_t objects;           // Bloom mask of the objects the recorded paths hit
         glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
@@ -320,29 +326,27 @@ public:
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
         bool has_origins;
         glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
-        int unrecorded_texels;           // texels holding a value whose store brought no path record
+        int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
 
         bool lit() const noexcept { return (path_flags & path_lit) != 0; }             // a path cast shadow rays
         bool chained() const noexcept { return (path_flags & path_chained) != 0; }     // bounced between hit points
         bool unbounded() const noexcept { return (path_flags & path_unbounded) != 0; } // escaped with no bound
     };
 
-    // f(const TileState&) for every allocated tile, in index order. Between frames only.
+    // f(const BlockState&) for every record block of every allocated tile that lies on the face, in tile
+    // then block order. Between frames only.
     template <class F>
-    void for_each_tile_state(F&& f) const {
+    void for_each_block_state(F&& f) const {
         for (std::size_t i = 0; i < tile_count(); ++i) {
             const Tile* tile = state_->tiles[i].load(std::memory_order_acquire);
             if (!tile) continue;
             const TexelAddress first = first_texel_of_tile(i);
-            TileState t{i, first.face, first.column, first.row,
-                        std::min(face_size_, first.column + tile_edge), std::min(face_size_, first.row + tile_edge),
-                        tile->path_objects.load(std::memory_order_relaxed), glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f),
-                        glm::vec3(0.0f), tile->path_flags.load(std::memory_order_relaxed), false, glm::vec3(0.0f),
-                        glm::vec3(0.0f), 0};
-            // Recorded bits are set only on texels holding a value (and cleared when one is emptied).
-            t.unrecorded_texels = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) - count_bits(tile->recorded_bits);
-            read_box(tile->vertex_min, tile->vertex_max, t.vertex_lo, t.vertex_hi);
-            read_box(tile->escape_min, tile->escape_max, t.escape_lo, t.escape_hi);
+            // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
+            // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
+            const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != count_bits(tile->recorded_bits);
+            BlockState t{};
+            t.tile = i;
+            t.face = first.face;
             t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
                                                  tile->pending_max[0].load(std::memory_order_relaxed);
             if (t.has_origins) {
@@ -355,42 +359,81 @@ public:
                     t.origin_lo[k] = a, t.origin_hi[k] = b;
                 }
             }
-            f(static_cast<const TileState&>(t));
+            for (int b = 0; b < record_blocks; ++b) {
+                t.block = b;
+                t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
+                t.row0 = first.row + b / (tile_edge / record_edge) * record_edge;
+                t.column1 = std::min(face_size_, t.column0 + record_edge);
+                t.row1 = std::min(face_size_, t.row0 + record_edge);
+                if (t.column0 >= t.column1 || t.row0 >= t.row1) continue; // off the face
+                const PathUnion& r = tile->records[b];
+                t.objects = r.objects.load(std::memory_order_relaxed);
+                t.path_flags = r.flags.load(std::memory_order_relaxed);
+                read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
+                read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
+                t.unrecorded_texels = 0;
+                if (any_unrecorded)
+                    for (int row = t.row0; row < t.row1; ++row)
+                        for (int column = t.column0; column < t.column1; ++column) {
+                            const int slot = slot_of(TexelAddress{t.face, column, row});
+                            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
+                                ++t.unrecorded_texels;
+                        }
+                f(static_cast<const BlockState&>(t));
+            }
         }
     }
 
-    // Empties the texels of tile `index` (TileState::index) holding a value for which
+    // Empties the texels of block `b` (from for_each_block_state()) holding a value for which
     // drop(TexelAddress, bool recorded) returns true; `recorded`: the texel's store brought a path record.
     // Returns how many were emptied. Between frames only.
     template <class Drop>
-    std::size_t invalidate_in_tile(std::size_t index, Drop&& drop) {
+    std::size_t invalidate_in_block(const BlockState& b, Drop&& drop) {
         assert_between_frames();
-        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile) return 0;
-        const TexelAddress first = first_texel_of_tile(index);
+        // invalidate() texel by texel, with the bits and counts updated once for the block (between frames
+        // no other thread touches the cube, so the words need no read-modify-write of their own).
         std::size_t dropped = 0;
-        for (int row = first.row; row < std::min(face_size_, first.row + tile_edge); ++row)
-            for (int column = first.column; column < std::min(face_size_, first.column + tile_edge); ++column) {
-                const TexelAddress t{first.face, column, row};
+        std::uint64_t gone[bit_words] = {};
+        for (int row = b.row0; row < b.row1; ++row)
+            for (int column = b.column0; column < b.column1; ++column) {
+                const TexelAddress t{b.face, column, row};
                 const int slot = slot_of(t);
                 if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) continue;
                 if (!drop(t, bit_set(tile->recorded_bits, slot))) continue;
-                invalidate(t);
+                tile->texels[slot].store(Texel::invalid, std::memory_order_relaxed);
+                gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
                 ++dropped;
             }
+        if (dropped == 0) return 0;
+        std::size_t doubtful_gone = 0;
+        for (int w = 0; w < bit_words; ++w) {
+            if (!gone[w]) continue;
+            for (std::uint64_t d = tile->doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]; d; d &= d - 1)
+                ++doubtful_gone;
+            tile->recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
+        }
+        state_->valid_texels.fetch_sub(static_cast<std::int64_t>(dropped), std::memory_order_relaxed);
+        tile->valid.fetch_sub(static_cast<std::uint32_t>(dropped), std::memory_order_relaxed);
+        if (doubtful_gone) state_->doubtful_texels.fetch_sub(doubtful_gone, std::memory_order_relaxed);
         return dropped;
     }
 
-    // Marks every valid texel of tile `index` (TileState::index) as recorded and adds `path` to the tile's
-    // record: for texels copied from another cube whose records are known (carry_path_records). Between frames.
-    void record_texels_of_tile(std::size_t index, const PathRecord& path) noexcept {
+    // Marks every valid texel of block `b` (from for_each_block_state()) as recorded and adds `path` to the
+    // block's record: for texels copied from another cube whose records are known (carry_path_records).
+    // Between frames.
+    void record_texels_of_block(const BlockState& b, const PathRecord& path) noexcept {
         assert_between_frames();
-        Tile* tile = index < tile_count() ? state_->tiles[index].load(std::memory_order_acquire) : nullptr;
+        Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile) return;
-        for (int slot = 0; slot < tile_texels; ++slot)
-            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
-                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
-        merge_path(*tile, path);
+        for (int row = b.row0; row < b.row1; ++row)
+            for (int column = b.column0; column < b.column1; ++column) {
+                const int slot = slot_of(TexelAddress{b.face, column, row});
+                if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
+                    tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+            }
+        merge_path(tile->records[b.block], path);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -621,6 +664,22 @@ private:
         return glm::uintBitsToFloat((key & 0x80000000u) ? key & 0x7FFFFFFFu : ~key);
     }
 
+    // The union of the path records stored into one record block of a tile.
+    struct PathUnion {
+        PathUnion() noexcept {
+            for (int k = 0; k < 3; ++k) {
+                vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                vertex_max[k].store(0u, std::memory_order_relaxed);
+                escape_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
+                escape_max[k].store(0u, std::memory_order_relaxed);
+            }
+        }
+        std::atomic<std::uint64_t> objects{0};                   // Bloom mask of the objects hit
+        std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
+        std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
+        std::atomic<std::uint32_t> flags{0};                     // path_lit | path_chained | path_unbounded
+    };
+
     struct Tile {
         Tile() noexcept {
             for (auto& t : texels) t.store(Texel::invalid, std::memory_order_relaxed);
@@ -631,12 +690,6 @@ private:
                 pending_max[k].store(0u, std::memory_order_relaxed);
             }
             for (auto& w : recorded_bits) w.store(0, std::memory_order_relaxed);
-            for (int k = 0; k < 3; ++k) {
-                vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
-                vertex_max[k].store(0u, std::memory_order_relaxed);
-                escape_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
-                escape_max[k].store(0u, std::memory_order_relaxed);
-            }
             pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
         }
         // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
@@ -691,13 +744,10 @@ private:
         std::atomic<std::uint32_t> pending_nearest;
         float nearest = std::numeric_limits<float>::infinity();
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
-        // What the paths stored into this tile saw (store() with a PathRecord): their union, kept until the
-        // tile is dropped; read between frames only (raycache/invalidation.hpp).
+        // What the paths stored into this tile saw (store() with a PathRecord): per record block, their
+        // union, kept until the tile is dropped; read between frames only (raycache/invalidation.hpp).
         std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
-        std::atomic<std::uint64_t> path_objects{0};
-        std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
-        std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
-        std::atomic<std::uint32_t> path_flags{0};
+        PathUnion records[record_blocks];
         std::atomic<std::uint32_t> valid{0}; // texels holding a value (so passes over tiles need not read them)
     };
 
@@ -969,23 +1019,26 @@ private:
         return false;
     }
 
-    // Adds a written texel's path record to its tile (atomic or, min, max; loads first, so a tile whose
-    // union already holds the record is not written).
+    // Adds a written texel's path record to its block's union (atomic or, min, max; loads first, so a
+    // block whose union already holds the record is not written).
     void record_path(const TexelAddress& t, const PathRecord& path) noexcept {
         Tile* tile = tile_of(t);
         const int slot = slot_of(t);
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
-        merge_path(*tile, path);
+        merge_path(tile->records[block_of(t)], path);
     }
-    static void merge_path(Tile& tile, const PathRecord& path) noexcept {
-        if ((tile.path_objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
-            tile.path_objects.fetch_or(path.objects, std::memory_order_relaxed);
+    // The record block of a texel within its tile.
+    static int block_of(const TexelAddress& t) noexcept {
+        return (t.row % tile_edge / record_edge) * (tile_edge / record_edge) + t.column % tile_edge / record_edge;
+    }
+    static void merge_path(PathUnion& r, const PathRecord& path) noexcept {
+        if ((r.objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
+            r.objects.fetch_or(path.objects, std::memory_order_relaxed);
         const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |
                                     (path.unbounded ? path_unbounded : 0u);
-        if ((tile.path_flags.load(std::memory_order_relaxed) & flags) != flags)
-            tile.path_flags.fetch_or(flags, std::memory_order_relaxed);
-        if (path.has_vertices()) widen(tile.vertex_min, tile.vertex_max, path.vertex_lo, path.vertex_hi);
-        if (path.has_escapes()) widen(tile.escape_min, tile.escape_max, path.escape_lo, path.escape_hi);
+        if ((r.flags.load(std::memory_order_relaxed) & flags) != flags) r.flags.fetch_or(flags, std::memory_order_relaxed);
+        if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
+        if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);
     }
     // Widens the box of ordered floats [min, max] to hold [lo, hi] (atomic min and max per axis).
     static void widen(std::atomic<std::uint32_t> (&min)[3], std::atomic<std::uint32_t> (&max)[3], const glm::vec3& lo,

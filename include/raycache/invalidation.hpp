@@ -8,16 +8,16 @@
 // both in that set), so it lies in the texel's cone from the box's ball too: one test serves both.
 // A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
-//     (raycache/shared/cone_sphere.h; tested top-down: a face, then a 16 x 16 tile, then each texel), and,
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, an 8 x 8 record block of it, then each texel), and,
 //     for a CDCT texel, the sphere comes nearer the centre than the texel's rays reach (its distance plus
 //     the search's gap limit: the segments end there);
-//   - or the rest of a path stored into its tile can have met X (the tile's PathRecord union,
+//   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
 //     raycache/path_record.hpp): X among the objects hit (Bloom mask), A or B in the cone from a light to
 //     the box of hit points (shadow rays), A or B in that box (bounces between hit points), A or B met by
 //     rays from that box in the cone of the directions in which bounces escaped, a bounce that escaped with
 //     no such bound (unbounded), or a cached object whose own cube changed (transitively, by the caller);
 //   - or its store brought no PathRecord (nothing is known about the rest of its path).
-// A moved light empties every texel whose path hit something. A tile the path tests catch is emptied whole.
+// A moved light empties every texel whose path hit something. A block the path tests catch is emptied whole.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -71,9 +71,9 @@ struct CubeRays {
 struct InvalidationCounts {
     std::size_t valid_before = 0; // texels holding a value before the pass
     std::size_t dropped = 0;      // texels emptied
-    std::size_t tiles = 0;        // allocated tiles looked at
-    std::size_t tiles_by_path = 0;  // tiles emptied whole by their path records
-    std::size_t tiles_by_texel = 0; // tiles whose cone met a moved sphere, so each texel was tested
+    std::size_t blocks = 0;          // record blocks of allocated tiles looked at (CacheCube::BlockState)
+    std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
+    std::size_t blocks_by_texel = 0; // blocks whose cone met a moved sphere, so each texel was tested
 };
 
 namespace detail {
@@ -112,7 +112,7 @@ inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_di
     return false;
 }
 
-// Whether the rest of the paths recorded in a tile can have met a change.
+// Whether the rest of the paths recorded in a record block can have met a change.
 template <class State>
 bool paths_meet(const State& t, const SceneChanges& changes) {
     const bool has_vertices = t.vertex_lo.x <= t.vertex_hi.x;
@@ -127,7 +127,7 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
     for (std::uint64_t key : changes.changed)
         if (tagged(key)) return true;
     if (changes.moved.empty()) return false;
-    // The ball around the hit points, and the cone of the escaped bounces' directions: once per tile.
+    // The ball around the hit points, and the cone of the escaped bounces' directions: once per block.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
     // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
@@ -169,25 +169,37 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
         face_meets[face] = any_sphere_in_cone(cube_ball, shared::raycache_region_cone(face, 0, 0, n, n, n), changes.moved, cube_ball);
 
-    using Tile = typename CacheCube<Texel>::TileState;
-    std::vector<Tile> tiles;
-    cube.for_each_tile_state([&](const Tile& t) { tiles.push_back(t); });
-    counts.tiles = tiles.size();
-    for (const Tile& t : tiles) {
+    using Block = typename CacheCube<Texel>::BlockState;
+    std::vector<Block> blocks;
+    cube.for_each_block_state([&](const Block& b) { blocks.push_back(b); });
+    counts.blocks = blocks.size();
+    // The middle level: a tile's cone, once for its blocks (which come one after another); a block's
+    // directions lie within its tile's, so a tile whose cone misses every sphere spares its blocks' tests.
+    std::size_t cone_tile = static_cast<std::size_t>(-1);
+    bool tile_cone_meets = false;
+    for (const Block& t : blocks) {
         if (paths_meet(t, changes)) {
-            ++counts.tiles_by_path;
-            counts.dropped += cube.invalidate_in_tile(t.index, [](const TexelAddress&, bool) { return true; });
+            ++counts.blocks_by_path;
+            counts.dropped += cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
             continue;
         }
         // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
         if (changes.moved.empty() && !changes.light_moved) continue;
-        const OriginBall ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi);
+        const OriginBall ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi); // the tile's origins
+        if (t.tile != cone_tile) {
+            constexpr int edge = CacheCube<Texel>::tile_edge;
+            const int c0 = t.column0 / edge * edge, r0 = t.row0 / edge * edge;
+            cone_tile = t.tile;
+            tile_cone_meets = face_meets[t.face] &&
+                              any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n),
+                                                 changes.moved, cube_ball);
+        }
         const bool cone_meets =
-            face_meets[t.face] &&
+            tile_cone_meets &&
             any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved, cube_ball);
-        if (cone_meets) ++counts.tiles_by_texel;
+        if (cone_meets) ++counts.blocks_by_texel;
         else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
-        counts.dropped += cube.invalidate_in_tile(t.index, [&](const TexelAddress& a, bool recorded) {
+        counts.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
             if (!recorded) return true; // nothing known about the rest of its path
             return cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
                                                     changes.moved, cube_ball, reach(a));
@@ -230,36 +242,56 @@ inline InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChange
 
 // After a cube was resampled into another (raycache/adaptive_resolution.hpp, resample_into: each texel of
 // `to` took a texel of `from` within its own rectangle of the face), gives every valid texel of `to` the
-// union of the path records of the tiles of `from` whose rectangles overlap its tile's, so the resampled
+// union of the path records of the blocks of `from` whose rectangles overlap its block's, so the resampled
 // texels stay known to exact invalidation. Between frames.
 template <class Texel>
 void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
-    using Tile = typename CacheCube<Texel>::TileState;
-    std::vector<Tile> old;
-    from.for_each_tile_state([&](const Tile& t) { old.push_back(t); });
+    using Block = typename CacheCube<Texel>::BlockState;
+    constexpr int edge = CacheCube<Texel>::record_edge;
+    // The old blocks by position (face, block row, block column), so each new block visits only the few
+    // old blocks around its own rectangle, not all of them.
+    const int per_edge = (from.face_size() + edge - 1) / edge;
+    std::vector<Block> old;
+    std::vector<int> at(static_cast<std::size_t>(RAYCACHE_FACE_COUNT * per_edge * per_edge), -1);
+    from.for_each_block_state([&](const Block& b) {
+        at[static_cast<std::size_t>((b.face * per_edge + b.row0 / edge) * per_edge + b.column0 / edge)] = static_cast<int>(old.size());
+        old.push_back(b);
+    });
     const float fn = static_cast<float>(from.face_size()), tn = static_cast<float>(to.face_size());
-    to.for_each_tile_state([&](const Tile& t) {
+    // Old block columns (or rows) whose texels can overlap new texels [lo, hi): the overlap test below
+    // decides; one block of margin either side for rounding.
+    auto range = [&](int lo, int hi) {
+        const float scale = fn / (tn * static_cast<float>(edge));
+        return std::make_pair(std::max(0, static_cast<int>(static_cast<float>(lo) * scale) - 1),
+                              std::min(per_edge - 1, static_cast<int>(static_cast<float>(hi) * scale) + 1));
+    };
+    to.for_each_block_state([&](const Block& t) {
         PathRecord union_of;
-        bool any = false, unknown = false; // unknown: an overlapping old tile held unrecorded texels
-        for (const Tile& o : old) {
-            if (o.face != t.face) continue;
-            const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(t.column1) / tn &&
-                                 static_cast<float>(t.column0) / tn < static_cast<float>(o.column1) / fn &&
-                                 static_cast<float>(o.row0) / fn < static_cast<float>(t.row1) / tn &&
-                                 static_cast<float>(t.row0) / tn < static_cast<float>(o.row1) / fn;
-            if (!overlap) continue;
-            any = true;
-            unknown = unknown || o.unrecorded_texels > 0;
-            union_of.objects |= o.objects;
-            if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
-                                                union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
-            if (o.escape_lo.x <= o.escape_hi.x) union_of.escape_lo = glm::min(union_of.escape_lo, o.escape_lo),
-                                                union_of.escape_hi = glm::max(union_of.escape_hi, o.escape_hi);
-            union_of.lit |= o.lit();
-            union_of.chained |= o.chained();
-            union_of.unbounded |= o.unbounded();
-        }
-        if (any && !unknown) to.record_texels_of_tile(t.index, union_of);
+        bool any = false, unknown = false; // unknown: an overlapping old block held unrecorded texels
+        const auto [c_lo, c_hi] = range(t.column0, t.column1);
+        const auto [r_lo, r_hi] = range(t.row0, t.row1);
+        for (int br = r_lo; br <= r_hi; ++br)
+            for (int bc = c_lo; bc <= c_hi; ++bc) {
+                const int i = at[static_cast<std::size_t>((t.face * per_edge + br) * per_edge + bc)];
+                if (i < 0) continue;
+                const Block& o = old[static_cast<std::size_t>(i)];
+                const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(t.column1) / tn &&
+                                     static_cast<float>(t.column0) / tn < static_cast<float>(o.column1) / fn &&
+                                     static_cast<float>(o.row0) / fn < static_cast<float>(t.row1) / tn &&
+                                     static_cast<float>(t.row0) / tn < static_cast<float>(o.row1) / fn;
+                if (!overlap) continue;
+                any = true;
+                unknown = unknown || o.unrecorded_texels > 0;
+                union_of.objects |= o.objects;
+                if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
+                                                    union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
+                if (o.escape_lo.x <= o.escape_hi.x) union_of.escape_lo = glm::min(union_of.escape_lo, o.escape_lo),
+                                                    union_of.escape_hi = glm::max(union_of.escape_hi, o.escape_hi);
+                union_of.lit |= o.lit();
+                union_of.chained |= o.chained();
+                union_of.unbounded |= o.unbounded();
+            }
+        if (any && !unknown) to.record_texels_of_block(t, union_of);
     });
 }
 
