@@ -91,6 +91,7 @@ public:
     // tile: a path that hit a moved object then costs the texels of its block, not the whole tile's.
     static constexpr int record_edge = 8;
     static constexpr int record_blocks = (tile_edge / record_edge) * (tile_edge / record_edge);
+    static_assert(tile_edge % record_edge == 0, "record blocks tile a tile");
 
     // A cube of six face_size x face_size faces, every texel invalid and no tile allocated yet.
     // budget: optional, shared with other cubes; its limit bounds the tiles this cube allocates (the
