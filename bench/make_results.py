@@ -249,7 +249,7 @@ def main():
     md += ["", tables, "## Micro-benchmarks (Google Benchmark)", "",
            "One operation on the reflected rays of behind-32's main sphere; CDCT searches on a cube filled by tracing every "
            "texel. `cct_store` stores into a cube emptied every 4096 stores, so most of its stores allocate their tile "
-           "(1.2 KiB, zeroed). A secant search's reads form one dependent chain (texel choice, tile table, texel word, "
+           "(1.4 KiB, zeroed). A secant search's reads form one dependent chain (texel choice, tile table, texel word, "
            "square roots): it costs more than the ray it answers here.", "", micro_table(results)]
     with open(output, "w") as f:
         f.write("\n".join(md))
