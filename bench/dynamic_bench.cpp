@@ -60,7 +60,6 @@ constexpr Technique techniques[] = {{"CCT", raycache::embree::Technique::cct, rc
 struct Track {
     rcx::bench::Variant variant;
     std::size_t technique_index = 0; // in techniques[]
-    const char* technique = "";
     const Policy* policy = nullptr;
     std::vector<double> kept, hit, speedup, psnr, inval_ms, ms_per_moved;
 };
@@ -102,7 +101,6 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.variant.label = std::string(techniques[i].label) + " " + policies[k].label;
             t.variant.mode = techniques[i].mode;
             t.technique_index = i;
-            t.technique = techniques[i].label;
             t.policy = &policies[k];
             t.variant.caches = std::make_unique<SceneCache>(techniques[i].technique, rcx::bench::our_relief); // the tracer's search
             tracer.attach_caches(*t.variant.caches, 0);
@@ -132,7 +130,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             const double ms = t.variant.ms.back() + inval[k];
             const double psnr = rcx::compare(tracks[0].variant.last, t.variant.last).psnr_db;
             const double hit = t.variant.last_stats.hit_rate();
-            out.frames_csv << label << "," << f << "," << t.technique << "," << t.policy->label << "," << moved << "," << kept[k] << "," << hit << "," << ms
+            out.frames_csv << label << "," << f << "," << techniques[t.technique_index].label << "," << t.policy->label << "," << moved << "," << kept[k] << "," << hit << "," << ms
                            << "," << off_ms << "," << off_ms / ms << "," << psnr << "," << inval[k] << "\n";
             if (f == 0) continue; // cold for everyone
             t.kept.push_back(kept[k]);
@@ -156,10 +154,10 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
     }
     for (std::size_t k = 1; k < tracks.size(); ++k) {
         const Track& t = tracks[k];
-        out.summary_csv << label << "," << t.technique << "," << t.policy->label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
+        out.summary_csv << label << "," << techniques[t.technique_index].label << "," << t.policy->label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
                         << mean(t.speedup) << "," << mean(t.psnr) << "," << minimum(t.psnr) << "," << mean(t.inval_ms) << ","
                         << maximum(t.inval_ms) << "," << mean(t.ms_per_moved) << "\n";
-        out.rows.push_back({label, t.technique, t.policy->label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
+        out.rows.push_back({label, techniques[t.technique_index].label, t.policy->label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
                             fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean(t.psnr), 1), fmt(minimum(t.psnr), 1),
                             fmt(mean(t.inval_ms), 3), fmt(maximum(t.inval_ms), 3), fmt(mean(t.ms_per_moved), 3)});
     }

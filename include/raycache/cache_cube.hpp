@@ -332,6 +332,17 @@ public:
         bool lit() const noexcept { return (path_flags & path_lit) != 0; }             // a path cast shadow rays
         bool chained() const noexcept { return (path_flags & path_chained) != 0; }     // bounced between hit points
         bool unbounded() const noexcept { return (path_flags & path_unbounded) != 0; } // escaped with no bound
+        // The block's union as one PathRecord (empty boxes as PathRecord keeps them), for merging.
+        PathRecord record() const noexcept {
+            PathRecord r;
+            r.objects = objects;
+            if (vertex_lo.x <= vertex_hi.x) r.vertex_lo = vertex_lo, r.vertex_hi = vertex_hi;
+            if (escape_lo.x <= escape_hi.x) r.escape_lo = escape_lo, r.escape_hi = escape_hi;
+            r.lit = lit();
+            r.chained = chained();
+            r.unbounded = unbounded();
+            return r;
+        }
     };
 
     // f(const BlockState&) for every record block of every allocated tile that lies on the face, in tile
@@ -407,17 +418,7 @@ public:
                 gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
                 ++dropped;
             }
-        if (dropped == 0) return 0;
-        std::size_t doubtful_gone = 0;
-        for (int w = 0; w < bit_words; ++w) {
-            if (!gone[w]) continue;
-            for (std::uint64_t d = tile->doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]; d; d &= d - 1)
-                ++doubtful_gone;
-            tile->recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
-        }
-        state_->valid_texels.fetch_sub(static_cast<std::int64_t>(dropped), std::memory_order_relaxed);
-        tile->valid.fetch_sub(static_cast<std::uint32_t>(dropped), std::memory_order_relaxed);
-        if (doubtful_gone) state_->doubtful_texels.fetch_sub(doubtful_gone, std::memory_order_relaxed);
+        if (dropped > 0) forget_emptied(*tile, gone, dropped);
         return dropped;
     }
 
@@ -544,14 +545,10 @@ public:
         Tile* tile = tile_of(texel);
         if (!tile) return;
         const int slot = slot_of(texel);
-        if (Texel::is_valid(tile->texels[slot].exchange(Texel::invalid, std::memory_order_relaxed))) {
-            state_->valid_texels.fetch_sub(1, std::memory_order_relaxed);
-            tile->valid.fetch_sub(1, std::memory_order_relaxed);
-        }
-        const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
-        if (tile->doubtful_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed) & bit)
-            state_->doubtful_texels.fetch_sub(1, std::memory_order_relaxed);
-        tile->recorded_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed);
+        const bool held = Texel::is_valid(tile->texels[slot].exchange(Texel::invalid, std::memory_order_relaxed));
+        std::uint64_t gone[bit_words] = {};
+        gone[slot / 64] = std::uint64_t{1} << (slot % 64);
+        forget_emptied(*tile, gone, held ? 1 : 0);
     }
 
     // Empties every texel, gives every tile back (to the budget too) and resets the counters. Between frames only.
@@ -1018,6 +1015,23 @@ private:
     bool refuse() noexcept {
         state_->counters.add(refused_stores);
         return false;
+    }
+
+    // After texels of `tile` were emptied (their words already invalid): drops their doubtful and recorded
+    // bits (`gone`) and takes `values` (those of them that held one) off the counts. Between frames.
+    void forget_emptied(Tile& tile, const std::uint64_t (&gone)[bit_words], std::size_t values) noexcept {
+        std::size_t doubtful_gone = 0;
+        for (int w = 0; w < bit_words; ++w) {
+            if (!gone[w]) continue;
+            for (std::uint64_t d = tile.doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]; d; d &= d - 1)
+                ++doubtful_gone;
+            tile.recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
+        }
+        if (values) {
+            state_->valid_texels.fetch_sub(static_cast<std::int64_t>(values), std::memory_order_relaxed);
+            tile.valid.fetch_sub(static_cast<std::uint32_t>(values), std::memory_order_relaxed);
+        }
+        if (doubtful_gone) state_->doubtful_texels.fetch_sub(doubtful_gone, std::memory_order_relaxed);
     }
 
     // Adds a written texel's path record to its block's union (atomic or, min, max; loads first, so a

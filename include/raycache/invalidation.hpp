@@ -173,9 +173,10 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     std::vector<Block> blocks;
     cube.for_each_block_state([&](const Block& b) { blocks.push_back(b); });
     counts.blocks = blocks.size();
-    // The middle level: a tile's cone, once for its blocks (which come one after another); a block's
-    // directions lie within its tile's, so a tile whose cone misses every sphere spares its blocks' tests.
+    // The middle level: a tile's origin ball and cone, once for its blocks (which come one after another); a
+    // block's directions lie within its tile's, so a tile whose cone misses every sphere spares its blocks' tests.
     std::size_t cone_tile = static_cast<std::size_t>(-1);
+    OriginBall ball{};
     bool tile_cone_meets = false;
     for (const Block& t : blocks) {
         if (paths_meet(t, changes)) {
@@ -185,11 +186,11 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         }
         // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
         if (changes.moved.empty() && !changes.light_moved) continue;
-        const OriginBall ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi); // the tile's origins
         if (t.tile != cone_tile) {
             constexpr int edge = CacheCube<Texel>::tile_edge;
             const int c0 = t.column0 / edge * edge, r0 = t.row0 / edge * edge;
             cone_tile = t.tile;
+            ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi); // the origins are the tile's
             tile_cone_meets = face_meets[t.face] &&
                               any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n),
                                                  changes.moved, cube_ball);
@@ -282,14 +283,7 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
                 if (!overlap) continue;
                 any = true;
                 unknown = unknown || o.unrecorded_texels > 0;
-                union_of.objects |= o.objects;
-                if (o.vertex_lo.x <= o.vertex_hi.x) union_of.vertex_lo = glm::min(union_of.vertex_lo, o.vertex_lo),
-                                                    union_of.vertex_hi = glm::max(union_of.vertex_hi, o.vertex_hi);
-                if (o.escape_lo.x <= o.escape_hi.x) union_of.escape_lo = glm::min(union_of.escape_lo, o.escape_lo),
-                                                    union_of.escape_hi = glm::max(union_of.escape_hi, o.escape_hi);
-                union_of.lit |= o.lit();
-                union_of.chained |= o.chained();
-                union_of.unbounded |= o.unbounded();
+                union_of.merge(o.record());
             }
         if (any && !unknown) to.record_texels_of_block(t, union_of);
     });
