@@ -335,3 +335,27 @@ TEST_CASE("a cube resampled to a coarser size keeps, per record block, the union
         CHECK(blocks == static_cast<std::size_t>(6 * ((size + 7) / 8) * ((size + 7) / 8)));
     }
 }
+
+TEST_CASE("two rays stored into one texel in one frame leave the same path record whichever came first") {
+    // The smaller word wins a same-frame rivalry either way; the texel's block must record both paths
+    // either way too, or which texels a move drops (and so later frames) would depend on thread timing.
+    const glm::vec3 dim(0.1f), bright(0.9f); // dim packs to the smaller word
+    REQUIRE(raycache::CctTexel::encode(dim) < raycache::CctTexel::encode(bright));
+    PathRecord saw_5, saw_6;
+    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
+    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    const TexelAddress t{RAYCACHE_FACE_POSITIVE_X, 3, 4};
+    auto objects_after = [&](const glm::vec3& first, const PathRecord& first_path, const glm::vec3& second, const PathRecord& second_path) {
+        CctCube cube(16);
+        cube.store_at(t, first, first_path);
+        cube.store_at(t, second, second_path);
+        cube.begin_frame();
+        CHECK(*cube.load(t) == raycache::CctTexel::decode(raycache::CctTexel::encode(dim))); // the smaller word won
+        std::uint64_t objects = 0;
+        cube.for_each_block_state([&](const CctCube::BlockState& b) { objects |= b.objects; });
+        return objects;
+    };
+    const std::uint64_t both = raycache::object_bits(5) | raycache::object_bits(6);
+    CHECK(objects_after(dim, saw_5, bright, saw_6) == both);   // the larger word came second and lost
+    CHECK(objects_after(bright, saw_6, dim, saw_5) == both);   // the larger word came first and was replaced
+}

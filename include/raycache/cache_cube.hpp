@@ -306,9 +306,7 @@ public:
         RAYCACHE_ASSERT(contains(t));
         if (!contains(t) || !shared::raycache_is_finite3(origin) || !(hit_distance >= 0.0f)) return refuse();
         const StoreOrigin from{origin, hit_distance, tolerance};
-        if (!store_word(t, Texel::encode(value), &from)) return false;
-        if (path) record_path(t, *path);
-        return true;
+        return store_word(t, Texel::encode(value), &from, path);
     }
 
     // Bits of BlockState::path_flags: what a block's recorded paths did (raycache/path_record.hpp).
@@ -450,9 +448,7 @@ public:
         const InFrame use = in_frame();
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return refuse();
-        if (!store_word(texel, Texel::encode(value))) return false;
-        record_path(texel, path);
-        return true;
+        return store_word(texel, Texel::encode(value), nullptr, &path);
     }
 
     // The value in `texel` whether or not it is visible yet; std::nullopt when empty. No counting.
@@ -1034,10 +1030,9 @@ private:
         if (doubtful_gone) state_->doubtful_texels.fetch_sub(doubtful_gone, std::memory_order_relaxed);
     }
 
-    // Adds a written texel's path record to its block's union (atomic or, min, max; loads first, so a
-    // block whose union already holds the record is not written).
-    void record_path(const TexelAddress& t, const PathRecord& path) noexcept {
-        Tile* tile = tile_of(t);
+    // Adds the path record of a store that reached texel t's same-frame rivalry to its block's union
+    // (atomic or, min, max; loads first, so a block whose union already holds the record is not written).
+    void record_path(Tile* tile, const TexelAddress& t, const PathRecord& path) noexcept {
         const int slot = slot_of(t);
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         merge_path(tile->records[block_of(t)], path);
@@ -1086,7 +1081,10 @@ private:
         OriginTolerance tolerance;
     };
 
-    bool store_word(const TexelAddress& t, Word word, const StoreOrigin* from = nullptr) noexcept {
+    // With `path`, the texel's block records it once the store reaches the same-frame rivalry, whether it
+    // wins or not: the block then holds every rival's path whatever order the threads came in, so what a
+    // later move drops does not depend on timing.
+    bool store_word(const TexelAddress& t, Word word, const StoreOrigin* from = nullptr, const PathRecord* path = nullptr) noexcept {
         if (!Texel::is_valid(word)) return refuse();
         Tile* tile = tile_for_store(t);
         if (!tile) return refuse(); // over the budget
@@ -1107,6 +1105,7 @@ private:
         tile->written_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         if (!state_->written_this_frame.load(std::memory_order_relaxed))
             state_->written_this_frame.store(true, std::memory_order_relaxed);
+        if (path) record_path(tile, t, *path);
         for (;;) {
             if (Texel::is_valid(old) && !(word < old)) return refuse(); // same frame: the smaller word wins
             if (texel.compare_exchange_weak(old, word, std::memory_order_acq_rel, std::memory_order_acquire)) {
