@@ -1,22 +1,18 @@
 // The Embree tracer on a dynamic scene (dynamic-N) with CCT and CDCT caches: the tracer moves the objects
 // (its BVH follows them), and SceneCache::scene_changed() drops what moved objects can have changed. An
-// oracle retraces, after each move, every texel still valid, with the cache off in the scene before and
-// after the move. CCT: rays through random directions of the texel from random origins the texel answers
-// (within the origin test's drift of its tile's origin box, or anywhere in the cube's box). CDCT: rays from
-// random points of the cube's box toward points at the texel's stored distance in random directions of the
-// texel, counted when, before the move, they met a surface within 2% of that distance (or, for a stored
-// escape, nothing). A texel is stale when some ray's colour changed by more than 1e-4 in a channel (the
-// tolerance; stale texels differ by 0.01 and more). `exact` must leave none, `none` must leave some.
+// oracle (stale_oracle.hpp) retraces, after each move, every texel still valid, with the cache off in the
+// scene before and after the move; a texel is stale when some ray's colour changed by more than 1e-4 in a
+// channel. `exact` must leave none, `none` must leave some.
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <memory>
-#include <random>
 #include <string>
 
 #include "rcx/image.hpp"
 #include "rcx/scene.hpp"
+#include "stale_oracle.hpp"
 #include "tracer.hpp"
 
 namespace {
@@ -25,81 +21,6 @@ using raycache::embree::Invalidation;
 using raycache::embree::SceneCache;
 
 bool wuson_missing() { return !std::filesystem::exists(rcx::SceneParams{}.mesh_path); }
-
-constexpr float tolerance = 1e-4f;
-
-// Valid texels (over every cube) for which some retraced ray sees another colour in `after` than in `before`.
-std::size_t stale_texels(const SceneCache& caches, const rcx::embree::Tracer& before, const rcx::embree::Tracer& after,
-                         std::size_t* checked) {
-    std::mt19937 rng(23);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    const float drift_fraction = raycache::embree::SceneCacheSettings{}.origin_drift;
-    std::size_t stale = 0;
-    *checked = 0;
-    caches.for_each_cct_cube([&](raycache::embree::ObjectId, const raycache::CubeBounds& bounds, const raycache::CctCube* cube) {
-        REQUIRE(cube);
-        const int n = cube->face_size();
-        cube->for_each_valid_texel([&](const raycache::TexelAddress& a) {
-            ++*checked;
-            glm::vec3 lo = bounds.centre - glm::vec3(bounds.half_size), hi = bounds.centre + glm::vec3(bounds.half_size);
-            if (const auto box = cube->origin_box(a)) {
-                const float drift = drift_fraction * bounds.half_size;
-                lo = box->first - glm::vec3(drift), hi = box->second + glm::vec3(drift);
-            }
-            for (int k = 0; k < 6; ++k) {
-                const glm::vec3 o = lo + (hi - lo) * glm::vec3(u(rng), u(rng), u(rng));
-                const float sc = 2.0f * ((static_cast<float>(a.column) + u(rng)) / static_cast<float>(n)) - 1.0f;
-                const float tc = 2.0f * ((static_cast<float>(a.row) + u(rng)) / static_cast<float>(n)) - 1.0f;
-                const glm::vec3 d = glm::normalize(raycache::shared::raycache_face_point(a.face, 1.0f, sc, tc));
-                const glm::vec3 diff = glm::abs(before.trace_uncached(o, d, 1).color - after.trace_uncached(o, d, 1).color);
-                if (std::max(diff.x, std::max(diff.y, diff.z)) > tolerance) {
-                    ++stale;
-                    return;
-                }
-            }
-        });
-    });
-    return stale;
-}
-
-// The same for every CDCT cube.
-std::size_t stale_cdct_texels(const SceneCache& caches, const rcx::embree::Tracer& before, const rcx::embree::Tracer& after,
-                              std::size_t* checked) {
-    std::mt19937 rng(29);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    std::size_t stale = 0;
-    *checked = 0;
-    caches.for_each_cdct_cache([&](raycache::embree::ObjectId, const raycache::CdctCache* cache) {
-        REQUIRE(cache);
-        const raycache::CubeBounds& bounds = cache->bounds();
-        const raycache::CdctCube& cube = cache->cube();
-        const int n = cube.face_size();
-        cube.for_each_valid_texel([&](const raycache::TexelAddress& a) {
-            const raycache::DepthSample stored = *cube.load(a);
-            const bool escape = stored.distance >= cache->parameters().max_depth;
-            bool counted = false;
-            for (int k = 0; k < 32; ++k) {
-                const glm::vec3 o = bounds.centre + bounds.half_size * glm::vec3(2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f, 2.0f * u(rng) - 1.0f);
-                const float sc = 2.0f * ((static_cast<float>(a.column) + u(rng)) / static_cast<float>(n)) - 1.0f;
-                const float tc = 2.0f * ((static_cast<float>(a.row) + u(rng)) / static_cast<float>(n)) - 1.0f;
-                const glm::vec3 point = bounds.centre + stored.distance * glm::normalize(raycache::shared::raycache_face_point(a.face, 1.0f, sc, tc));
-                const float length = glm::length(point - o);
-                const glm::vec3 d = (point - o) / length;
-                const raycache::TracedRay was = before.trace_uncached(o, d, 1);
-                const bool hit = std::isfinite(was.distance);
-                if (escape ? hit : (!hit || std::abs(was.distance - length) > 0.02f * length)) continue;
-                counted = true;
-                const glm::vec3 diff = glm::abs(was.color - after.trace_uncached(o, d, 1).color);
-                if (std::max(diff.x, std::max(diff.y, diff.z)) > tolerance) {
-                    ++stale;
-                    break;
-                }
-            }
-            *checked += counted;
-        });
-    });
-    return stale;
-}
 
 struct Run {
     std::size_t stale = 0, checked = 0;
@@ -128,9 +49,10 @@ Run run(const rcx::Scene& scene, Invalidation policy, int frames, raycache::embr
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
             REQUIRE(!change.moved.empty());
             kept_sum += caches.scene_changed(change, policy).kept_fraction();
-            std::size_t checked = 0;
-            r.stale += cdct ? stale_cdct_texels(caches, before, tracer, &checked) : stale_texels(caches, before, tracer, &checked);
-            r.checked += checked;
+            const rcx::embree::StaleCount c =
+                cdct ? rcx::embree::stale_cdct_texels(caches, before, tracer) : rcx::embree::stale_cct_texels(caches, before, tracer);
+            r.stale += c.stale;
+            r.checked += c.checked;
         }
         tracer.render(scene.camera_at(0), s);
         caches.begin_frame();
