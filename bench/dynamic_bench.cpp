@@ -115,8 +115,8 @@ std::vector<double> changed_by_moves(const Options& o, const rcx::Scene& scene) 
             const rcx::embree::Tracer before(scene.at_frame(f - 1));
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
             for (std::size_t i = 0; i < std::size(techniques); ++i) {
-                const SceneCache& caches = *variants[i].caches;
-                variants[i].caches->scene_changed(change, Invalidation::none);
+                SceneCache& caches = *variants[i].caches;
+                caches.scene_changed(change, Invalidation::none);
                 const rcx::embree::StaleCount c = techniques[i].technique == raycache::embree::Technique::cct
                                                       ? rcx::embree::stale_cct_texels(caches, before, tracer, oracle_stride)
                                                       : rcx::embree::stale_cdct_texels(caches, before, tracer, oracle_stride);

@@ -383,12 +383,10 @@ public:
                 read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
                 t.unrecorded_texels = 0;
                 if (any_unrecorded)
-                    for (int row = t.row0; row < t.row1; ++row)
-                        for (int column = t.column0; column < t.column1; ++column) {
-                            const int slot = slot_of(TexelAddress{t.face, column, row});
-                            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
-                                ++t.unrecorded_texels;
-                        }
+                    for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
+                        if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
+                            ++t.unrecorded_texels;
+                    });
                 f(static_cast<const BlockState&>(t));
             }
         }
@@ -406,16 +404,13 @@ public:
         // no other thread touches the cube, so the words need no read-modify-write of their own).
         std::size_t dropped = 0;
         std::uint64_t gone[bit_words] = {};
-        for (int row = b.row0; row < b.row1; ++row)
-            for (int column = b.column0; column < b.column1; ++column) {
-                const TexelAddress t{b.face, column, row};
-                const int slot = slot_of(t);
-                if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) continue;
-                if (!drop(t, bit_set(tile->recorded_bits, slot))) continue;
-                tile->texels[slot].store(Texel::invalid, std::memory_order_relaxed);
-                gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
-                ++dropped;
-            }
+        for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
+            if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return;
+            if (!drop(t, bit_set(tile->recorded_bits, slot))) return;
+            tile->texels[slot].store(Texel::invalid, std::memory_order_relaxed);
+            gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
+            ++dropped;
+        });
         if (dropped > 0) forget_emptied(*tile, gone, dropped);
         return dropped;
     }
@@ -427,12 +422,10 @@ public:
         assert_between_frames();
         Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile) return;
-        for (int row = b.row0; row < b.row1; ++row)
-            for (int column = b.column0; column < b.column1; ++column) {
-                const int slot = slot_of(TexelAddress{b.face, column, row});
-                if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
-                    tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
-            }
+        for_each_texel_of_block(b, [&](const TexelAddress&, int slot) {
+            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
+                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        });
         merge_path(tile->records[b.block], path);
     }
 
@@ -1036,6 +1029,15 @@ private:
         const int slot = slot_of(t);
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         merge_path(tile->records[block_of(t)], path);
+    }
+    // f(TexelAddress, slot within its tile) for every texel of record block `b`.
+    template <class F>
+    void for_each_texel_of_block(const BlockState& b, F&& f) const {
+        for (int row = b.row0; row < b.row1; ++row)
+            for (int column = b.column0; column < b.column1; ++column) {
+                const TexelAddress t{b.face, column, row};
+                f(t, slot_of(t));
+            }
     }
     // The record block of a texel within its tile.
     static int block_of(const TexelAddress& t) noexcept {
