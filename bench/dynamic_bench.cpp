@@ -44,6 +44,7 @@ struct Options {
     int size = 512;
     int frames = 30;
     std::string scene = "dynamic-32";
+    int invalidation_threads = 0; // SceneCache::scene_changed's passes over this many threads (0: every core)
 };
 
 struct Policy {
@@ -159,7 +160,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
             moved = change.moved.size();
             for (std::size_t k = 1; k < tracks.size(); ++k) {
-                const raycache::embree::InvalidationStatistics s = tracks[k].variant.caches->scene_changed(change, tracks[k].policy->policy);
+                const raycache::embree::InvalidationStatistics s = rcx::embree::scene_changed(*tracks[k].variant.caches, change, tracks[k].policy->policy, o.invalidation_threads);
                 kept[k] = s.kept_fraction();
                 inval[k] = s.milliseconds;
             }
@@ -231,8 +232,9 @@ int main(int argc, char** argv) {
         else if (a == "--size") o.size = std::atoi(value().c_str());
         else if (a == "--frames") o.frames = std::atoi(value().c_str());
         else if (a == "--scene") o.scene = value();
+        else if (a == "--invalidation-threads") o.invalidation_threads = std::atoi(value().c_str());
         else if (a == "--help") {
-            std::puts("usage: raycache_dynamic_bench [--quick] [--out DIR] [--size N] [--frames N] [--scene dynamic-N]");
+            std::puts("usage: raycache_dynamic_bench [--quick] [--out DIR] [--size N] [--frames N] [--scene dynamic-N] [--invalidation-threads N]");
             return 0;
         } else {
             std::fprintf(stderr, "raycache_dynamic_bench: unknown option '%s'\n", a.c_str());
@@ -281,7 +283,9 @@ int main(int argc, char** argv) {
            << "its BVH rebuilt). Over frames 1.." << o.frames - 1 << ": *kept* = valid texels the invalidation kept (mean, "
            << "minimum), hit rate of the frame's leaving rays, *speed-up* = mean over frames of off ms / ms (a cached frame's "
            << "ms includes its invalidation and `begin_frame()`), PSNR against the uncached frame, invalidation time of the "
-           << "frame and per moved object; *could keep* = the valid texels the move did not change, by the stale-texel oracle "
+           << "frame and per moved object (each pass's cubes spread over "
+           << (o.invalidation_threads > 0 ? std::to_string(o.invalidation_threads) + " thread(s)" : std::string("every core"))
+           << ", `SceneCache::scene_changed` with a parallel_for); *could keep* = the valid texels the move did not change, by the stale-texel oracle "
            << "(rays the texels answer retraced uncached before and after the move, on every " << oracle_stride
            << "th valid texel of the `none` caches, mean over frames): an upper bound for any exact invalidation, since a texel "
            << "counts as changed only when one of its sampled rays changed. Per frame: `dynamic_frames.csv`.\n\n"

@@ -182,7 +182,7 @@ int run(const rcx::Options& o) {
         if (scene.dynamic() && f > 0) { // objects move between frames; the caches learn what moved
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
             if (settings.caches) {
-                const raycache::embree::InvalidationStatistics inv = settings.caches->scene_changed(change, invalidation_of(o.invalidate));
+                const raycache::embree::InvalidationStatistics inv = rcx::embree::scene_changed(*settings.caches, change, invalidation_of(o.invalidate), settings.threads);
                 r.kept = inv.kept_fraction();
                 r.invalidate_ms = inv.milliseconds;
             }

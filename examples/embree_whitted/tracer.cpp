@@ -482,11 +482,28 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     return image;
 }
 
+namespace {
+// A SceneCache parallel_for over a TBB arena of `threads` (0: every core).
+auto parallel_over(tbb::task_arena& arena) {
+    return [&arena](std::size_t count, const std::function<void(std::size_t)>& f) {
+        arena.execute([&] { tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); }); });
+    };
+}
+} // namespace
+
 raycache::embree::SceneCacheStatistics end_frame(raycache::embree::SceneCache& caches, int threads) {
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-    return caches.begin_frame([&](std::size_t count, const std::function<void(std::size_t)>& f) {
-        arena.execute([&] { tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); }); });
-    });
+    return caches.begin_frame(parallel_over(arena));
+}
+
+raycache::embree::InvalidationStatistics scene_changed(raycache::embree::SceneCache& caches, const raycache::embree::SceneChange& change,
+                                                       raycache::embree::Invalidation policy, int threads) {
+    if (threads <= 0) // every core: TBB's own arena, with no arena of our own to start on each call
+        return caches.scene_changed(change, policy, [](std::size_t count, const std::function<void(std::size_t)>& f) {
+            tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); });
+        });
+    tbb::task_arena arena(threads);
+    return caches.scene_changed(change, policy, parallel_over(arena));
 }
 
 } // namespace rcx::embree

@@ -91,4 +91,9 @@ private:
 // (threads: 0 = every core); the same result as caches.begin_frame().
 raycache::embree::SceneCacheStatistics end_frame(raycache::embree::SceneCache& caches, int threads = 0);
 
+// SceneCache::scene_changed with each pass's cubes spread over TBB (threads: 0 = every core); the same
+// result as caches.scene_changed(change, policy).
+raycache::embree::InvalidationStatistics scene_changed(raycache::embree::SceneCache& caches, const raycache::embree::SceneChange& change,
+                                                       raycache::embree::Invalidation policy, int threads = 0);
+
 } // namespace rcx::embree

@@ -454,6 +454,17 @@ public:
     // paths hit a cached object whose cube lost texels.
     // Deterministic; between frames only (before or after begin_frame()).
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy) {
+        return scene_changed(change, policy, [](std::size_t count, const std::function<void(std::size_t)>& f) {
+            for (std::size_t i = 0; i < count; ++i) f(i);
+        });
+    }
+
+    // scene_changed() with each pass's cubes invalidated on the caller's threads: parallel_for(count, f) as
+    // begin_frame()'s (f(i) once for each i in [0, count), on any threads, returning when all have). The
+    // cubes of a pass share nothing they write but the budget's byte counter, and each cube's result
+    // depends on its own texels and the changes alone, so the result is scene_changed()'s.
+    template <class ParallelFor>
+    InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy, ParallelFor&& parallel_for) {
         const auto started = std::chrono::steady_clock::now();
         InvalidationStatistics stats;
         for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
@@ -477,26 +488,29 @@ public:
             for (std::size_t i = 0; i < entries_.size(); ++i) stats.dropped += empty_cube(entries_[i]), changed[i] = 1;
         if (policy == Invalidation::exact) {
             std::vector<std::size_t> next; // entries that changed in the last pass
-            for (std::size_t i = 0; i < entries_.size(); ++i) {
-                if (changed[i]) {
-                    next.push_back(i);
-                    continue;
+            for (std::size_t i = 0; i < entries_.size(); ++i)
+                if (changed[i]) next.push_back(i);
+            // One pass over the cubes that have not changed yet, in parallel; then, in entry order, what it did.
+            std::vector<std::size_t> todo, dropped;
+            auto pass = [&](const SceneChanges& c) {
+                todo.clear();
+                for (std::size_t i = 0; i < entries_.size(); ++i)
+                    if (!changed[i]) todo.push_back(i);
+                dropped.assign(todo.size(), 0);
+                const std::function<void(std::size_t)> one = [&](std::size_t k) { dropped[k] = invalidate_entry(entries_[todo[k]], c); };
+                parallel_for(todo.size(), one);
+                for (std::size_t k = 0; k < todo.size(); ++k) {
+                    stats.dropped += dropped[k];
+                    if (dropped[k]) changed[todo[k]] = 1, next.push_back(todo[k]);
                 }
-                const std::size_t dropped = invalidate_entry(entries_[i], changes);
-                stats.dropped += dropped;
-                if (dropped) changed[i] = 1, next.push_back(i);
-            }
+            };
+            pass(changes);
             // A path that met a cached object read that object's cube: when the cube changed, so may the path.
             while (!next.empty()) {
                 SceneChanges seen;
                 for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
                 next.clear();
-                for (std::size_t i = 0; i < entries_.size(); ++i) {
-                    if (changed[i]) continue;
-                    const std::size_t dropped = invalidate_entry(entries_[i], seen);
-                    stats.dropped += dropped;
-                    if (dropped) changed[i] = 1, next.push_back(i);
-                }
+                pass(seen);
             }
         }
         for (char c : changed) stats.cubes_changed += c ? 1 : 0;

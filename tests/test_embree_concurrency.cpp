@@ -1,0 +1,145 @@
+// SceneCache::scene_changed with its passes spread over threads: a ring of cached mirror balls, each
+// reflecting the others, filled through leaving_ray's recording callback; one ball moves. The parallel
+// invalidation must empty exactly the texels the serial one empties, in every cube (labelled concurrency:
+// run under TSan).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raycache/embree/scene_cache.hpp"
+
+namespace {
+
+using raycache::PathRecord;
+using raycache::TracedRay;
+using raycache::embree::Invalidation;
+using raycache::embree::InvalidationStatistics;
+using raycache::embree::ObjectId;
+using raycache::embree::SceneCache;
+using raycache::embree::Technique;
+
+constexpr int balls = 8;
+constexpr float ring = 3.0f, radius = 0.5f;
+
+glm::vec3 centre_of(int i) {
+    const float a = 6.2831853f * static_cast<float>(i) / balls;
+    return glm::vec3(ring * std::cos(a), 0.0f, ring * std::sin(a));
+}
+
+// The nearest ball a ray meets (distance in *t), or -1; the ray leaves ball `from`, which it skips.
+int nearest(const glm::vec3& o, const glm::vec3& d, int from, float* t) {
+    int best = -1;
+    *t = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < balls; ++i) {
+        if (i == from) continue;
+        const glm::vec3 oc = o - centre_of(i);
+        const float b = glm::dot(oc, d), c = glm::dot(oc, oc) - radius * radius, h = b * b - c;
+        if (h < 0.0f) continue;
+        const float s = -b - std::sqrt(h);
+        if (s > 1e-4f && s < *t) *t = s, best = i;
+    }
+    return best;
+}
+
+// A leaving ray of ball `from`: its first hit's colour, with a shadow ray toward a light above and one
+// mirror bounce from the hit, all recorded as the Embree tracer records them.
+TracedRay trace(const glm::vec3& o, const glm::vec3& d, int from, PathRecord& path) {
+    float t = 0.0f;
+    const int i = nearest(o, d, from, &t);
+    if (i < 0) return {glm::vec3(0.1f, 0.2f, 0.4f) + 0.2f * d, std::numeric_limits<float>::infinity()};
+    const glm::vec3 p = o + t * d;
+    path.hit(raycache::embree::path_key(ObjectId{static_cast<unsigned>(i)}), p);
+    const glm::vec3 n = glm::normalize(p - centre_of(i));
+    path.lit = true;
+    const glm::vec3 r = glm::reflect(d, n);
+    float t2 = 0.0f;
+    const int j = nearest(p + 1e-3f * n, r, i, &t2);
+    if (j < 0) path.escaped(r);
+    else path.hit(raycache::embree::path_key(ObjectId{static_cast<unsigned>(j)}), p + t2 * r), path.chained = true;
+    const float shade = 0.3f + 0.7f * std::max(0.0f, n.y);
+    return {glm::vec3(0.2f + 0.1f * static_cast<float>(i), shade, j < 0 ? 0.5f : 0.1f * static_cast<float>(j)), t};
+}
+
+// The caches after two frames of leaving rays from every ball.
+void fill(SceneCache& caches) {
+    for (int i = 0; i < balls; ++i) caches.attach(ObjectId{static_cast<unsigned>(i)}, 32, raycache::CubeBounds{centre_of(i), radius});
+    for (int frame = 0; frame < 2; ++frame) {
+        for (int i = 0; i < balls; ++i)
+            for (int k = 0; k < 4000; ++k) {
+                // Points spread over the ball (a spiral), rays leaving along their normals, tilted.
+                const float z = 1.0f - 2.0f * (static_cast<float>(k) + 0.5f) / 4000.0f, phi = 2.39996f * static_cast<float>(k);
+                const float s = std::sqrt(1.0f - z * z);
+                const glm::vec3 n(s * std::cos(phi), z, s * std::sin(phi));
+                const glm::vec3 d = glm::normalize(n + 0.3f * glm::vec3(std::sin(1.7f * phi), 0.0f, std::cos(1.3f * phi)));
+                const glm::vec3 o = centre_of(i) + (radius + 1e-3f) * n;
+                caches.leaving_ray(ObjectId{static_cast<unsigned>(i)}, o, d, [&](PathRecord& path) { return trace(o, d, i, path); });
+            }
+        caches.begin_frame();
+    }
+}
+
+// Every cube's valid texels, by cube, as loaded values.
+std::vector<std::vector<float>> contents(const SceneCache& caches) {
+    std::vector<std::vector<float>> all;
+    caches.for_each_cct_cube([&](ObjectId, const raycache::CubeBounds&, const raycache::CctCube* cube) {
+        if (!cube) return;
+        std::vector<float>& v = all.emplace_back();
+        cube->for_each_valid_texel([&](const raycache::TexelAddress& a) {
+            const glm::vec3 c = *cube->load(a);
+            v.insert(v.end(), {static_cast<float>(a.face), static_cast<float>(a.column), static_cast<float>(a.row), c.x, c.y, c.z});
+        });
+    });
+    caches.for_each_cdct_cache([&](ObjectId, const raycache::CdctCache* cache) {
+        if (!cache) return;
+        std::vector<float>& v = all.emplace_back();
+        cache->cube().for_each_valid_texel([&](const raycache::TexelAddress& a) {
+            const raycache::DepthSample s = *cache->cube().load(a);
+            v.insert(v.end(), {static_cast<float>(a.face), static_cast<float>(a.column), static_cast<float>(a.row), s.distance});
+        });
+    });
+    return all;
+}
+
+// A parallel_for over `threads` std::threads, each taking every threads-th index.
+auto threads_for(int threads) {
+    return [threads](std::size_t count, const std::function<void(std::size_t)>& f) {
+        std::vector<std::thread> pool;
+        for (int t = 0; t < threads; ++t)
+            pool.emplace_back([&, t] {
+                for (std::size_t i = static_cast<std::size_t>(t); i < count; i += static_cast<std::size_t>(threads)) f(i);
+            });
+        for (std::thread& th : pool) th.join();
+    };
+}
+
+} // namespace
+
+TEST_CASE("scene_changed over 4 threads empties exactly the texels the serial pass empties, CCT and CDCT") {
+    for (const Technique technique : {Technique::cct, Technique::cdct}) {
+        CAPTURE(technique == Technique::cct ? "CCT" : "CDCT");
+        SceneCache serial(technique), parallel(technique);
+        fill(serial);
+        fill(parallel);
+        REQUIRE(contents(serial) == contents(parallel));
+        raycache::embree::SceneChange change;
+        change.moved.push_back({ObjectId{3}, {centre_of(3), radius}, {centre_of(3) + glm::vec3(0.0f, 0.4f, 0.0f), radius}, std::nullopt});
+        change.lights = {glm::vec3(0.0f, 10.0f, 0.0f)};
+        const InvalidationStatistics one = serial.scene_changed(change, Invalidation::exact);
+        const InvalidationStatistics four = parallel.scene_changed(change, Invalidation::exact, threads_for(4));
+        MESSAGE(one.dropped << " of " << one.valid_before << " texels dropped, " << one.cubes_changed << " cubes changed");
+        CHECK(one.dropped > 0);
+        CHECK(one.dropped < one.valid_before);
+        CHECK(one.cubes_changed > 2); // the mover's cube, and others by their rays' cones or paths
+        CHECK(four.valid_before == one.valid_before);
+        CHECK(four.dropped == one.dropped);
+        CHECK(four.cubes_changed == one.cubes_changed);
+        CHECK(contents(parallel) == contents(serial));
+    }
+}
