@@ -13,6 +13,7 @@
 //
 // Usage: raycache_dynamic_bench [--quick] [--out DIR] [--size N] [--frames N] [--scene NAME]
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -66,7 +67,12 @@ struct Track {
     std::size_t technique_index = 0; // in techniques[]
     const Policy* policy = nullptr;
     std::vector<double> kept, hit, speedup, psnr, inval_ms, ms_per_moved;
+    // Per reason (InvalidationStatistics: the mover's cube, cone, path, transitively, unrecorded), the
+    // share of the valid texels a move emptied for it.
+    std::vector<double> why[5];
 };
+constexpr const char* why_labels[5] = {"with the moved objects' own cubes", "by their rays' cones", "with blocks whose paths met the move",
+                                       "through cached mirrors whose cubes changed", "stored without a record"};
 
 // Every how many valid texels the oracle retraces (a sample: all of them would take minutes a frame).
 constexpr std::size_t oracle_stride = 4;
@@ -93,6 +99,7 @@ struct Outputs {
     std::ofstream frames_csv, summary_csv;
     std::vector<std::vector<std::string>> rows;
     std::string exact_vs_all; // per scenario and technique: frames where exact's PSNR is more than 0.5 dB under all's
+    std::string exact_why;    // per scenario and technique: what exact emptied, by reason
 };
 
 // What each move of `scene` really changed, per technique: the stale-texel oracle's fraction of the valid
@@ -155,6 +162,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
     std::vector<double> worst_gap(std::size(techniques), -std::numeric_limits<double>::infinity());
     for (int f = 0; f < o.frames; ++f) {
         std::vector<double> kept(tracks.size(), 1.0), inval(tracks.size(), 0.0);
+        std::vector<std::array<double, 5>> why(tracks.size(), std::array<double, 5>{});
         std::size_t moved = 0;
         if (f > 0) {
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
@@ -163,6 +171,9 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
                 const raycache::embree::InvalidationStatistics s = rcx::embree::scene_changed(*tracks[k].variant.caches, change, tracks[k].policy->policy, o.invalidation_threads);
                 kept[k] = s.kept_fraction();
                 inval[k] = s.milliseconds;
+                const double valid = static_cast<double>(std::max<std::size_t>(1, s.valid_before));
+                why[k] = {s.dropped_with_moved_cubes / valid, s.dropped_by_cone / valid, s.dropped_by_path / valid,
+                          s.dropped_transitively / valid, s.dropped_unrecorded / valid};
             }
         }
         rcx::bench::render_round(tracer, order, scene.camera_at(f), o.size, o.size, static_cast<std::size_t>(f));
@@ -181,6 +192,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.speedup.push_back(off_ms / ms);
             t.psnr.push_back(psnr);
             t.inval_ms.push_back(inval[k]);
+            for (int r = 0; r < 5; ++r) t.why[r].push_back(why[k][static_cast<std::size_t>(r)]);
             if (moved) t.ms_per_moved.push_back(inval[k] / static_cast<double>(moved));
             if (t.policy->policy == Invalidation::all) psnr_all[t.technique_index] = psnr;
             if (t.policy->policy == Invalidation::exact) psnr_exact[t.technique_index] = psnr;
@@ -202,7 +214,14 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
         const double must_drop = changed[t.technique_index];
         out.summary_csv << label << "," << techniques[t.technique_index].label << "," << t.policy->label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
                         << mean(t.speedup) << "," << mean(t.psnr) << "," << minimum(t.psnr) << "," << mean(t.inval_ms) << ","
-                        << maximum(t.inval_ms) << "," << mean(t.ms_per_moved) << "," << must_drop << "\n";
+                        << maximum(t.inval_ms) << "," << mean(t.ms_per_moved) << "," << must_drop;
+        for (const std::vector<double>& w : t.why) out.summary_csv << "," << mean(w);
+        out.summary_csv << "\n";
+        if (t.policy->policy == Invalidation::exact) {
+            out.exact_why += "- " + label + ", " + techniques[t.technique_index].label + ", exact: of the valid texels a move, it emptied ";
+            for (int r = 0; r < 5; ++r)
+                out.exact_why += fmt(100.0 * mean(t.why[r]), 1) + "% " + why_labels[r] + (r < 3 ? ", " : r == 3 ? " and " : ".\n");
+        }
         out.rows.push_back({label, techniques[t.technique_index].label, t.policy->label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
                             fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean(t.psnr), 1), fmt(minimum(t.psnr), 1),
                             fmt(mean(t.inval_ms), 3), fmt(maximum(t.inval_ms), 3), fmt(mean(t.ms_per_moved), 3),
@@ -254,7 +273,8 @@ int main(int argc, char** argv) {
         out.frames_csv << "scenario,frame,technique,policy,moved_objects,kept_fraction,hit_rate,ms,off_ms,speedup,psnr,invalidate_ms\n";
         out.summary_csv.open(o.out + "/dynamic_summary.csv");
         out.summary_csv << "scenario,technique,policy,kept_mean,kept_min,hit_rate,speedup,psnr_mean,psnr_min,invalidate_ms_mean,"
-                           "invalidate_ms_max,invalidate_ms_per_moved_object,oracle_changed_fraction\n";
+                           "invalidate_ms_max,invalidate_ms_per_moved_object,oracle_changed_fraction,dropped_moved_cubes,"
+                           "dropped_cone,dropped_path,dropped_transitively,dropped_unrecorded\n";
 
         const rcx::Scene all = rcx::make_scene(o.scene);
         scenario(o, o.scene + ", every object moves", all, out);
@@ -292,7 +312,8 @@ int main(int argc, char** argv) {
            << rcx::bench::markdown_table({"scenario", "technique", "policy", "kept mean", "kept min", "hit rate", "speed-up", "PSNR mean dB",
                                           "PSNR min dB", "invalidate ms", "max ms", "ms per moved object", "could keep (oracle)"},
                                          out.rows)
-           << "\n" << out.exact_vs_all;
+           << "\n" << out.exact_vs_all << "\nWhat exact emptied, by the first reason that caught each texel (`InvalidationStatistics`), "
+           << "mean over frames:\n\n" << out.exact_why;
         std::ofstream file(o.out + "/dynamic.md");
         file << md.str();
         std::printf("%s", md.str().c_str());

@@ -137,6 +137,19 @@ TEST_CASE("scene_changed over 4 threads empties exactly the texels the serial pa
         CHECK(one.dropped > 0);
         CHECK(one.dropped < one.valid_before);
         CHECK(one.cubes_changed > 2); // the mover's cube, and others by their rays' cones or paths
+        // Every emptied texel has one reason: the mover's own cube, its rays' cone, its block's paths, or a
+        // changed mirror's cube (every store here brought a record). The ball moves up past its neighbours'
+        // reflections of it, so their cones meet it.
+        MESSAGE("moved cube " << one.dropped_with_moved_cubes << ", cone " << one.dropped_by_cone << ", path " << one.dropped_by_path
+                              << ", transitively " << one.dropped_transitively);
+        CHECK(one.dropped_with_moved_cubes > 0);
+        CHECK(one.dropped_by_cone > 0);
+        CHECK(one.dropped_unrecorded == 0);
+        CHECK(one.dropped_with_moved_cubes + one.dropped_by_cone + one.dropped_by_path + one.dropped_transitively +
+                  one.dropped_unrecorded == one.dropped);
+        CHECK(four.dropped_by_cone == one.dropped_by_cone);
+        CHECK(four.dropped_by_path == one.dropped_by_path);
+        CHECK(four.dropped_transitively == one.dropped_transitively);
         CHECK(four.valid_before == one.valid_before);
         CHECK(four.dropped == one.dropped);
         CHECK(four.cubes_changed == one.cubes_changed);

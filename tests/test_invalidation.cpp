@@ -171,6 +171,8 @@ TEST_CASE("a path that hit a moved object costs the texels of its 8 x 8 record b
     changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
     CHECK(counts.dropped == 64);
+    CHECK(counts.dropped_by_path == 64); // the reason, counted: no cone reaches -X, every store recorded
+    CHECK(counts.dropped_by_cone + counts.dropped_unrecorded == 0);
     CHECK(counts.blocks_by_path == 1);
     CHECK(cube.valid_texels() == 256 - 64);
     for (int row = 0; row < 16; ++row)
@@ -209,6 +211,8 @@ TEST_CASE("texels stored without a path record are dropped by any move; recorded
     changes.moved.push_back({99, {glm::vec3(20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(20.0f, 0.5f, 0.0f), 0.5f}});
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
     CHECK(counts.dropped == 1);
+    CHECK(counts.dropped_unrecorded == 1);
+    CHECK(counts.dropped_by_path + counts.dropped_by_cone == 0);
     CHECK(cube.peek(up).has_value());
     CHECK(!cube.peek(down).has_value());
 }

@@ -70,7 +70,10 @@ struct CubeRays {
 // What one pass did to one cube.
 struct InvalidationCounts {
     std::size_t valid_before = 0; // texels holding a value before the pass
-    std::size_t dropped = 0;      // texels emptied
+    std::size_t dropped = 0;      // texels emptied: the three below
+    std::size_t dropped_by_path = 0;    // ... with blocks whose path records met a change
+    std::size_t dropped_by_cone = 0;    // ... whose own rays' cone met a moved sphere
+    std::size_t dropped_unrecorded = 0; // ... whose store brought no path record
     std::size_t blocks = 0;          // record blocks of allocated tiles looked at (CacheCube::BlockState)
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
     std::size_t blocks_by_texel = 0; // blocks whose cone met a moved sphere, so each texel was tested
@@ -181,7 +184,9 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     for (const Block& t : blocks) {
         if (paths_meet(t, changes)) {
             ++counts.blocks_by_path;
-            counts.dropped += cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
+            const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
+            counts.dropped += d;
+            counts.dropped_by_path += d;
             continue;
         }
         // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
@@ -201,9 +206,11 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         if (cone_meets) ++counts.blocks_by_texel;
         else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
         counts.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
-            if (!recorded) return true; // nothing known about the rest of its path
-            return cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
-                                                    changes.moved, cube_ball, reach(a));
+            if (!recorded) return ++counts.dropped_unrecorded, true; // nothing known about the rest of its path
+            const bool meets = cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
+                                                                changes.moved, cube_ball, reach(a));
+            counts.dropped_by_cone += meets;
+            return meets;
         });
     }
     return counts;

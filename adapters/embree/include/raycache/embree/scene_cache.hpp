@@ -182,7 +182,12 @@ struct SceneChange {
 // What SceneCache::scene_changed() did.
 struct InvalidationStatistics {
     std::size_t valid_before = 0;   // texels holding a value, all cubes
-    std::size_t dropped = 0;        // texels emptied
+    std::size_t dropped = 0;        // texels emptied; under exact, these five:
+    std::size_t dropped_with_moved_cubes = 0; // ... in the cubes of moved objects (emptied whole)
+    std::size_t dropped_by_cone = 0;          // ... whose own rays' cone met a moved sphere
+    std::size_t dropped_by_path = 0;          // ... with record blocks whose paths met a move (or a moved light)
+    std::size_t dropped_transitively = 0;     // ... with blocks whose paths hit a cached object whose cube changed
+    std::size_t dropped_unrecorded = 0;       // ... whose store brought no path record
     std::size_t cubes_moved = 0;    // cubes re-centred with their objects
     std::size_t cubes_changed = 0;  // cubes that lost a texel (their objects' reflections changed)
     double milliseconds = 0.0;
@@ -480,7 +485,9 @@ public:
                 e.bounds = m.cube ? *m.cube : CubeBounds{e.bounds.centre + (m.after.centre - m.before.centre), e.bounds.half_size};
                 ++stats.cubes_moved;
                 if (policy == Invalidation::none) continue;
-                stats.dropped += empty_cube(e);
+                const std::size_t emptied = empty_cube(e);
+                stats.dropped += emptied;
+                stats.dropped_with_moved_cubes += emptied;
                 changed[i] = 1;
             }
         }
@@ -491,26 +498,30 @@ public:
             for (std::size_t i = 0; i < entries_.size(); ++i)
                 if (changed[i]) next.push_back(i);
             // One pass over the cubes that have not changed yet, in parallel; then, in entry order, what it did.
-            std::vector<std::size_t> todo, dropped;
-            auto pass = [&](const SceneChanges& c) {
+            std::vector<std::size_t> todo;
+            std::vector<InvalidationCounts> counts;
+            auto pass = [&](const SceneChanges& c, bool transitive) {
                 todo.clear();
                 for (std::size_t i = 0; i < entries_.size(); ++i)
                     if (!changed[i]) todo.push_back(i);
-                dropped.assign(todo.size(), 0);
-                const std::function<void(std::size_t)> one = [&](std::size_t k) { dropped[k] = invalidate_entry(entries_[todo[k]], c); };
+                counts.assign(todo.size(), InvalidationCounts{});
+                const std::function<void(std::size_t)> one = [&](std::size_t k) { counts[k] = invalidate_entry(entries_[todo[k]], c); };
                 parallel_for(todo.size(), one);
                 for (std::size_t k = 0; k < todo.size(); ++k) {
-                    stats.dropped += dropped[k];
-                    if (dropped[k]) changed[todo[k]] = 1, next.push_back(todo[k]);
+                    stats.dropped += counts[k].dropped;
+                    (transitive ? stats.dropped_transitively : stats.dropped_by_path) += counts[k].dropped_by_path;
+                    stats.dropped_by_cone += counts[k].dropped_by_cone;
+                    stats.dropped_unrecorded += counts[k].dropped_unrecorded;
+                    if (counts[k].dropped) changed[todo[k]] = 1, next.push_back(todo[k]);
                 }
             };
-            pass(changes);
+            pass(changes, false);
             // A path that met a cached object read that object's cube: when the cube changed, so may the path.
             while (!next.empty()) {
                 SceneChanges seen;
                 for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
                 next.clear();
-                pass(seen);
+                pass(seen, true);
             }
         }
         for (char c : changed) stats.cubes_changed += c ? 1 : 0;
@@ -663,11 +674,11 @@ private:
         else e.cdct->clear(); // and its pyramid
         return valid;
     }
-    // One exact pass over an entry's cube; the texels it emptied.
-    std::size_t invalidate_entry(Entry& e, const SceneChanges& changes) {
-        if (!e.cct) return invalidate_changes(*e.cdct, changes).dropped; // and its pyramid
+    // One exact pass over an entry's cube.
+    InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes) {
+        if (!e.cct) return invalidate_changes(*e.cdct, changes); // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
-        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes).dropped;
+        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes);
     }
 
     // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
