@@ -483,7 +483,7 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
 }
 
 namespace {
-// A SceneCache parallel_for over a TBB arena of `threads` (0: every core).
+// A SceneCache parallel_for (begin_frame, scene_changed) that runs over `arena`.
 auto parallel_over(tbb::task_arena& arena) {
     return [&arena](std::size_t count, const std::function<void(std::size_t)>& f) {
         arena.execute([&] { tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); }); });
