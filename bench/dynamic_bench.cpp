@@ -35,6 +35,7 @@
 namespace {
 
 using raycache::embree::Invalidation;
+using raycache::embree::InvalidationStatistics;
 using raycache::embree::SceneCache;
 using rcx::bench::fmt;
 using Clock = std::chrono::steady_clock;
@@ -62,17 +63,28 @@ struct Technique {
 constexpr Technique techniques[] = {{"CCT", raycache::embree::Technique::cct, rcx::CacheMode::cct},
                                     {"CDCT", raycache::embree::Technique::cdct, rcx::CacheMode::cdct}};
 
+// Why exact invalidation emptied texels (raycache::embree::InvalidationStatistics): the summary CSV's
+// column and dynamic.md's words for each count.
+struct DropReason {
+    const char* column;
+    const char* words;
+    std::size_t InvalidationStatistics::*count;
+};
+constexpr DropReason drop_reasons[] = {
+    {"dropped_moved_cubes", "with the moved objects' own cubes", &InvalidationStatistics::dropped_with_moved_cubes},
+    {"dropped_cone", "by their rays' cones", &InvalidationStatistics::dropped_by_cone},
+    {"dropped_path", "with blocks whose paths met the move", &InvalidationStatistics::dropped_by_path},
+    {"dropped_transitively", "through cached mirrors whose cubes changed", &InvalidationStatistics::dropped_transitively},
+    {"dropped_unrecorded", "stored without a record", &InvalidationStatistics::dropped_unrecorded}};
+constexpr std::size_t reason_count = std::size(drop_reasons);
+
 struct Track {
     rcx::bench::Variant variant;
     std::size_t technique_index = 0; // in techniques[]
     const Policy* policy = nullptr;
     std::vector<double> kept, hit, speedup, psnr, inval_ms, ms_per_moved;
-    // Per reason (InvalidationStatistics: the mover's cube, cone, path, transitively, unrecorded), the
-    // share of the valid texels a move emptied for it.
-    std::vector<double> why[5];
+    std::vector<double> why[reason_count]; // per drop reason, the share of the valid texels a move emptied
 };
-constexpr const char* why_labels[5] = {"with the moved objects' own cubes", "by their rays' cones", "with blocks whose paths met the move",
-                                       "through cached mirrors whose cubes changed", "stored without a record"};
 
 // Every how many valid texels the oracle retraces (a sample: all of them would take minutes a frame).
 constexpr std::size_t oracle_stride = 4;
@@ -162,18 +174,17 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
     std::vector<double> worst_gap(std::size(techniques), -std::numeric_limits<double>::infinity());
     for (int f = 0; f < o.frames; ++f) {
         std::vector<double> kept(tracks.size(), 1.0), inval(tracks.size(), 0.0);
-        std::vector<std::array<double, 5>> why(tracks.size(), std::array<double, 5>{});
+        std::vector<std::array<double, reason_count>> why(tracks.size(), std::array<double, reason_count>{});
         std::size_t moved = 0;
         if (f > 0) {
             const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
             moved = change.moved.size();
             for (std::size_t k = 1; k < tracks.size(); ++k) {
-                const raycache::embree::InvalidationStatistics s = rcx::embree::scene_changed(*tracks[k].variant.caches, change, tracks[k].policy->policy, o.invalidation_threads);
+                const InvalidationStatistics s = rcx::embree::scene_changed(*tracks[k].variant.caches, change, tracks[k].policy->policy, o.invalidation_threads);
                 kept[k] = s.kept_fraction();
                 inval[k] = s.milliseconds;
                 const double valid = static_cast<double>(std::max<std::size_t>(1, s.valid_before));
-                why[k] = {s.dropped_with_moved_cubes / valid, s.dropped_by_cone / valid, s.dropped_by_path / valid,
-                          s.dropped_transitively / valid, s.dropped_unrecorded / valid};
+                for (std::size_t r = 0; r < reason_count; ++r) why[k][r] = static_cast<double>(s.*drop_reasons[r].count) / valid;
             }
         }
         rcx::bench::render_round(tracer, order, scene.camera_at(f), o.size, o.size, static_cast<std::size_t>(f));
@@ -192,7 +203,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.speedup.push_back(off_ms / ms);
             t.psnr.push_back(psnr);
             t.inval_ms.push_back(inval[k]);
-            for (int r = 0; r < 5; ++r) t.why[r].push_back(why[k][static_cast<std::size_t>(r)]);
+            for (std::size_t r = 0; r < reason_count; ++r) t.why[r].push_back(why[k][r]);
             if (moved) t.ms_per_moved.push_back(inval[k] / static_cast<double>(moved));
             if (t.policy->policy == Invalidation::all) psnr_all[t.technique_index] = psnr;
             if (t.policy->policy == Invalidation::exact) psnr_exact[t.technique_index] = psnr;
@@ -219,8 +230,9 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
         out.summary_csv << "\n";
         if (t.policy->policy == Invalidation::exact) {
             out.exact_why += "- " + label + ", " + techniques[t.technique_index].label + ", exact: of the valid texels a move, it emptied ";
-            for (int r = 0; r < 5; ++r)
-                out.exact_why += fmt(100.0 * mean(t.why[r]), 1) + "% " + why_labels[r] + (r < 3 ? ", " : r == 3 ? " and " : ".\n");
+            for (std::size_t r = 0; r < reason_count; ++r)
+                out.exact_why += fmt(100.0 * mean(t.why[r]), 1) + "% " + drop_reasons[r].words +
+                                 (r + 2 < reason_count ? ", " : r + 1 < reason_count ? " and " : ".\n");
         }
         out.rows.push_back({label, techniques[t.technique_index].label, t.policy->label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
                             fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean(t.psnr), 1), fmt(minimum(t.psnr), 1),
@@ -273,8 +285,9 @@ int main(int argc, char** argv) {
         out.frames_csv << "scenario,frame,technique,policy,moved_objects,kept_fraction,hit_rate,ms,off_ms,speedup,psnr,invalidate_ms\n";
         out.summary_csv.open(o.out + "/dynamic_summary.csv");
         out.summary_csv << "scenario,technique,policy,kept_mean,kept_min,hit_rate,speedup,psnr_mean,psnr_min,invalidate_ms_mean,"
-                           "invalidate_ms_max,invalidate_ms_per_moved_object,oracle_changed_fraction,dropped_moved_cubes,"
-                           "dropped_cone,dropped_path,dropped_transitively,dropped_unrecorded\n";
+                           "invalidate_ms_max,invalidate_ms_per_moved_object,oracle_changed_fraction";
+        for (const DropReason& r : drop_reasons) out.summary_csv << "," << r.column;
+        out.summary_csv << "\n";
 
         const rcx::Scene all = rcx::make_scene(o.scene);
         scenario(o, o.scene + ", every object moves", all, out);
