@@ -413,10 +413,11 @@ TEST_CASE("cubes sharing a budget never exceed it under random concurrent stores
     CHECK(budget->used() == 0u);
 }
 
-TEST_CASE("stores with path records from 4 threads, then exact invalidation between frames: the same texels survive as with 1 thread") {
+TEST_CASE("stores with path records from 4 threads, then exact invalidation between frames on 4 threads: the same texels survive as with 1 thread") {
     // Each store's path hit the object numbered by its direction's face at a point along its direction;
     // object 3 then moves. Concurrent record merging (atomic or, min, max) must give tiles the same records, so the
-    // pass, which reads only those and the texels, empties the same texels.
+    // pass, which reads only those and the texels, empties the same texels; and the pass, its runs of tiles
+    // spread over the same threads, must empty them with the same counts.
     const std::vector<StoreItem> items = make_store_list(40000);
     auto build = [&](int threads) {
         auto cube = std::make_unique<raycache::CctCube>(face_size);
@@ -433,7 +434,13 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
         raycache::SceneChanges changes;
         changes.moved.push_back({3, {glm::vec3(3.0f, 0.5f, 0.0f), 0.4f}, {glm::vec3(3.0f, 0.8f, 0.2f), 0.4f}});
         changes.lights.push_back(glm::vec3(0.0f, 8.0f, 0.0f));
-        const raycache::InvalidationCounts counts = raycache::invalidate_changes(*cube, {{glm::vec3(0.0f), 1.0f}, 0.1f}, changes);
+        auto parallel_for = [threads](std::size_t count, const std::function<void(std::size_t)>& f) {
+            run_threads(threads, [&](int t) {
+                for (std::size_t i = static_cast<std::size_t>(t); i < count; i += static_cast<std::size_t>(threads)) f(i);
+            });
+        };
+        const raycache::InvalidationCounts counts =
+            raycache::invalidate_changes(*cube, {{glm::vec3(0.0f), 1.0f}, 0.1f}, changes, parallel_for);
         std::vector<std::uint32_t> content(static_cast<std::size_t>(texel_count));
         cube->for_each_valid_texel([&](const TexelAddress& a) {
             content[raycache::texel_linear_index(a, face_size)] = CctTexel::encode(*cube->load(a));
@@ -446,5 +453,9 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
     CHECK(one.first.dropped < one.first.valid_before);
     CHECK(one.first.dropped == four.first.dropped);
     CHECK(one.first.blocks_by_path == four.first.blocks_by_path);
+    CHECK(one.first.blocks_by_texel == four.first.blocks_by_texel);
+    CHECK(one.first.dropped_by_path == four.first.dropped_by_path);
+    CHECK(one.first.dropped_by_cone == four.first.dropped_by_cone);
+    CHECK(one.first.blocks > 4 * 16 * raycache::CctCube::record_blocks); // more than four runs of tiles to share
     CHECK(one.second == four.second);
 }

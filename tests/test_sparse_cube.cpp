@@ -25,16 +25,16 @@ const glm::vec3 grey(0.5f);
 // 16 x 16 words, four 64-bit written masks, four 64-bit doubtful masks, the pending and visible origin
 // boxes (6 + 6 four-byte values), a has-box flag (1 byte, padded to 4), the pending and visible nearest hit
 // distances (4 + 4 bytes) and the stale mark (4 bytes); then the path records of raycache/invalidation.hpp:
-// four 64-bit recorded masks, and for each of the four 8 x 8 record blocks a 64-bit Bloom mask of objects,
+// four 64-bit recorded masks, and for each of the sixteen 4 x 4 record blocks a 64-bit Bloom mask of objects,
 // the hit-point box and the escape-direction box (6 + 6 four-byte values) and the path flags (4 bytes),
 // padded to 64; then the valid-texel count (4 bytes, padded to 8).
-constexpr std::size_t path_record_bytes = 4 * 8 + 4 * (8 + 6 * 4 + 6 * 4 + 4 + 4) + 4 + 4;
+constexpr std::size_t path_record_bytes = 4 * 8 + 16 * (8 + 6 * 4 + 6 * 4 + 4 + 4) + 4 + 4;
 constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8 + 12 * 4 + 4 + 8 + 4 + path_record_bytes;
 constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8 + 12 * 4 + 4 + 8 + 4 + path_record_bytes;
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 8 x 8 block: 1448 bytes for the CCT, 2472 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 4 x 4 block: 2216 bytes for the CCT, 3240 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }
@@ -115,10 +115,10 @@ TEST_CASE("a budget that holds one tile refuses the second tile's stores; the fr
 }
 
 TEST_CASE("cubes sharing a budget draw on it together") {
-    auto budget = std::make_shared<MemoryBudget>(10000);
+    auto budget = std::make_shared<MemoryBudget>(14000);
     CdctCube a(16, budget), b(16, budget); // one tile a face each; tables 6 x 8 bytes
     CHECK(budget->used() == 2u * 48u);
-    // 10000 - 96 = 9904 bytes: four CDCT tiles (8672), not five (10840).
+    // 14000 - 96 = 13904 bytes: four CDCT tiles (12960), not five (16200).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});

@@ -88,8 +88,10 @@ public:
     // Texels along a tile's edge (faces smaller than this have one tile each).
     static constexpr int tile_edge = 16;
     // Path records (raycache/invalidation.hpp) are kept per block of record_edge x record_edge texels of a
-    // tile: a path that hit a moved object then costs the texels of its block, not the whole tile's.
-    static constexpr int record_edge = 8;
+    // tile: a path that hit a moved object then costs the texels of its block, not the whole tile's. Blocks
+    // of 4 x 4 keep about ten points more of a CDCT's texels per move than 8 x 8 blocks (the unions of fewer,
+    // more alike paths are narrower), for 768 bytes more a tile.
+    static constexpr int record_edge = 4;
     static constexpr int record_blocks = (tile_edge / record_edge) * (tile_edge / record_edge);
     static_assert(tile_edge % record_edge == 0, "record blocks tile a tile");
 

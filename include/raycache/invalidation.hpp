@@ -8,14 +8,15 @@
 // both in that set), so it lies in the texel's cone from the box's ball too: one test serves both.
 // A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
-//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, an 8 x 8 record block of it, then each texel), and,
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, a 4 x 4 record block of it, then each texel), and,
 //     for a CDCT texel, the sphere comes nearer the centre than the texel's rays reach (its distance plus
 //     the search's gap limit: the segments end there);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
-//     raycache/path_record.hpp): X among the objects hit (Bloom mask), A or B in the cone from a light to
-//     the box of hit points (shadow rays), A or B in that box (bounces between hit points), A or B met by
-//     rays from that box in the cone of the directions in which bounces escaped, a bounce that escaped with
-//     no such bound (unbounded), or a cached object whose own cube changed (transitively, by the caller);
+//     raycache/path_record.hpp, tested once the union of its 8 x 8 group of blocks met X): X among the
+//     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
+//     B in that box (bounces between hit points), A or B met by rays from that box in the cone of the
+//     directions in which bounces escaped, a bounce that escaped with no such bound (unbounded), or a cached
+//     object whose own cube changed (transitively, by the caller);
 //   - or its store brought no PathRecord (nothing is known about the rest of its path).
 // A moved light empties every texel whose path hit something. A block the path tests catch is emptied whole.
 #pragma once
@@ -23,6 +24,7 @@
 #include "raycache/requires_cpp17.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -115,13 +117,13 @@ inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_di
     return false;
 }
 
-// Whether the rest of the paths recorded in a record block can have met a change.
-template <class State>
-bool paths_meet(const State& t, const SceneChanges& changes) {
-    const bool has_vertices = t.vertex_lo.x <= t.vertex_hi.x;
-    const bool has_escapes = t.escape_lo.x <= t.escape_hi.x;
+// Whether the rest of the paths whose union is `t` (a record block's, or a group of blocks') can have met a
+// change.
+inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
+    const bool has_vertices = t.has_vertices();
+    const bool has_escapes = t.has_escapes();
     if (has_escapes && !has_vertices) return true; // escapes from points not recorded: no bound
-    if (t.unbounded()) return true; // a bounce escaped with no bound known
+    if (t.unbounded) return true; // a bounce escaped with no bound known
     if (changes.light_moved && has_vertices) return true;
     auto tagged = [&](std::uint64_t key) {
         const std::uint64_t bits = object_bits(key);
@@ -130,7 +132,7 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
     for (std::uint64_t key : changes.changed)
         if (tagged(key)) return true;
     if (changes.moved.empty()) return false;
-    // The ball around the hit points, and the cone of the escaped bounces' directions: once per block.
+    // The ball around the hit points, and the cone of the escaped bounces' directions: once per union.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
     // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
@@ -144,21 +146,32 @@ bool paths_meet(const State& t, const SceneChanges& changes) {
             if (has_escapes &&
                 shared::raycache_rays_from_ball_meet_sphere(centre, radius + 1e-3f * scale, escapes, s.centre, s.radius))
                 return true;
-            if (t.lit())
+            if (t.lit)
                 for (const glm::vec3& light : changes.lights)
                     if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
                                                            s.radius))
                         return true;
-            if (t.chained() && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
+            if (t.chained && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
         }
     }
     return false;
 }
 
+// Calls f(i) for each i in [0, count) on this thread: the parallel_for of the serial overloads below.
+struct SerialFor {
+    template <class F>
+    void operator()(std::size_t count, F&& f) const {
+        for (std::size_t i = 0; i < count; ++i) f(i);
+    }
+};
+
 // invalidate_changes() below; reach(texel): how far from the cube's centre the rays a texel answers end
-// (infinity for the CCT).
-template <class Texel, class Reach>
-InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach) {
+// (infinity for the CCT). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
+// and returns when all have: runs of tiles go to f, and tiles share nothing they write but the cube's
+// atomic counts, so the result does not depend on the threads.
+template <class Texel, class Reach, class ParallelFor>
+InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach,
+                              ParallelFor&& parallel_for) {
     cube.assert_between_frames();
     cube.settle_budget(); // the tiles this frame keeps, before their records are read
     InvalidationCounts counts;
@@ -174,44 +187,107 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 
     using Block = typename CacheCube<Texel>::BlockState;
     std::vector<Block> blocks;
+    blocks.reserve(cube.allocated_tiles() * CacheCube<Texel>::record_blocks);
     cube.for_each_block_state([&](const Block& b) { blocks.push_back(b); });
     counts.blocks = blocks.size();
-    // The middle level: a tile's origin ball and cone, once for its blocks (which come one after another); a
-    // block's directions lie within its tile's, so a tile whose cone misses every sphere spares its blocks' tests.
-    std::size_t cone_tile = static_cast<std::size_t>(-1);
-    OriginBall ball{};
-    bool tile_cone_meets = false;
-    for (const Block& t : blocks) {
-        if (paths_meet(t, changes)) {
-            ++counts.blocks_by_path;
-            const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
-            counts.dropped += d;
-            counts.dropped_by_path += d;
-            continue;
+    const bool geometric = !changes.moved.empty() || changes.light_moved; // else only names of changed objects
+
+    // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
+    // 8 x 8 texels), then by block, then by texel: the union of a group's paths and the group's cone are
+    // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
+    // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
+    // have no hit points to start from (no bound) makes its group's union unusable.
+    constexpr int edge = CacheCube<Texel>::tile_edge;
+    constexpr int per_side = edge / CacheCube<Texel>::record_edge;
+    constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
+    constexpr int groups_per_side = per_side / group_edge;
+    constexpr std::size_t group_count = groups_per_side * groups_per_side;
+    static_assert(per_side % group_edge == 0, "groups tile a tile");
+    auto group_of = [](int block) { return static_cast<std::size_t>((block / per_side / group_edge) * groups_per_side + block % per_side / group_edge); };
+    struct Group {
+        PathRecord paths;
+        bool unbound = false, any = false;
+        int column0 = 0, row0 = 0, column1 = 0, row1 = 0; // the texels its blocks cover
+    };
+    // The blocks [first, end) of one tile, counted into `c`.
+    auto tile = [&](std::size_t first, std::size_t end, InvalidationCounts& c) {
+        const Block& head = blocks[first];
+        // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
+        const OriginBall ball = origin_ball(rays, head.has_origins, head.origin_lo, head.origin_hi); // the origins are the tile's
+        const int c0 = head.column0 / edge * edge, r0 = head.row0 / edge * edge;
+        const bool tile_cone_meets =
+            geometric && face_meets[head.face] &&
+            any_sphere_in_cone(ball, shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n),
+                               changes.moved, cube_ball);
+        std::array<Group, group_count> groups{};
+        for (std::size_t i = first; i < end; ++i) {
+            const Block& t = blocks[i];
+            Group& g = groups[group_of(t.block)];
+            const PathRecord r = t.record();
+            g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
+            g.paths.merge(r);
+            if (!g.any) g.column0 = t.column0, g.row0 = t.row0, g.column1 = t.column1, g.row1 = t.row1;
+            g.column0 = std::min(g.column0, t.column0), g.row0 = std::min(g.row0, t.row0);
+            g.column1 = std::max(g.column1, t.column1), g.row1 = std::max(g.row1, t.row1);
+            g.any = true;
         }
-        // Only names of changed objects (the transitive passes): unrecorded texels went in the first pass.
-        if (changes.moved.empty() && !changes.light_moved) continue;
-        if (t.tile != cone_tile) {
-            constexpr int edge = CacheCube<Texel>::tile_edge;
-            const int c0 = t.column0 / edge * edge, r0 = t.row0 / edge * edge;
-            cone_tile = t.tile;
-            ball = origin_ball(rays, t.has_origins, t.origin_lo, t.origin_hi); // the origins are the tile's
-            tile_cone_meets = face_meets[t.face] &&
-                              any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n),
-                                                 changes.moved, cube_ball);
+        std::array<bool, group_count> group_paths_meet{}, group_cone_meets{};
+        for (std::size_t k = 0; k < group_count; ++k) {
+            const Group& g = groups[k];
+            if (!g.any) continue;
+            group_paths_meet[k] = g.unbound || paths_meet(g.paths, changes);
+            group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(head.face, g.column0, g.row0, g.column1, g.row1, n),
+                                                                        changes.moved, cube_ball);
         }
-        const bool cone_meets =
-            tile_cone_meets &&
-            any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved, cube_ball);
-        if (cone_meets) ++counts.blocks_by_texel;
-        else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
-        counts.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
-            if (!recorded) return ++counts.dropped_unrecorded, true; // nothing known about the rest of its path
-            const bool meets = cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
-                                                                changes.moved, cube_ball, reach(a));
-            counts.dropped_by_cone += meets;
-            return meets;
-        });
+        for (std::size_t i = first; i < end; ++i) {
+            const Block& t = blocks[i];
+            const std::size_t k = group_of(t.block);
+            if (group_paths_meet[k] && paths_meet(t.record(), changes)) {
+                ++c.blocks_by_path;
+                const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
+                c.dropped += d;
+                c.dropped_by_path += d;
+                continue;
+            }
+            if (!geometric) continue; // unrecorded texels went in the first pass
+            const bool cone_meets =
+                group_cone_meets[k] &&
+                any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved, cube_ball);
+            if (cone_meets) ++c.blocks_by_texel;
+            else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
+            c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
+                if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
+                const bool meets = cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
+                                                                    changes.moved, cube_ball, reach(a));
+                c.dropped_by_cone += meets;
+                return meets;
+            });
+        }
+    };
+    // Runs of tiles_per_run tiles for parallel_for; their counts are added in order.
+    constexpr std::size_t tiles_per_run = 16;
+    std::vector<std::size_t> run_starts; // index into blocks of each run's first block
+    std::size_t tiles = 0;
+    for (std::size_t i = 0; i < blocks.size(); ++i)
+        if (i == 0 || blocks[i].tile != blocks[i - 1].tile)
+            if (tiles++ % tiles_per_run == 0) run_starts.push_back(i);
+    run_starts.push_back(blocks.size());
+    std::vector<InvalidationCounts> runs(run_starts.size() - 1);
+    parallel_for(runs.size(), [&](std::size_t r) {
+        for (std::size_t first = run_starts[r]; first < run_starts[r + 1];) {
+            std::size_t end = first;
+            while (end < run_starts[r + 1] && blocks[end].tile == blocks[first].tile) ++end;
+            tile(first, end, runs[r]);
+            first = end;
+        }
+    });
+    for (const InvalidationCounts& r : runs) {
+        counts.dropped += r.dropped;
+        counts.dropped_by_path += r.dropped_by_path;
+        counts.dropped_by_cone += r.dropped_by_cone;
+        counts.dropped_unrecorded += r.dropped_unrecorded;
+        counts.blocks_by_path += r.blocks_by_path;
+        counts.blocks_by_texel += r.blocks_by_texel;
     }
     return counts;
 }
@@ -219,31 +295,40 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 } // namespace detail
 
 // One pass of exact invalidation over a cube: a CCT cube (`rays` with its origin test), or a CDCT cube
-// (rays from anywhere in its box: origin_drift < 0; a CdctCache: the overload below). Between frames only.
-// Deterministic: the result depends on the cube's contents and `changes` alone.
-template <class Texel>
-InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
-    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return std::numeric_limits<float>::infinity(); });
+// (rays from anywhere in its box: origin_drift < 0; a CdctCache: the overloads below). Between frames only.
+// Deterministic: the result depends on the cube's contents and `changes` alone. parallel_for(count, f):
+// f(i) once for each i in [0, count), on any threads, returning when all have (as tbb::parallel_for);
+// runs of the cube's tiles go to f. Without it, on this thread.
+template <class Texel, class ParallelFor = detail::SerialFor>
+InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes,
+                                      ParallelFor&& parallel_for = {}) {
+    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return std::numeric_limits<float>::infinity(); },
+                              parallel_for);
 }
 
 // invalidate_changes() over a CDCT cube in `bounds`, searched with `p`: its rays leave from anywhere in the
 // box, and a texel holding distance s answers only rays that meet the stored surface at most
 // max(p.max_gap, p.epsilon) behind it (the searches' gap test), so its rays end within s + that of the
 // centre: a moved sphere farther out cannot have changed it (none for an escape, or with no gap limit).
-inline InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p,
-                                             const SceneChanges& changes) {
+template <class ParallelFor = detail::SerialFor>
+InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p, const SceneChanges& changes,
+                                      ParallelFor&& parallel_for = {}) {
     const float gap = std::max(p.max_gap, p.epsilon);
-    return detail::invalidate(cube, CubeRays{bounds, -1.0f}, changes, [&](const TexelAddress& a) {
-        const std::optional<DepthSample> texel = cube.load(a);
-        if (!texel || !(texel->distance < p.max_depth)) return std::numeric_limits<float>::infinity(); // an escape, or clamped
-        return (texel->distance + gap) * 1.0001f + 1e-4f;
-    });
+    return detail::invalidate(
+        cube, CubeRays{bounds, -1.0f}, changes,
+        [&](const TexelAddress& a) {
+            const std::optional<DepthSample> texel = cube.load(a);
+            if (!texel || !(texel->distance < p.max_depth)) return std::numeric_limits<float>::infinity(); // an escape, or clamped
+            return (texel->distance + gap) * 1.0001f + 1e-4f;
+        },
+        parallel_for);
 }
 
 // invalidate_changes() over a CDCT cache's cube (its rays leave from anywhere in its box), then its depth
 // pyramid follows when texels were dropped. Between frames only.
-inline InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChanges& changes) {
-    const InvalidationCounts counts = invalidate_changes(cache.cube(), cache.bounds(), cache.parameters(), changes);
+template <class ParallelFor = detail::SerialFor>
+InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChanges& changes, ParallelFor&& parallel_for = {}) {
+    const InvalidationCounts counts = invalidate_changes(cache.cube(), cache.bounds(), cache.parameters(), changes, parallel_for);
     if (counts.dropped > 0) cache.rebuild_pyramid();
     return counts;
 }

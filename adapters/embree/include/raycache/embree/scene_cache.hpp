@@ -505,8 +505,20 @@ public:
                 for (std::size_t i = 0; i < entries_.size(); ++i)
                     if (!changed[i]) todo.push_back(i);
                 counts.assign(todo.size(), InvalidationCounts{});
-                const std::function<void(std::size_t)> one = [&](std::size_t k) { counts[k] = invalidate_entry(entries_[todo[k]], c); };
-                parallel_for(todo.size(), one);
+                // A cube of many tiles (a mirror that fills the view) would keep one thread busy while the
+                // others wait, so such cubes share their tiles among the threads, one cube after another;
+                // the other cubes go one to a task.
+                std::vector<std::size_t> small, large;
+                for (std::size_t k = 0; k < todo.size(); ++k)
+                    (allocated_tiles(entries_[todo[k]]) > shared_cube_tiles ? large : small).push_back(k);
+                const std::function<void(std::size_t)> one = [&](std::size_t j) {
+                    counts[small[j]] = invalidate_entry(entries_[todo[small[j]]], c, detail::SerialFor{});
+                };
+                parallel_for(small.size(), one);
+                for (std::size_t k : large)
+                    counts[k] = invalidate_entry(entries_[todo[k]], c, [&](std::size_t count, const std::function<void(std::size_t)>& f) {
+                        parallel_for(count, f);
+                    });
                 for (std::size_t k = 0; k < todo.size(); ++k) {
                     stats.dropped += counts[k].dropped;
                     (transitive ? stats.dropped_transitively : stats.dropped_by_path) += counts[k].dropped_by_path;
@@ -674,11 +686,17 @@ private:
         else e.cdct->clear(); // and its pyramid
         return valid;
     }
-    // One exact pass over an entry's cube.
-    InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes) {
-        if (!e.cct) return invalidate_changes(*e.cdct, changes); // and its pyramid
+    // Cubes with more tiles than this share them among the threads in scene_changed() (16 tiles a task).
+    static constexpr std::size_t shared_cube_tiles = 64;
+    std::size_t allocated_tiles(const Entry& e) const {
+        return with_cube(e, [](const auto& cube) { return cube.allocated_tiles(); });
+    }
+    // One exact pass over an entry's cube, its tiles spread by parallel_for (invalidate_changes()).
+    template <class ParallelFor>
+    InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes, ParallelFor&& parallel_for) {
+        if (!e.cct) return invalidate_changes(*e.cdct, changes, parallel_for); // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
-        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes);
+        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes, parallel_for);
     }
 
     // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
