@@ -180,6 +180,32 @@ TEST_CASE("a path that hit a moved object costs the texels of its 4 x 4 record b
             CHECK(cube.load({RAYCACHE_FACE_POSITIVE_X, column, row}).has_value() == !(column < 4 && row < 4));
 }
 
+TEST_CASE("a block emptied by a move forgets the paths it held: refilled with paths that missed the mover, it stays at the next move") {
+    // Block 0 of face +X (columns and rows 0..3) first holds paths that hit object 5, which moves (far out
+    // along -X, where no ray of face +X can reach it): the block goes. Refilled with paths that hit object 6
+    // only, it must survive object 5's next move; a record that still held the first paths would drop it.
+    REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
+    CctCube cube(16);
+    PathRecord saw_5, saw_6;
+    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
+    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    auto fill_block = [&](const PathRecord& path) {
+        for (int row = 0; row < 4; ++row)
+            for (int column = 0; column < 4; ++column) REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
+        cube.begin_frame();
+    };
+    raycache::SceneChanges changes;
+    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    fill_block(saw_5);
+    CHECK(raycache::invalidate_changes(cube, {box, -1.0f}, changes).dropped == 16);
+    CHECK(cube.valid_texels() == 0);
+    fill_block(saw_6);
+    const raycache::InvalidationCounts again = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(again.valid_before == 16);
+    CHECK(again.dropped == 0);
+    CHECK(cube.valid_texels() == 16);
+}
+
 TEST_CASE("blocks of one 8 x 8 group are judged by their own paths when only the group's union meets the move") {
     // Face +Y of a 16-texel cube: block 0 (columns and rows 0..3) holds paths that hit a point P = (0, 5, 0)
     // and escaped straight along +X, block 1 (columns 4..7) paths from P that escaped along +Z; the other

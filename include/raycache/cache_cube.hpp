@@ -396,7 +396,8 @@ public:
 
     // Empties the texels of block `b` (from for_each_block_state()) holding a value for which
     // drop(TexelAddress, bool recorded) returns true; `recorded`: the texel's store brought a path record.
-    // Returns how many were emptied. Between frames only.
+    // A block left with no value forgets its path record too (no texel answers for those paths any more),
+    // so its next stores start a fresh union. Returns how many were emptied. Between frames only.
     template <class Drop>
     std::size_t invalidate_in_block(const BlockState& b, Drop&& drop) {
         assert_between_frames();
@@ -404,16 +405,17 @@ public:
         if (!tile) return 0;
         // invalidate() texel by texel, with the bits and counts updated once for the block (between frames
         // no other thread touches the cube, so the words need no read-modify-write of their own).
-        std::size_t dropped = 0;
+        std::size_t dropped = 0, kept = 0;
         std::uint64_t gone[bit_words] = {};
         for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
             if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return;
-            if (!drop(t, bit_set(tile->recorded_bits, slot))) return;
+            if (!drop(t, bit_set(tile->recorded_bits, slot))) return void(++kept);
             tile->texels[slot].store(Texel::invalid, std::memory_order_relaxed);
             gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
             ++dropped;
         });
         if (dropped > 0) forget_emptied(*tile, gone, dropped);
+        if (dropped > 0 && kept == 0) tile->records[b.block].clear();
         return dropped;
     }
 
@@ -655,7 +657,11 @@ private:
 
     // The union of the path records stored into one record block of a tile.
     struct PathUnion {
-        PathUnion() noexcept {
+        PathUnion() noexcept { clear(); }
+        // Empty: no object, empty boxes, no flag (a new tile's, or a block left with no value).
+        void clear() noexcept {
+            objects.store(0, std::memory_order_relaxed);
+            flags.store(0, std::memory_order_relaxed);
             for (int k = 0; k < 3; ++k) {
                 vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 vertex_max[k].store(0u, std::memory_order_relaxed);
