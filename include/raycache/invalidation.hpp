@@ -8,9 +8,9 @@
 // both in that set), so it lies in the texel's cone from the box's ball too: one test serves both.
 // A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
-//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, a 4 x 4 record block of it, then each texel), and,
-//     for a CDCT texel, the sphere comes nearer the centre than the texel's rays reach (its distance plus
-//     the search's gap limit: the segments end there);
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, an 8 x 8 group of 4 x 4
+//     record blocks, a block, then each texel), and, for a CDCT texel, the sphere comes nearer the centre
+//     than the texel's rays reach (its distance plus the search's gap limit: the segments end there);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
 //     raycache/path_record.hpp, tested once the union of its 8 x 8 group of blocks met X): X among the
 //     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
