@@ -483,27 +483,27 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
 }
 
 namespace {
-// A SceneCache parallel_for (begin_frame, scene_changed) that runs over `arena`.
-auto parallel_over(tbb::task_arena& arena) {
-    return [&arena](std::size_t count, const std::function<void(std::size_t)>& f) {
-        arena.execute([&] { tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); }); });
-    };
+// A SceneCache parallel_for (begin_frame, scene_changed) over TBB.
+void tbb_for(std::size_t count, const std::function<void(std::size_t)>& f) {
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); });
+}
+// SceneCache's call(parallel_for) on `threads` threads: TBB's own arena for every core (threads <= 0), so
+// no arena of our own is started on each call; else an arena of that many.
+template <class Call>
+decltype(auto) on_threads(int threads, Call&& call) {
+    if (threads <= 0) return call(tbb_for);
+    tbb::task_arena arena(threads);
+    return call([&arena](std::size_t count, const std::function<void(std::size_t)>& f) { arena.execute([&] { tbb_for(count, f); }); });
 }
 } // namespace
 
 raycache::embree::SceneCacheStatistics end_frame(raycache::embree::SceneCache& caches, int threads) {
-    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-    return caches.begin_frame(parallel_over(arena));
+    return on_threads(threads, [&](auto&& parallel_for) { return caches.begin_frame(parallel_for); });
 }
 
 raycache::embree::InvalidationStatistics scene_changed(raycache::embree::SceneCache& caches, const raycache::embree::SceneChange& change,
                                                        raycache::embree::Invalidation policy, int threads) {
-    if (threads <= 0) // every core: TBB's own arena, with no arena of our own to start on each call
-        return caches.scene_changed(change, policy, [](std::size_t count, const std::function<void(std::size_t)>& f) {
-            tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { f(i); });
-        });
-    tbb::task_arena arena(threads);
-    return caches.scene_changed(change, policy, parallel_over(arena));
+    return on_threads(threads, [&](auto&& parallel_for) { return caches.scene_changed(change, policy, parallel_for); });
 }
 
 } // namespace rcx::embree

@@ -157,7 +157,8 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
     return false;
 }
 
-// Calls f(i) for each i in [0, count) on this thread: the parallel_for of the serial overloads below.
+// Calls f(i) for each i in [0, count) on this thread: the parallel_for of the serial overloads (here and
+// SceneCache's).
 struct SerialFor {
     template <class F>
     void operator()(std::size_t count, F&& f) const {
@@ -207,7 +208,6 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     struct Group {
         PathRecord paths;
         bool unbound = false, any = false;
-        int column0 = 0, row0 = 0, column1 = 0, row1 = 0; // the texels its blocks cover
     };
     // The blocks [first, end) of one tile, counted into `c`.
     auto tile = [&](std::size_t first, std::size_t end, InvalidationCounts& c) {
@@ -226,9 +226,6 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             const PathRecord r = t.record();
             g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
             g.paths.merge(r);
-            if (!g.any) g.column0 = t.column0, g.row0 = t.row0, g.column1 = t.column1, g.row1 = t.row1;
-            g.column0 = std::min(g.column0, t.column0), g.row0 = std::min(g.row0, t.row0);
-            g.column1 = std::max(g.column1, t.column1), g.row1 = std::max(g.row1, t.row1);
             g.any = true;
         }
         std::array<bool, group_count> group_paths_meet{}, group_cone_meets{};
@@ -236,7 +233,12 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             const Group& g = groups[k];
             if (!g.any) continue;
             group_paths_meet[k] = g.unbound || paths_meet(g.paths, changes);
-            group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(head.face, g.column0, g.row0, g.column1, g.row1, n),
+            // The group's square of texels, clipped to the face as its blocks are.
+            constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
+            const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
+            group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball,
+                                                                        shared::raycache_region_cone(head.face, gc0, gr0, std::min(n, gc0 + texels),
+                                                                                                     std::min(n, gr0 + texels), n),
                                                                         changes.moved, cube_ball);
         }
         for (std::size_t i = first; i < end; ++i) {

@@ -459,9 +459,7 @@ public:
     // paths hit a cached object whose cube lost texels.
     // Deterministic; between frames only (before or after begin_frame()).
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy) {
-        return scene_changed(change, policy, [](std::size_t count, const std::function<void(std::size_t)>& f) {
-            for (std::size_t i = 0; i < count; ++i) f(i);
-        });
+        return scene_changed(change, policy, detail::SerialFor{});
     }
 
     // scene_changed() with each pass's cubes invalidated on the caller's threads: parallel_for(count, f) as
@@ -515,10 +513,7 @@ public:
                     counts[small[j]] = invalidate_entry(entries_[todo[small[j]]], c, detail::SerialFor{});
                 };
                 parallel_for(small.size(), one);
-                for (std::size_t k : large)
-                    counts[k] = invalidate_entry(entries_[todo[k]], c, [&](std::size_t count, const std::function<void(std::size_t)>& f) {
-                        parallel_for(count, f);
-                    });
+                for (std::size_t k : large) counts[k] = invalidate_entry(entries_[todo[k]], c, parallel_for);
                 for (std::size_t k = 0; k < todo.size(); ++k) {
                     stats.dropped += counts[k].dropped;
                     (transitive ? stats.dropped_transitively : stats.dropped_by_path) += counts[k].dropped_by_path;
@@ -545,9 +540,7 @@ public:
     // Adaptive cubes then take the face size their object's rays call for: a smaller one is filled from
     // the old cube (resample_into), a larger one starts empty.
     SceneCacheStatistics begin_frame() {
-        return begin_frame([](std::size_t count, const std::function<void(std::size_t)>& f) {
-            for (std::size_t i = 0; i < count; ++i) f(i);
-        });
+        return begin_frame(detail::SerialFor{});
     }
 
     // begin_frame() with each cube's own end-of-frame work (the confidence test, making the frame's stores
