@@ -91,6 +91,40 @@ TEST_CASE("a whole face's cone reaches its corners, 54.74 degrees, and holds eve
     }
 }
 
+TEST_CASE("one texel's cone: holds every direction the texel choice gives it, and is at most 15% wider than its corners' cone") {
+    // Hand-derived: the centre texel of a 2 x 2 face is a quarter of it, [0, 1] x [0, 1] on +Z; its centre
+    // point (0.5, 0.5, 1) is 0.707 from its corners in the face plane, and no point of it is nearer the
+    // face's centre than 0 (r_min = 0), so the bound is 0.707 rad (40.5 degrees; the corners themselves lie
+    // 19.5 and 35.3 degrees from the axis).
+    const raycache_direction_cone quarter = raycache::shared::raycache_texel_cone(RAYCACHE_FACE_POSITIVE_Z, 1, 1, 2);
+    CHECK(glm::length(quarter.axis - glm::normalize(glm::vec3(0.5f, -0.5f, 1.0f))) < 1e-6f); // +Z: t runs along -y
+    CHECK(quarter.cos_spread == doctest::Approx(1.0f - 0.5f * 0.5f).epsilon(1e-3)); // 1 - x^2 / 2 for x = 0.7071
+    // Every sampled direction whose texel is (face, column, row) lies in the cone, on faces of several sizes;
+    // and the cone is at most 15% wider (in angle) than the exact cone to the texel's corners (on faces of 16 to 512 texels).
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int n : {1, 2, 3, 16, 37, 512, 4096}) {
+        for (int trial = 0; trial < 60; ++trial) {
+            const int f = trial % 6;
+            const int column = static_cast<int>(rng() % static_cast<unsigned>(n)), row = static_cast<int>(rng() % static_cast<unsigned>(n));
+            const raycache_direction_cone cone = raycache::shared::raycache_texel_cone(f, column, row, n);
+            const raycache_direction_cone corners = raycache::shared::raycache_region_cone(f, column, row, column + 1, row + 1, n);
+            // Small faces' texels span tens of degrees, where the bound is looser (still conservative); on
+            // faces of thousands of texels both cones are below what float cosines resolve.
+            if (n >= 16 && n <= 512)
+                CHECK(std::acos(std::max(-1.0f, std::min(1.0f, cone.cos_spread))) <= 1.15f * std::acos(std::min(1.0f, corners.cos_spread)) + 2e-4f);
+            for (int k = 0; k < 500; ++k) {
+                // Points of the texel, its edges and corners included (u in [0, 1] reaches both ends).
+                const float a = k < 4 ? static_cast<float>(k & 1) : u(rng), b = k < 4 ? static_cast<float>(k >> 1) : u(rng);
+                const float sc = 2.0f * ((static_cast<float>(column) + a) / static_cast<float>(n)) - 1.0f;
+                const float tc = 2.0f * ((static_cast<float>(row) + b) / static_cast<float>(n)) - 1.0f;
+                const glm::vec3 d = glm::normalize(raycache::shared::raycache_face_point(f, 1.0f, sc, tc));
+                REQUIRE(glm::dot(d, cone.axis) >= cone.cos_spread);
+            }
+        }
+    }
+}
+
 TEST_CASE("rays from any point of the box through any direction of a tile: the test never misses a sphere they meet") {
     // Brute force: a cube of half-size h at c; spheres placed at random; rays from the box's 8 corners, its
     // centre and random interior and surface points, through random directions of the tile. Every sphere

@@ -55,6 +55,15 @@ TEST_CASE("a new cube holds no tile, and a store allocates exactly the tile of i
     CHECK(cube.store_at(TexelAddress{0, 48, 32}, grey));
     CHECK(cube.store(glm::vec3(0, 0, -1), grey));
     CHECK(cube.allocated_tiles() == 3u);
+    // Tiles are numbered face by face, row by row: (face 0, row 2, column 2) = 10, column 3 = 11, and the
+    // -Z face's (5) centre tile 5 * 16 + 10 = 90; the per-tile block walk starts each at its corner texel.
+    CHECK(cube.allocated_tile_indices() == std::vector<std::size_t>{10, 11, 90});
+    std::vector<int> corners;
+    for (std::size_t i : cube.allocated_tile_indices())
+        cube.for_each_block_state_of_tile(i, [&](const CctCube::BlockState& b) {
+            if (b.block == 0) corners.insert(corners.end(), {b.face, b.column0, b.row0});
+        });
+    CHECK(corners == std::vector<int>{0, 32, 32, 0, 48, 32, 5, 32, 32});
 }
 
 TEST_CASE("lookups and loads of texels in tiles never stored miss without allocating") {

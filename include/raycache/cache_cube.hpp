@@ -56,6 +56,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -349,48 +350,63 @@ public:
     // then block order. Between frames only.
     template <class F>
     void for_each_block_state(F&& f) const {
-        for (std::size_t i = 0; i < tile_count(); ++i) {
-            const Tile* tile = state_->tiles[i].load(std::memory_order_acquire);
-            if (!tile) continue;
-            const TexelAddress first = first_texel_of_tile(i);
-            // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
-            // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
-            const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != count_bits(tile->recorded_bits);
-            BlockState t{};
-            t.tile = i;
-            t.face = first.face;
-            t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
-                                                 tile->pending_max[0].load(std::memory_order_relaxed);
-            if (t.has_origins) {
-                for (int k = 0; k < 3; ++k) {
-                    const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
-                    const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
-                    float a = tile->has_box ? tile->box_min[k] : std::numeric_limits<float>::infinity();
-                    float b = tile->has_box ? tile->box_max[k] : -std::numeric_limits<float>::infinity();
-                    if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
-                    t.origin_lo[k] = a, t.origin_hi[k] = b;
-                }
+        for (std::size_t i = 0; i < tile_count(); ++i) for_each_block_state_of_tile(i, f);
+    }
+
+    // The indices of the allocated tiles, ascending (for spreading for_each_block_state_of_tile() over
+    // threads). Between frames only.
+    std::vector<std::size_t> allocated_tile_indices() const {
+        std::vector<std::size_t> indices;
+        indices.reserve(allocated_tiles());
+        for (std::size_t i = 0; i < tile_count(); ++i)
+            if (state_->tiles[i].load(std::memory_order_acquire)) indices.push_back(i);
+        return indices;
+    }
+
+    // for_each_block_state() for tile `i` alone (nothing when it is not allocated). Between frames only;
+    // threads may read different tiles at once.
+    template <class F>
+    void for_each_block_state_of_tile(std::size_t i, F&& f) const {
+        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return;
+        const TexelAddress first = first_texel_of_tile(i);
+        // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
+        // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
+        const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != count_bits(tile->recorded_bits);
+        BlockState t{};
+        t.tile = i;
+        t.face = first.face;
+        t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
+                                             tile->pending_max[0].load(std::memory_order_relaxed);
+        if (t.has_origins) {
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
+                const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
+                float a = tile->has_box ? tile->box_min[k] : std::numeric_limits<float>::infinity();
+                float b = tile->has_box ? tile->box_max[k] : -std::numeric_limits<float>::infinity();
+                if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
+                t.origin_lo[k] = a, t.origin_hi[k] = b;
             }
-            for (int b = 0; b < record_blocks; ++b) {
-                t.block = b;
-                t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
-                t.row0 = first.row + b / (tile_edge / record_edge) * record_edge;
-                t.column1 = std::min(face_size_, t.column0 + record_edge);
-                t.row1 = std::min(face_size_, t.row0 + record_edge);
-                if (t.column0 >= t.column1 || t.row0 >= t.row1) continue; // off the face
-                const PathUnion& r = tile->records[b];
-                t.objects = r.objects.load(std::memory_order_relaxed);
-                t.path_flags = r.flags.load(std::memory_order_relaxed);
-                read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
-                read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
-                t.unrecorded_texels = 0;
-                if (any_unrecorded)
-                    for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
-                        if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
-                            ++t.unrecorded_texels;
-                    });
-                f(static_cast<const BlockState&>(t));
-            }
+        }
+        for (int b = 0; b < record_blocks; ++b) {
+            t.block = b;
+            t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
+            t.row0 = first.row + b / (tile_edge / record_edge) * record_edge;
+            t.column1 = std::min(face_size_, t.column0 + record_edge);
+            t.row1 = std::min(face_size_, t.row0 + record_edge);
+            if (t.column0 >= t.column1 || t.row0 >= t.row1) continue; // off the face
+            const PathUnion& r = tile->records[b];
+            t.objects = r.objects.load(std::memory_order_relaxed);
+            t.path_flags = r.flags.load(std::memory_order_relaxed);
+            read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
+            read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
+            t.unrecorded_texels = 0;
+            if (any_unrecorded)
+                for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
+                    if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
+                        ++t.unrecorded_texels;
+                });
+            f(static_cast<const BlockState&>(t));
         }
     }
 

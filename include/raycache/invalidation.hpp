@@ -100,17 +100,20 @@ inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm:
     return ball;
 }
 
-// Whether rays from `ball` in the cone's directions can meet a moved sphere. `reach`: how far from the
-// cube's centre the rays end (infinity: they do not); a segment between two points of a ball around the
-// centre stays in that ball, so rays from the cube's ball ending within `reach` stay within the larger
-// of the two radii, and a sphere beyond that cannot meet them.
-inline bool any_sphere_in_cone(const OriginBall& ball, const shared::raycache_direction_cone& cone,
-                               const std::vector<SceneChanges::Move>& moved, const OriginBall& cube_ball,
-                               float reach = std::numeric_limits<float>::infinity()) {
+// Whether rays from `ball` in the directions of cone_of() (called at most once, and only when a moved sphere
+// lies within reach: most texels' spheres do not, and their cones cost five normalisations) can meet a moved
+// sphere. `reach`: how far from the cube's centre the rays end (infinity: they do not); a segment between
+// two points of a ball around the centre stays in that ball, so rays from the cube's ball ending within
+// `reach` stay within the larger of the two radii, and a sphere beyond that cannot meet them.
+template <class ConeOf>
+bool any_sphere_in_cone(const OriginBall& ball, ConeOf&& cone_of, const std::vector<SceneChanges::Move>& moved,
+                        const OriginBall& cube_ball, float reach = std::numeric_limits<float>::infinity()) {
     const float bound = std::max(cube_ball.radius, reach);
+    std::optional<shared::raycache_direction_cone> cone;
     auto meets = [&](const BoundingSphere& s) {
         if (glm::length(s.centre - cube_ball.centre) - s.radius > bound) return false;
-        return shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, s.centre, s.radius);
+        if (!cone) cone = cone_of();
+        return shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, *cone, s.centre, s.radius);
     };
     for (const SceneChanges::Move& m : moved)
         if (meets(m.before) || meets(m.after)) return true;
@@ -184,13 +187,9 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     bool face_meets[RAYCACHE_FACE_COUNT];
     const OriginBall cube_ball = origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
     for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-        face_meets[face] = any_sphere_in_cone(cube_ball, shared::raycache_region_cone(face, 0, 0, n, n, n), changes.moved, cube_ball);
+        face_meets[face] = any_sphere_in_cone(cube_ball, [&] { return shared::raycache_region_cone(face, 0, 0, n, n, n); }, changes.moved, cube_ball);
 
     using Block = typename CacheCube<Texel>::BlockState;
-    std::vector<Block> blocks;
-    blocks.reserve(cube.allocated_tiles() * CacheCube<Texel>::record_blocks);
-    cube.for_each_block_state([&](const Block& b) { blocks.push_back(b); });
-    counts.blocks = blocks.size();
     const bool geometric = !changes.moved.empty() || changes.light_moved; // else only names of changed objects
 
     // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
@@ -209,21 +208,27 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         PathRecord paths;
         bool unbound = false, any = false;
     };
-    // The blocks [first, end) of one tile, counted into `c`.
-    auto tile = [&](std::size_t first, std::size_t end, InvalidationCounts& c) {
-        const Block& head = blocks[first];
+    // Tile `index`, its blocks read here (on the run's thread), counted into `c`.
+    auto tile = [&](std::size_t index, InvalidationCounts& c) {
+        std::array<Block, CacheCube<Texel>::record_blocks> blocks;
+        std::size_t count = 0;
+        cube.for_each_block_state_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
+        if (count == 0) return;
+        c.blocks += count;
+        const Block& head = blocks[0];
         // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
         const OriginBall ball = origin_ball(rays, head.has_origins, head.origin_lo, head.origin_hi); // the origins are the tile's
         const int c0 = head.column0 / edge * edge, r0 = head.row0 / edge * edge;
         const bool tile_cone_meets =
             geometric && face_meets[head.face] &&
-            any_sphere_in_cone(ball, shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n),
+            any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
                                changes.moved, cube_ball);
         std::array<Group, group_count> groups{};
-        for (std::size_t i = first; i < end; ++i) {
+        std::array<PathRecord, CacheCube<Texel>::record_blocks> records;
+        for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             Group& g = groups[group_of(t.block)];
-            const PathRecord r = t.record();
+            const PathRecord& r = records[i] = t.record();
             g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
             g.paths.merge(r);
             g.any = true;
@@ -236,15 +241,14 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             // The group's square of texels, clipped to the face as its blocks are.
             constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
-            group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball,
-                                                                        shared::raycache_region_cone(head.face, gc0, gr0, std::min(n, gc0 + texels),
-                                                                                                     std::min(n, gr0 + texels), n),
-                                                                        changes.moved, cube_ball);
+            group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, [&] {
+                return shared::raycache_region_cone(head.face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
+            }, changes.moved, cube_ball);
         }
-        for (std::size_t i = first; i < end; ++i) {
+        for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k] && paths_meet(t.record(), changes)) {
+            if (group_paths_meet[k] && paths_meet(records[i], changes)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
@@ -254,36 +258,29 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             if (!geometric) continue; // unrecorded texels went in the first pass
             const bool cone_meets =
                 group_cone_meets[k] &&
-                any_sphere_in_cone(ball, shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n), changes.moved, cube_ball);
+                any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n); },
+                                   changes.moved, cube_ball);
             if (cone_meets) ++c.blocks_by_texel;
             else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
-                const bool meets = cone_meets && any_sphere_in_cone(ball, shared::raycache_region_cone(a.face, a.column, a.row, a.column + 1, a.row + 1, n),
+                const bool meets = cone_meets && any_sphere_in_cone(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
                                                                     changes.moved, cube_ball, reach(a));
                 c.dropped_by_cone += meets;
                 return meets;
             });
         }
     };
-    // Runs of tiles_per_run tiles for parallel_for; their counts are added in order.
+    // Runs of tiles_per_run allocated tiles for parallel_for, each reading its own tiles' records; their
+    // counts are added in order.
     constexpr std::size_t tiles_per_run = 16;
-    std::vector<std::size_t> run_starts; // index into blocks of each run's first block
-    std::size_t tiles = 0;
-    for (std::size_t i = 0; i < blocks.size(); ++i)
-        if (i == 0 || blocks[i].tile != blocks[i - 1].tile)
-            if (tiles++ % tiles_per_run == 0) run_starts.push_back(i);
-    run_starts.push_back(blocks.size());
-    std::vector<InvalidationCounts> runs(run_starts.size() - 1);
+    const std::vector<std::size_t> tiles = cube.allocated_tile_indices();
+    std::vector<InvalidationCounts> runs((tiles.size() + tiles_per_run - 1) / tiles_per_run);
     parallel_for(runs.size(), [&](std::size_t r) {
-        for (std::size_t first = run_starts[r]; first < run_starts[r + 1];) {
-            std::size_t end = first;
-            while (end < run_starts[r + 1] && blocks[end].tile == blocks[first].tile) ++end;
-            tile(first, end, runs[r]);
-            first = end;
-        }
+        for (std::size_t i = r * tiles_per_run; i < std::min(tiles.size(), (r + 1) * tiles_per_run); ++i) tile(tiles[i], runs[r]);
     });
     for (const InvalidationCounts& r : runs) {
+        counts.blocks += r.blocks;
         counts.dropped += r.dropped;
         counts.dropped_by_path += r.dropped_by_path;
         counts.dropped_by_cone += r.dropped_by_cone;

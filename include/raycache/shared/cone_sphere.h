@@ -93,6 +93,26 @@ RAYCACHE_FN raycache_direction_cone raycache_region_cone(int face, int column0, 
     return raycache_widened_cone(axis, c);
 }
 
+/* The cone of every direction through texel (column, row) of `face`, as raycache_region_cone of that one
+ * texel but with one normalisation instead of five: its axis through the texel's centre point p on the
+ * plane at distance 1, its spread a bound on the angle from there to any point q of the texel. Direction
+ * changes with a point x of the plane at most |dx| / |x| (the projection's largest stretch), so the angle is
+ * at most |q - p| / min |x| over the texel: at most sqrt(2) / n (the half-diagonal of a texel 2/n wide) over
+ * sqrt(1 + r^2), r the distance from the face's centre to the texel's nearest point. cos(spread) is taken as
+ * 1 - spread^2 / 2, which is never above it (a wider cone, conservative). At most ~15% wider than the
+ * corners' cone on faces of 16 texels or more. */
+RAYCACHE_FN raycache_direction_cone raycache_texel_cone(int face, int column, int row, int face_size) {
+    float n = float(face_size);
+    float sc = 2.0f * ((float(column) + 0.5f) / n) - 1.0f;
+    float tc = 2.0f * ((float(row) + 0.5f) / n) - 1.0f;
+    float near_s = max(0.0f, abs(sc) - 1.0f / n);
+    float near_t = max(0.0f, abs(tc) - 1.0f / n);
+    /* At least 1e-3 rad: floats near 1 resolve cosines only to ~6e-8, an angle of ~3.5e-4 (faces of more than
+     * about 1400 texels). */
+    float spread = max((1.41421356f / n) / sqrt(1.0f + near_s * near_s + near_t * near_t), 1.0e-3f);
+    return raycache_widened_cone(normalize(raycache_face_point(face, 1.0f, sc, tc)), 1.0f - 0.5f * spread * spread);
+}
+
 /* The cone from `apex` that holds the ball (centre, radius): every segment from the apex to a point of the
  * ball lies in it (shadow rays from a region of hit points to a point light). When the apex lies in the
  * ball, a cone of every direction (cos_spread = -1), which meets every sphere. */
