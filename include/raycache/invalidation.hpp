@@ -101,8 +101,8 @@ inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm:
 }
 
 // Whether rays from `ball` in the directions of cone_of() (called at most once, and only when a moved sphere
-// lies within reach: most texels' spheres do not, and their cones cost five normalisations) can meet a moved
-// sphere. `reach`: how far from the cube's centre the rays end (infinity: they do not); a segment between
+// lies within reach: for most CDCT texels none does, and a region's cone costs five normalisations) can
+// meet a moved sphere. `reach`: how far from the cube's centre the rays end (infinity: they do not); a segment between
 // two points of a ball around the centre stays in that ball, so rays from the cube's ball ending within
 // `reach` stay within the larger of the two radii, and a sphere beyond that cannot meet them.
 template <class ConeOf>
