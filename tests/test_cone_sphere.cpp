@@ -258,3 +258,61 @@ TEST_CASE("the cone of a box of unit directions holds every direction in the box
     // ... and such a cone meets every sphere.
     CHECK(meets({0, 0, 0}, raycache_cone_of_direction_box({-1, -1, -1}, {1, 1, 1}), {0, 0, -50}, 0.1f));
 }
+
+TEST_CASE("rays from a ball through a box of unit directions: spheres away from every direction of the box are rejected, met ones never") {
+    using namespace raycache::shared;
+    // Both necessary conditions, as invalidation tests escaped bounces: the box's cone, and the box's facing.
+    auto test = [](glm::vec3 c, float r, glm::vec3 lo, glm::vec3 hi, glm::vec3 s, float rho) {
+        return raycache_rays_from_ball_meet_sphere(c, r, raycache_cone_of_direction_box(lo, hi), s, rho) &&
+               raycache_direction_box_may_reach_sphere(c, r, lo, hi, s, rho);
+    };
+    // Directions with y >= -0.05: a box reaching past 90 degrees from its centre, whose cone is every direction.
+    const glm::vec3 lo(-1.0f, -0.05f, -1.0f), hi(1.0f, 1.0f, 1.0f);
+    REQUIRE(raycache_cone_of_direction_box(lo, hi).cos_spread <= -1.0f);
+    // A sphere straight below (0, -10, 0), radius 1, from the ball (0, 0.5): every direction towards it has
+    // y < 0, while the box's best alignment with -y is 0.05 < cos(asin(1.5 / 10)) = 0.98869.
+    CHECK_FALSE(test({0, 0, 0}, 0.5f, lo, hi, {0, -10, 0}, 1.0f));
+    // Beside the ball at (10, 0, 0): the direction (0.995, 0.0995, 0) lies in the box and passes
+    // 10 x 0.0995 = 0.995 < 1.5 from the centre.
+    CHECK(test({0, 0, 0}, 0.5f, lo, hi, {10, 0, 0}, 1.0f));
+    // A sphere holding the ball's centre, whichever side: met.
+    CHECK(test({0, 0, 0}, 0.5f, lo, hi, {0, -10, 0}, 9.6f));
+    // At the rim: the sphere (0, -10, 0), radius 9.4, grown by the ball to 9.9, is seen within
+    // asin(0.99) = 81.89 degrees of -y (cos 0.14107). Directions with y >= -0.14 come no nearer than
+    // acos(0.14) = 81.95 degrees: a miss; with y >= -0.15, 81.37 degrees: met.
+    CHECK_FALSE(test({0, 0, 0}, 0.5f, {-1.0f, -0.14f, -1.0f}, hi, {0, -10, 0}, 9.4f));
+    CHECK(test({0, 0, 0}, 0.5f, {-1.0f, -0.15f, -1.0f}, hi, {0, -10, 0}, 9.4f));
+
+    // Brute force: rays sampled from the ball in directions sampled inside random boxes of unit directions;
+    // whenever one meets the sphere, the test says so. Wide boxes (every direction by the cone) too.
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    int rejected = 0, rejected_by_box_alone = 0, cases = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const glm::vec3 a = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+        const glm::vec3 b = glm::normalize(a + (trial % 2 ? 0.6f : 2.0f) * glm::vec3(u(rng), u(rng), u(rng)));
+        const glm::vec3 blo = glm::min(a, b), bhi = glm::max(a, b);
+        const glm::vec3 c(u(rng), u(rng), u(rng));
+        const float r = 0.1f + 0.5f * (u(rng) + 1.0f);
+        const glm::vec3 s = c + (3.0f + 5.0f * (u(rng) + 1.0f)) * glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+        const float rho = 0.2f + (u(rng) + 1.0f);
+        const bool said = test(c, r, blo, bhi, s, rho);
+        ++cases;
+        rejected += !said;
+        rejected_by_box_alone += !said && raycache_rays_from_ball_meet_sphere(c, r, raycache_cone_of_direction_box(blo, bhi), s, rho);
+        if (said) continue;
+        for (int k = 0; k < 3000; ++k) {
+            const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+            if (glm::any(glm::lessThan(d, blo)) || glm::any(glm::greaterThan(d, bhi))) continue;
+            glm::vec3 p(u(rng), u(rng), u(rng));
+            if (glm::length(p) > 1.0f) p = glm::normalize(p);
+            REQUIRE_FALSE(ray_meets_sphere(c + r * p, d, s, rho));
+        }
+        // The box's corners and the directions that define it, from the ball's centre and its surface.
+        REQUIRE_FALSE(ray_meets_sphere(c, a, s, rho));
+        REQUIRE_FALSE(ray_meets_sphere(c, b, s, rho));
+        REQUIRE_FALSE(ray_meets_sphere(c + r * glm::normalize(s - c), a, s, rho));
+    }
+    CHECK(rejected > cases / 4);            // a real bound
+    CHECK(rejected_by_box_alone > cases / 20); // and one the cone alone does not give
+}

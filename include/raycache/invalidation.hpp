@@ -146,8 +146,10 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
         if (tagged(m.key)) return true;
         if (!has_vertices) continue;
         for (const BoundingSphere& s : {m.before, m.after}) {
-            if (has_escapes &&
-                shared::raycache_rays_from_ball_meet_sphere(centre, radius + 1e-3f * scale, escapes, s.centre, s.radius))
+            // Escaped bounces: rays from the hit points' ball in the escapes' cone, and facing the sphere.
+            const float from = radius + 1e-3f * scale;
+            if (has_escapes && shared::raycache_rays_from_ball_meet_sphere(centre, from, escapes, s.centre, s.radius) &&
+                shared::raycache_direction_box_may_reach_sphere(centre, from, t.escape_lo, t.escape_hi, s.centre, s.radius))
                 return true;
             if (t.lit)
                 for (const glm::vec3& light : changes.lights)

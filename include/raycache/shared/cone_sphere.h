@@ -165,6 +165,27 @@ RAYCACHE_FN raycache_direction_cone raycache_cone_of_direction_box(vec3 lo, vec3
     return raycache_widened_cone(axis, c - 1.0e-6f);
 }
 
+/* Rays leaving any point of the ball (ball_centre, ball_radius) in any unit direction inside the box
+ * [lo, hi] meet the sphere (centre, radius) only if this is true: a direction that meets the sphere grown
+ * by the ball lies within asin((radius + ball_radius) / |centre - ball_centre|) of a, the unit direction
+ * to the centre, and the box's best alignment with a (each component from lo or hi) bounds dot(d, a) for
+ * every d inside it. A second necessary condition beside raycache_cone_of_direction_box's cone: a box that
+ * reaches 90 degrees from its centre's direction (whose cone is every direction) still rejects spheres on
+ * the side that none of its directions face. */
+RAYCACHE_FN bool raycache_direction_box_may_reach_sphere(vec3 ball_centre, float ball_radius, vec3 lo, vec3 hi, vec3 centre,
+                                                         float radius) {
+    vec3 v = centre - ball_centre;
+    float d = length(v);
+    float grown = radius + ball_radius;
+    if (!(d > grown)) return true; /* the ball meets the sphere */
+    vec3 a = v / d;
+    float best = max(lo.x * a.x, hi.x * a.x) + max(lo.y * a.y, hi.y * a.y) + max(lo.z * a.z, hi.z * a.z);
+    float s = grown / d;
+    /* the cap's cosine, lowered by the cone slack and a margin for rounding (conservative) */
+    float cos_cap = sqrt(max(0.0f, 1.0f - s * s)) - s * float(RAYCACHE_CONE_SLACK) - 1.0e-5f;
+    return best >= cos_cap;
+}
+
 /* True when the sphere (centre, radius) meets the box [lo, hi] (distance from the centre to the box). */
 RAYCACHE_FN bool raycache_box_meets_sphere(vec3 lo, vec3 hi, vec3 centre, float radius) {
     vec3 nearest = vec3(clamp(centre.x, lo.x, hi.x), clamp(centre.y, lo.y, hi.y), clamp(centre.z, lo.z, hi.z));
