@@ -140,6 +140,7 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
     // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
     const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
+    const float escapes_from = radius + 1e-3f * scale; // the ball the escaped bounces leave from
     const shared::raycache_direction_cone escapes =
         has_escapes ? shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi) : shared::raycache_direction_cone{};
     for (const SceneChanges::Move& m : changes.moved) {
@@ -147,9 +148,8 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
         if (!has_vertices) continue;
         for (const BoundingSphere& s : {m.before, m.after}) {
             // Escaped bounces: rays from the hit points' ball in the escapes' cone, and facing the sphere.
-            const float from = radius + 1e-3f * scale;
-            if (has_escapes && shared::raycache_rays_from_ball_meet_sphere(centre, from, escapes, s.centre, s.radius) &&
-                shared::raycache_direction_box_may_reach_sphere(centre, from, t.escape_lo, t.escape_hi, s.centre, s.radius))
+            if (has_escapes && shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, escapes, s.centre, s.radius) &&
+                shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius))
                 return true;
             if (t.lit)
                 for (const glm::vec3& light : changes.lights)
