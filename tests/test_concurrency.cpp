@@ -459,3 +459,57 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
     CHECK(one.first.blocks > 4 * 16 * raycache::CctCube::record_blocks); // more than four runs of tiles to share
     CHECK(one.second == four.second);
 }
+
+TEST_CASE("the confidence test spread over bands on 4 threads marks exactly the pairs a brute-force pass over every texel finds") {
+    // Frame A fills random texels, frame B fills some of the rest; then B's stores are tested band by band,
+    // bands dealt round-robin to 4 threads, each walking its bands in reverse. Expected: a texel is marked
+    // iff a filled neighbour on its face (left, right, up, down) differs by more than the threshold and one
+    // of the two was stored in B (A's pairs are not tested: the test runs for B's stores only). Grey levels
+    // 0.5 and 0.52 differ by less than the threshold 0.1, either and 0.9 by more (rgb9e5 keeps them within
+    // 0.002).
+    constexpr int n = 40; // tile rows of 16, 16 and 8 texels
+    const float levels[3] = {0.5f, 0.52f, 0.9f};
+    std::vector<int> level(static_cast<std::size_t>(6 * n * n), -1), frame(level.size(), -1);
+    CctCube cube(n);
+    Lcg rng{7};
+    for (int f = 0; f < 2; ++f) {
+        for (int i = 0; i < 6 * n * n; ++i) {
+            if (frame[static_cast<std::size_t>(i)] >= 0 || rng.next() % 3 != 0) continue;
+            const TexelAddress t{i / (n * n), i % n, (i / n) % n};
+            const int l = static_cast<int>(rng.next() % 3);
+            REQUIRE(cube.store_at(t, glm::vec3(levels[l])));
+            level[static_cast<std::size_t>(i)] = l;
+            frame[static_cast<std::size_t>(i)] = f;
+        }
+        if (f == 0) cube.begin_frame();
+    }
+    std::vector<bool> expected(level.size(), false);
+    std::size_t expected_count = 0;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column) {
+                const std::size_t i = static_cast<std::size_t>((face * n + row) * n + column);
+                const int dc[4] = {-1, 1, 0, 0}, dr[4] = {0, 0, -1, 1};
+                for (int k = 0; k < 4; ++k) {
+                    const int c = column + dc[k], r = row + dr[k];
+                    if (c < 0 || c >= n || r < 0 || r >= n) continue;
+                    const std::size_t j = static_cast<std::size_t>((face * n + r) * n + c);
+                    if (level[i] < 0 || level[j] < 0 || (frame[i] != 1 && frame[j] != 1)) continue;
+                    if ((level[i] == 2) != (level[j] == 2)) expected[i] = true;
+                }
+                expected_count += expected[i];
+            }
+    REQUIRE(expected_count > 100);
+    cube.settle_budget();
+    const int bands = cube.tile_bands();
+    REQUIRE(bands == 6 * 3);
+    run_threads(thread_count, [&](int thread) {
+        for (int b = bands - 1; b >= 0; --b)
+            if (b % thread_count == thread) raycache::mark_doubtful_edges_in_bands(cube, 0.1f, b, b + 1);
+    });
+    CHECK(cube.doubtful_texels() == expected_count);
+    std::size_t wrong = 0;
+    for (int i = 0; i < 6 * n * n; ++i)
+        wrong += cube.is_doubtful(TexelAddress{i / (n * n), i % n, (i / n) % n}) != expected[static_cast<std::size_t>(i)];
+    CHECK(wrong == 0u);
+}

@@ -22,19 +22,25 @@ using raycache::TexelAddress;
 
 const glm::vec3 grey(0.5f);
 
-// 16 x 16 words, four 64-bit written masks, four 64-bit doubtful masks, the pending and visible origin
-// boxes (6 + 6 four-byte values), a has-box flag (1 byte, padded to 4), the pending and visible nearest hit
-// distances (4 + 4 bytes) and the stale mark (4 bytes); then the path records of raycache/invalidation.hpp:
-// four 64-bit recorded masks, and for each of the sixteen 4 x 4 record blocks a 64-bit Bloom mask of objects,
-// the hit-point box and the escape-direction box (6 + 6 four-byte values) and the path flags (4 bytes),
-// padded to 64; then the valid-texel count (4 bytes, padded to 8).
-constexpr std::size_t path_record_bytes = 4 * 8 + 16 * (8 + 6 * 4 + 6 * 4 + 4 + 4) + 4 + 4;
-constexpr std::size_t cct_tile = 16 * 16 * 4 + 8 * 8 + 12 * 4 + 4 + 8 + 4 + path_record_bytes;
-constexpr std::size_t cdct_tile = 16 * 16 * 8 + 8 * 8 + 12 * 4 + 4 + 8 + 4 + path_record_bytes;
+// On cache lines of 64 bytes, grouped by who writes them during a frame: 16 x 16 words; the four 64-bit
+// written masks (stores) on a line of their own; the four 64-bit doubtful masks, the visible origin box (6
+// four-byte values), nearest hit distance (4 bytes) and has-box flag (1 byte), which lookups read, on the
+// next (61 bytes, padded to 64); then what stores write: the pending origin box (6 four-byte values), the
+// pending nearest distance, the stale mark and the valid-texel count (4 bytes each), padded to 8; the path
+// records of raycache/invalidation.hpp: four 64-bit recorded masks, and for each of the sixteen 4 x 4 record
+// blocks a 64-bit Bloom mask of objects, the hit-point box and the escape-direction box (6 + 6 four-byte
+// values) and the path flags (4 bytes), padded to 64; the whole padded to a multiple of 64.
+constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
+constexpr std::size_t written_line = 64;
+constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
+constexpr std::size_t store_part = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
+constexpr std::size_t cct_tile = round_up(16 * 16 * 4 + written_line + lookup_line + store_part, 64);
+constexpr std::size_t cdct_tile = round_up(16 * 16 * 8 + written_line + lookup_line + store_part, 64);
+static_assert(cct_tile == 2304 && cdct_tile == 3328, "the sizes the test's name gives");
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 4 x 4 block: 2216 bytes for the CCT, 3240 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 4 x 4 block, on cache lines by writer: 2304 bytes for the CCT, 3328 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }

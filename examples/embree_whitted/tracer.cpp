@@ -465,7 +465,7 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     const int tiles = tiles_x * tiles_y;
     if (settings.warm_up_stride > 1 && uses_caches(settings.mode)) {
         arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(settings.warm_up_stride)); });
-        settings.caches->begin_frame(); // the warm-up's stores become visible to the full pass
+        end_frame(*settings.caches, settings.threads); // the warm-up's stores become visible to the full pass
     }
     arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(1)); });
     const auto end = std::chrono::steady_clock::now();

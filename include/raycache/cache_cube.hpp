@@ -227,7 +227,7 @@ public:
         std::optional<Value> value = visible_value(tile, t);
         if (value) {
             if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
-                tile->stale.store(1u, std::memory_order_relaxed);
+                if (!tile->stale.load(std::memory_order_relaxed)) tile->stale.store(1u, std::memory_order_relaxed);
                 value.reset();
             }
         }
@@ -579,7 +579,7 @@ public:
         give_back_if_refused();
         allocate_wanted();
         end_frame_tiles(state_->written_this_frame.exchange(false, std::memory_order_relaxed));
-        state_->counters.reset();
+        reset_counters();
         return finished;
     }
     // If the budget refused a tile to anyone since the last call (so which tiles this frame got depended on
@@ -622,19 +622,30 @@ public:
         return s;
     }
 
-    void reset_statistics() noexcept { state_->counters.reset(); }
+    void reset_statistics() noexcept { reset_counters(); }
 
     // Calls f(address) for every texel stored during the current frame, in linear-index order
     // (for structures derived from the cube, updated before begin_frame()). Between frames only.
     template <class F>
     void for_each_written_texel(F&& f) const {
+        for_each_written_texel_in_bands(0, tile_bands(), f);
+    }
+
+    // Bands of texels that passes between frames can spread over threads: band b is tile row b % T of
+    // face b / T (T tiles to a face's edge), in linear-index order.
+    int tile_bands() const noexcept { return RAYCACHE_FACE_COUNT * tiles_per_edge_; }
+
+    // for_each_written_texel() for the texels of bands [first, last) alone, in the same order. Between
+    // frames only; calls on disjoint bands may run on different threads at once.
+    template <class F>
+    void for_each_written_texel_in_bands(int first, int last, F&& f) const {
         if (!state_->written_this_frame.load(std::memory_order_relaxed)) return;
         // A tile row's 16 written bits at once: bits (row % 4) * 16 .. + 15 of word row / 4.
         for_each_texel_where(
             [](const Tile& tile, int row) {
                 return static_cast<std::uint32_t>(tile.written_bits[row / 4].load(std::memory_order_relaxed) >> (row % 4 * 16)) & 0xFFFFu;
             },
-            [](const Tile&, int) { return true; }, f);
+            [](const Tile&, int) { return true; }, f, first, last);
     }
 
     // Calls f(address) for every texel holding a value (visible or written this frame), in linear-index
@@ -648,7 +659,8 @@ public:
 
     // Texels holding a value, visible or written this frame.
     std::size_t valid_texels() const noexcept {
-        return static_cast<std::size_t>(state_->valid_texels.load(std::memory_order_relaxed));
+        return static_cast<std::size_t>(state_->valid_texels.load(std::memory_order_relaxed) +
+                                        static_cast<std::int64_t>(state_->counters.sum(new_values)));
     }
     double valid_fraction() const noexcept {
         return static_cast<double>(valid_texels()) / static_cast<double>(texel_count());
@@ -657,7 +669,13 @@ public:
     bool contains(const TexelAddress& t) const noexcept { return is_on_cube(t, face_size_); }
 
 private:
-    enum Counter : std::size_t { hits, misses, stores, refused_stores, counter_count };
+    enum Counter : std::size_t { hits, misses, stores, refused_stores, new_values, counter_count };
+
+    // Zeroes the counters, the texels stores gave a value kept in valid_texels. Not concurrent with stores.
+    void reset_counters() noexcept {
+        state_->valid_texels.fetch_add(static_cast<std::int64_t>(state_->counters.sum(new_values)), std::memory_order_relaxed);
+        state_->counters.reset();
+    }
 
     static constexpr int tile_texels = tile_edge * tile_edge;
     static constexpr int bit_words = tile_texels / 64;
@@ -741,25 +759,32 @@ private:
                 return t.drift;
             return std::min(t.drift, t.parallax * nearest);
         }
+        // The members are grouped by cache line according to who writes them during a frame, so that a
+        // store does not evict the lines other threads' lookups read: on 16 cores, sharing one line between
+        // the stores' bits and the lookups' made a moving camera's cached frames about a fifth slower.
         std::atomic<Word> texels[tile_texels];
-        // One bit per texel: written during the current frame (so not visible yet).
-        std::atomic<std::uint64_t> written_bits[bit_words];
-        // One bit per texel: its value is kept but not answered (set_doubtful()).
-        std::atomic<std::uint64_t> doubtful_bits[bit_words];
-        // Origins of the stores into this tile: this frame's (pending) and earlier frames' (visible, written
-        // between frames only, so lookups read them without synchronisation of their own).
-        std::atomic<std::uint32_t> pending_min[3], pending_max[3];
+        // One bit per texel: written during the current frame (so not visible yet). Written by stores, read
+        // by lookups of a texel holding a value.
+        alignas(64) std::atomic<std::uint64_t> written_bits[bit_words];
+        // Read by lookups, written between frames only:
+        // one bit per texel: its value is kept but not answered (set_doubtful());
+        alignas(64) std::atomic<std::uint64_t> doubtful_bits[bit_words];
+        // the box of the origins earlier frames' stores left from (lookups read it without synchronisation of
+        // its own) and the nearest hit distance of those stores.
         float box_min[3] = {0, 0, 0}, box_max[3] = {0, 0, 0};
-        bool has_box = false;
-        // The nearest hit distance of the stores with distances: this frame's, and the visible one.
-        std::atomic<std::uint32_t> pending_nearest;
         float nearest = std::numeric_limits<float>::infinity();
+        bool has_box = false;
+        // Written by this frame's stores (and stale by lookups), read between frames: the pending origin box
+        // and nearest distance, which begin_frame() makes visible, and the texels holding a value (so passes
+        // over tiles need not read them).
+        alignas(64) std::atomic<std::uint32_t> pending_min[3], pending_max[3];
+        std::atomic<std::uint32_t> pending_nearest;
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
+        std::atomic<std::uint32_t> valid{0};
         // What the paths stored into this tile saw (store() with a PathRecord): per record block, their
         // union, kept until the tile is dropped; read between frames only (raycache/invalidation.hpp).
         std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
         PathUnion records[record_blocks];
-        std::atomic<std::uint32_t> valid{0}; // texels holding a value (so passes over tiles need not read them)
     };
 
     // One bit per tile of the cube: set from any thread, taken (read and cleared) between frames.
@@ -795,12 +820,15 @@ private:
         // wanted it and the budget refused.
         TileBitmap fresh, wanted;
         std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
-        std::atomic<std::size_t> allocated_tiles{0};
-        std::atomic<bool> written_this_frame{false};
-        std::atomic<std::int64_t> valid_texels{0};
+        std::atomic<bool> written_this_frame{false}; // set by the frame's first store; read by lookups
+        // Above: what lookups read. Below, on lines of their own: what threads write during a frame.
+        alignas(64) std::atomic<std::size_t> allocated_tiles{0};
+        std::atomic<std::int64_t> valid_texels{0}; // up to the last begin_frame() and changes between frames
         std::atomic<std::size_t> doubtful_texels{0};
         std::atomic<int> users{0}; // threads inside in_frame() scopes (debug builds)
         std::atomic<std::size_t> dropped_tiles{0};
+        // Per thread; new_values counts the texels stores gave a value since the counters were last reset
+        // (added to valid_texels then), so that no store writes a cube-wide atomic.
         detail::StripedCounters<counter_count> counters;
     };
 
@@ -928,31 +956,33 @@ private:
     // f(address) for each texel of an allocated tile that candidates(tile, row within the tile) names (a
     // mask of the row's 16 columns) and keep(tile, slot) accepts, in linear-index order. Tile rows whose
     // mask is empty cost one call, and a face's row of unallocated tiles one pointer load each; so the walk
-    // costs what the cube holds, not its 6 N^2 texels.
+    // costs what the cube holds, not its 6 N^2 texels. Bands [first_band, last_band) alone (tile_bands());
+    // all of them by default.
     template <class Candidates, class Keep, class F>
-    void for_each_texel_where(Candidates&& candidates, Keep&& keep, F&& f) const {
+    void for_each_texel_where(Candidates&& candidates, Keep&& keep, F&& f, int first_band = 0, int last_band = -1) const {
         const Tile* row_tiles[(RAYCACHE_MAX_FACE_SIZE + tile_edge - 1) / tile_edge]; // one tile row's tiles
-        for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-            for (int tile_row = 0; tile_row < tiles_per_edge_; ++tile_row) {
-                bool any = false;
-                for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
-                    row_tiles[tile_column] = tile_of(TexelAddress{face, tile_column * tile_edge, tile_row * tile_edge});
-                    any = any || row_tiles[tile_column];
-                }
-                if (!any) continue;
-                const int row_end = std::min(face_size_, (tile_row + 1) * tile_edge);
-                for (int row = tile_row * tile_edge; row < row_end; ++row)
-                    for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
-                        const Tile* tile = row_tiles[tile_column];
-                        if (!tile) continue;
-                        const int r = row - tile_row * tile_edge;
-                        const int columns = std::min(tile_edge, face_size_ - tile_column * tile_edge); // on the face
-                        for (std::uint32_t mask = candidates(*tile, r) & ((1u << columns) - 1u); mask; mask &= mask - 1) {
-                            const int c = count_trailing_zeros(mask);
-                            if (keep(*tile, r * tile_edge + c)) f(TexelAddress{face, tile_column * tile_edge + c, row});
-                        }
-                    }
+        if (last_band < 0) last_band = tile_bands();
+        for (int band = first_band; band < last_band; ++band) {
+            const int face = band / tiles_per_edge_, tile_row = band % tiles_per_edge_;
+            bool any = false;
+            for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
+                row_tiles[tile_column] = tile_of(TexelAddress{face, tile_column * tile_edge, tile_row * tile_edge});
+                any = any || row_tiles[tile_column];
             }
+            if (!any) continue;
+            const int row_end = std::min(face_size_, (tile_row + 1) * tile_edge);
+            for (int row = tile_row * tile_edge; row < row_end; ++row)
+                for (int tile_column = 0; tile_column < tiles_per_edge_; ++tile_column) {
+                    const Tile* tile = row_tiles[tile_column];
+                    if (!tile) continue;
+                    const int r = row - tile_row * tile_edge;
+                    const int columns = std::min(tile_edge, face_size_ - tile_column * tile_edge); // on the face
+                    for (std::uint32_t mask = candidates(*tile, r) & ((1u << columns) - 1u); mask; mask &= mask - 1) {
+                        const int c = count_trailing_zeros(mask);
+                        if (keep(*tile, r * tile_edge + c)) f(TexelAddress{face, tile_column * tile_edge + c, row});
+                    }
+                }
+        }
     }
 
     // settle_budget()'s halves (unchecked: the callers assert the frame rule).
@@ -1136,7 +1166,7 @@ private:
             if (Texel::is_valid(old) && !(word < old)) return refuse(); // same frame: the smaller word wins
             if (texel.compare_exchange_weak(old, word, std::memory_order_acq_rel, std::memory_order_acquire)) {
                 if (!Texel::is_valid(old)) {
-                    state_->valid_texels.fetch_add(1, std::memory_order_relaxed);
+                    state_->counters.add(new_values);
                     tile->valid.fetch_add(1, std::memory_order_relaxed);
                 }
                 state_->counters.add(stores);

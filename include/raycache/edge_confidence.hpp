@@ -31,20 +31,15 @@ inline bool colours_differ(const glm::vec3& a, const glm::vec3& b, float thresho
 inline const glm::vec3& colour_of(const glm::vec3& color) noexcept { return color; }
 inline const glm::vec3& colour_of(const DepthSample& sample) noexcept { return sample.color; }
 
-// Marks doubtful every texel written this frame, and every filled neighbour of one (left, right, up,
-// down on its face), whose colours differ by more than `threshold`. Call it between frames, before the
-// cube's begin_frame() (it reads the frame's written texels). Returns the texels newly marked.
-// threshold < 0 (or NaN): nothing is marked. Works on CCT and CDCT cubes alike: a CDCT texel holds one
-// ray's colour at one point, and a search answered at a point near a colour edge (a checker line seen in
-// the mirror) gets the wrong side as often as a CCT lookup does; its doubtful texels read as empty, so
-// such searches miss and are traced.
+// mark_doubtful_edges() for the texels written in bands [first, last) of the cube (CacheCube::tile_bands())
+// alone, to spread one cube's test over threads: calls on disjoint bands may run at once (a mark is an
+// atomic bit set, and which texels end up marked does not depend on the order of the tests). Call
+// cube.settle_budget() before the first band.
 template <class Texel>
-std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
-    if (!shared::raycache_edge_test_enabled(threshold)) return 0;
-    cube.settle_budget(); // which new tiles the frame keeps must not depend on thread timing
+void mark_doubtful_edges_in_bands(CacheCube<Texel>& cube, float threshold, int first, int last) {
+    if (!shared::raycache_edge_test_enabled(threshold)) return;
     const int n = cube.face_size();
-    const std::size_t before = cube.doubtful_texels();
-    cube.for_each_written_texel([&](const TexelAddress& t) {
+    cube.for_each_written_texel_in_bands(first, last, [&](const TexelAddress& t) {
         const auto own = cube.load(t);
         if (!own) return;
         const TexelAddress neighbours[4] = {{t.face, t.column - 1, t.row}, {t.face, t.column + 1, t.row},
@@ -58,6 +53,21 @@ std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
             }
         }
     });
+}
+
+// Marks doubtful every texel written this frame, and every filled neighbour of one (left, right, up,
+// down on its face), whose colours differ by more than `threshold`. Call it between frames, before the
+// cube's begin_frame() (it reads the frame's written texels). Returns the texels newly marked.
+// threshold < 0 (or NaN): nothing is marked. Works on CCT and CDCT cubes alike: a CDCT texel holds one
+// ray's colour at one point, and a search answered at a point near a colour edge (a checker line seen in
+// the mirror) gets the wrong side as often as a CCT lookup does; its doubtful texels read as empty, so
+// such searches miss and are traced.
+template <class Texel>
+std::size_t mark_doubtful_edges(CacheCube<Texel>& cube, float threshold) {
+    if (!shared::raycache_edge_test_enabled(threshold)) return 0;
+    cube.settle_budget(); // which new tiles the frame keeps must not depend on thread timing
+    const std::size_t before = cube.doubtful_texels();
+    mark_doubtful_edges_in_bands(cube, threshold, 0, cube.tile_bands());
     return cube.doubtful_texels() - before;
 }
 

@@ -557,10 +557,10 @@ public:
         // every cube gives them back, then the tiles the frame wanted are allocated, empty, cube by cube.
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.give_back_refused_frame(); });
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.allocate_wanted_tiles(); });
+        mark_doubtful_edges_of_frame(parallel_for);
         std::vector<CubeStatistics> frames(entries_.size());
         const std::function<void(std::size_t)> end_cube = [&](std::size_t i) {
             Entry& e = entries_[i];
-            with_cube(e, [&](auto& cube) { mark_doubtful_edges(cube, edge_threshold_); });
             frames[i] = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
         };
         parallel_for(entries_.size(), end_cube);
@@ -814,6 +814,26 @@ private:
         } else {
             e.cdct = std::make_unique<CdctCache>(face_size, e.bounds, relief_, use_pyramid_, budget_);
         }
+    }
+
+    // The confidence test over the frame's stores (raycache/edge_confidence.hpp), spread over the caller's
+    // threads by bands of tile rows of every cube, not cube by cube: along a walkthrough one object often
+    // receives most of the rays (behind-32's front mirror takes seven in eight of the stores), and its cube
+    // alone held the other threads up (7 ms of a 1024 x 1024 frame, on any number of cores). The budget
+    // must be settled first (begin_frame() does).
+    template <class ParallelFor>
+    void mark_doubtful_edges_of_frame(ParallelFor&& parallel_for) {
+        if (!shared::raycache_edge_test_enabled(edge_threshold_)) return;
+        std::vector<std::pair<std::size_t, int>> bands; // (entry, band)
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            const int count = with_cube(entries_[i], [](const auto& cube) { return cube.tile_bands(); });
+            for (int b = 0; b < count; ++b) bands.emplace_back(i, b);
+        }
+        const std::function<void(std::size_t)> mark = [&](std::size_t k) {
+            const auto [i, band] = bands[k];
+            with_cube(entries_[i], [&](auto& cube) { mark_doubtful_edges_in_bands(cube, edge_threshold_, band, band + 1); });
+        };
+        parallel_for(bands.size(), mark);
     }
 
     // An adaptive entry after a frame of `rays` leaving rays: moves it to the face size they call for.
