@@ -5,7 +5,8 @@ Reads: walkthrough.md and walkthrough_frames.csv when present (raycache_walkthro
 the top), table_5_2.md, tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
 rsh_frames.csv and rsh.md when present (raycache_rsh_bench; bench/rsh_results.py makes that section),
 vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench), dynamic.md when present
-(raycache_dynamic_bench) and micro.json
+(raycache_dynamic_bench), xeon16_h100/README.md when present (runs on a second machine, summarised by hand)
+and micro.json
 (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
 import csv
@@ -243,6 +244,10 @@ def main():
         with open(dynamic) as f:
             md += [f.read().rstrip("\n"), ""]
     md += rsh_results.section(results, rel)  # raycache_rsh_bench: the ray-space hierarchy
+    lent = os.path.join(results, "xeon16_h100", "README.md")
+    if os.path.exists(lent):  # written by hand from runs on a machine lent for one session
+        with open(lent) as f:
+            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/xeon16_h100/`]({rel}/xeon16_h100/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
