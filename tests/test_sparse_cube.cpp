@@ -133,7 +133,7 @@ TEST_CASE("cubes sharing a budget draw on it together") {
     auto budget = std::make_shared<MemoryBudget>(14000);
     CdctCube a(16, budget), b(16, budget); // one tile a face each; tables 6 x 8 bytes
     CHECK(budget->used() == 2u * 48u);
-    // 14000 - 96 = 13904 bytes: four CDCT tiles (12960), not five (16200).
+    // 14000 - 96 = 13904 bytes: four CDCT tiles (13312), not five (16640).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});
@@ -160,7 +160,7 @@ TEST_CASE("try_reserve takes bytes only when they fit, and release gives them ba
 
 // The texel walks skip tiles never stored into and read whole rows of a tile's written bits at once; what
 // they visit, and in which order, must stay what a walk over every texel of every face finds.
-TEST_CASE("for_each_written_texel and for_each_valid_texel visit, in linear-index order, exactly the texels a walk over every texel finds") {
+TEST_CASE("for_each_written_texel (whole, and band by band) and for_each_valid_texel visit, in linear-index order, exactly the texels a walk over every texel finds") {
     for (int n : {5, 16, 37, 64}) {
         CAPTURE(n);
         CctCube cube(n);
@@ -194,6 +194,18 @@ TEST_CASE("for_each_written_texel and for_each_valid_texel visit, in linear-inde
         CHECK(valid.size() > written.size());
         CHECK(written == expected_written); // same texels, same (linear) order
         CHECK(valid == expected_valid);
+        // Band b is tile row b % T of face b / T (T tiles to an edge): band by band, in order, the same walk.
+        const int per_edge = (n + 15) / 16;
+        REQUIRE(cube.tile_bands() == 6 * per_edge);
+        std::vector<std::uint64_t> by_bands;
+        int outside = 0;
+        for (int b = 0; b < cube.tile_bands(); ++b)
+            cube.for_each_written_texel_in_bands(b, b + 1, [&](const TexelAddress& t) {
+                outside += t.face != b / per_edge || t.row / 16 != b % per_edge;
+                by_bands.push_back(index(t));
+            });
+        CHECK(outside == 0);
+        CHECK(by_bands == expected_written);
     }
 }
 

@@ -622,7 +622,11 @@ public:
         return s;
     }
 
-    void reset_statistics() noexcept { reset_counters(); }
+    // Zeroes the counters. Between frames only (the count of texels holding a value is kept through it).
+    void reset_statistics() noexcept {
+        assert_between_frames();
+        reset_counters();
+    }
 
     // Calls f(address) for every texel stored during the current frame, in linear-index order
     // (for structures derived from the cube, updated before begin_frame()). Between frames only.
@@ -639,6 +643,8 @@ public:
     // frames only; calls on disjoint bands may run on different threads at once.
     template <class F>
     void for_each_written_texel_in_bands(int first, int last, F&& f) const {
+        RAYCACHE_ASSERT(0 <= first && first <= last && last <= tile_bands());
+        if (!(0 <= first && first <= last && last <= tile_bands())) return;
         if (!state_->written_this_frame.load(std::memory_order_relaxed)) return;
         // A tile row's 16 written bits at once: bits (row % 4) * 16 .. + 15 of word row / 4.
         for_each_texel_where(
@@ -760,8 +766,8 @@ private:
             return std::min(t.drift, t.parallax * nearest);
         }
         // The members are grouped by cache line according to who writes them during a frame, so that a
-        // store does not evict the lines other threads' lookups read: on 16 cores, sharing one line between
-        // the stores' bits and the lookups' made a moving camera's cached frames about a fifth slower.
+        // store does not evict the line of doubtful bits and visible origin box that every lookup of the
+        // tile reads (lookups of a texel holding a value still read the written bits, which stores set).
         std::atomic<Word> texels[tile_texels];
         // One bit per texel: written during the current frame (so not visible yet). Written by stores, read
         // by lookups of a texel holding a value.

@@ -543,8 +543,9 @@ public:
         return begin_frame(detail::SerialFor{});
     }
 
-    // begin_frame() with each cube's own end-of-frame work (the confidence test, making the frame's stores
-    // visible, the CDCT's pyramid) spread over the caller's threads: parallel_for(count, f) must call f(i)
+    // begin_frame() with the end-of-frame work spread over the caller's threads (the confidence test by
+    // bands of every cube's tile rows, then each cube's own: making the frame's stores visible, the CDCT's
+    // pyramid): parallel_for(count, f) must call f(i)
     // once for each i in [0, count), on any threads, and return when all calls have (for example through
     // tbb::parallel_for). There the cubes share only the budget's byte counter, which they give bytes back
     // to, so the result is begin_frame()'s; what allocates from the budget (the passes before, resizing
@@ -819,7 +820,7 @@ private:
     // The confidence test over the frame's stores (raycache/edge_confidence.hpp), spread over the caller's
     // threads by bands of tile rows of every cube, not cube by cube: along a walkthrough one object often
     // receives most of the rays (behind-32's front mirror takes seven in eight of the stores), and its cube
-    // alone held the other threads up (7 ms of a 1024 x 1024 frame, on any number of cores). The budget
+    // alone held the other threads up (5 to 13 ms of a 1024 x 1024 frame, on 4 threads as on 16). The budget
     // must be settled first (begin_frame() does).
     template <class ParallelFor>
     void mark_doubtful_edges_of_frame(ParallelFor&& parallel_for) {
