@@ -831,7 +831,8 @@ private:
             for (int b = 0; b < count; ++b) bands.emplace_back(i, b);
         }
         const std::function<void(std::size_t)> mark = [&](std::size_t k) {
-            const auto [i, band] = bands[k];
+            const std::size_t i = bands[k].first; // not a structured binding: C++17 lambdas cannot capture one
+            const int band = bands[k].second;
             with_cube(entries_[i], [&](auto& cube) { mark_doubtful_edges_in_bands(cube, edge_threshold_, band, band + 1); });
         };
         parallel_for(bands.size(), mark);
