@@ -67,9 +67,11 @@ TracedRay trace(const glm::vec3& o, const glm::vec3& d, int from, PathRecord& pa
     return {glm::vec3(0.2f + 0.1f * static_cast<float>(i), shade, j < 0 ? 0.5f : 0.1f * static_cast<float>(j)), t};
 }
 
-// The caches after two frames of leaving rays from every ball.
-void fill(SceneCache& caches) {
-    for (int i = 0; i < balls; ++i) caches.attach(ObjectId{static_cast<unsigned>(i)}, 32, raycache::CubeBounds{centre_of(i), radius});
+// The caches after two frames of leaving rays from every ball, at `face_size` (adaptive_face_size: the
+// cubes shrink after the first frame), each frame ended through `end_frame(caches)`.
+template <class EndFrame>
+void fill(SceneCache& caches, int face_size, EndFrame&& end_frame) {
+    for (int i = 0; i < balls; ++i) caches.attach(ObjectId{static_cast<unsigned>(i)}, face_size, raycache::CubeBounds{centre_of(i), radius});
     for (int frame = 0; frame < 2; ++frame) {
         for (int i = 0; i < balls; ++i)
             for (int k = 0; k < 4000; ++k) {
@@ -81,8 +83,11 @@ void fill(SceneCache& caches) {
                 const glm::vec3 o = centre_of(i) + (radius + 1e-3f) * n;
                 caches.leaving_ray(ObjectId{static_cast<unsigned>(i)}, o, d, [&](PathRecord& path) { return trace(o, d, i, path); });
             }
-        caches.begin_frame();
+        end_frame(caches);
     }
+}
+void fill(SceneCache& caches) {
+    fill(caches, 32, [](SceneCache& c) { c.begin_frame(); });
 }
 
 // Every cube's valid texels, by cube, as loaded values.
@@ -103,6 +108,26 @@ std::vector<std::vector<float>> contents(const SceneCache& caches) {
             const raycache::DepthSample s = *cache->cube().load(a);
             v.insert(v.end(), {static_cast<float>(a.face), static_cast<float>(a.column), static_cast<float>(a.row), s.distance});
         });
+    });
+    return all;
+}
+
+// Every cube's face size and the path records of its blocks (objects, boxes, flags, unrecorded texels).
+std::vector<std::vector<float>> records(const SceneCache& caches) {
+    std::vector<std::vector<float>> all;
+    auto add = [&](const auto& cube) {
+        std::vector<float>& v = all.emplace_back(1, static_cast<float>(cube.face_size()));
+        cube.for_each_block_state([&](const auto& b) {
+            v.insert(v.end(), {static_cast<float>(b.tile), static_cast<float>(b.block), static_cast<float>(b.objects & 0xFFFFFFu),
+                               static_cast<float>(b.objects >> 40), b.vertex_lo.x, b.vertex_hi.y, b.escape_lo.z, b.escape_hi.x,
+                               static_cast<float>(b.path_flags), static_cast<float>(b.unrecorded_texels)});
+        });
+    };
+    caches.for_each_cct_cube([&](ObjectId, const raycache::CubeBounds&, const raycache::CctCube* cube) {
+        if (cube) add(*cube);
+    });
+    caches.for_each_cdct_cache([&](ObjectId, const raycache::CdctCache* cache) {
+        if (cache) add(cache->cube());
     });
     return all;
 }
@@ -154,5 +179,44 @@ TEST_CASE("scene_changed over 4 threads empties exactly the texels the serial pa
         CHECK(four.dropped == one.dropped);
         CHECK(four.cubes_changed == one.cubes_changed);
         CHECK(contents(parallel) == contents(serial));
+    }
+}
+
+TEST_CASE("adaptive cubes resized over 4 threads hold what resizing them one by one gives, CCT and CDCT") {
+    // With room in the budget for every resized cube, begin_frame() resizes them on the caller's threads;
+    // with little room (here the first frame fills most of it), one by one. Either way every cube must end
+    // with the serial resize's face size, texels, doubtful marks (as what loads) and path records.
+    for (const Technique technique : {Technique::cct, Technique::cdct}) {
+        // The tight budgets leave less room after the first frame than the 8 resized cubes could take.
+        const std::size_t tight = technique == Technique::cct ? std::size_t{2} << 20 : std::size_t{3} << 20;
+        for (const std::size_t budget : {std::size_t{256} << 20, tight}) {
+            CAPTURE(technique == Technique::cct ? "CCT" : "CDCT");
+            CAPTURE(budget);
+            raycache::embree::SceneCacheSettings settings;
+            settings.budget_bytes = budget;
+            SceneCache serial(technique, settings), parallel(technique, settings);
+            std::vector<std::size_t> resized_serial, resized_parallel, doubtful_serial, doubtful_parallel;
+            fill(serial, raycache::embree::adaptive_face_size, [&](SceneCache& c) {
+                const auto s = c.begin_frame();
+                resized_serial.push_back(s.resized_cubes);
+                doubtful_serial.push_back(s.doubtful_texels);
+            });
+            fill(parallel, raycache::embree::adaptive_face_size, [&](SceneCache& c) {
+                const auto s = c.begin_frame(threads_for(4));
+                resized_parallel.push_back(s.resized_cubes);
+                doubtful_parallel.push_back(s.doubtful_texels);
+            });
+            CHECK(resized_serial == std::vector<std::size_t>{balls, 0});
+            CHECK(resized_parallel == resized_serial);
+            CHECK(doubtful_serial.back() > 0);
+            CHECK(doubtful_parallel == doubtful_serial);
+            const std::vector<std::vector<float>> r = records(serial);
+            REQUIRE(r.size() == static_cast<std::size_t>(balls));
+            for (const std::vector<float>& cube : r) CHECK(cube.front() < 64.0f); // shrunk from the first size
+            CHECK(records(parallel) == r);
+            CHECK(contents(parallel) == contents(serial));
+            CHECK(serial.statistics().allocated_bytes == parallel.statistics().allocated_bytes);
+            CHECK(serial.statistics().allocated_bytes <= budget);
+        }
     }
 }

@@ -342,43 +342,45 @@ template <class Texel>
 void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
     using Block = typename CacheCube<Texel>::BlockState;
     constexpr int edge = CacheCube<Texel>::record_edge;
-    // The old blocks by position (face, block row, block column), so each new block visits only the few
-    // old blocks around its own rectangle, not all of them.
-    const int per_edge = (from.face_size() + edge - 1) / edge;
-    std::vector<Block> old;
-    std::vector<int> at(static_cast<std::size_t>(RAYCACHE_FACE_COUNT * per_edge * per_edge), -1);
-    from.for_each_block_state([&](const Block& b) {
-        at[static_cast<std::size_t>((b.face * per_edge + b.row0 / edge) * per_edge + b.column0 / edge)] = static_cast<int>(old.size());
-        old.push_back(b);
-    });
+    // One pass over the old blocks, each merged into the few new blocks its rectangle overlaps (a coarser
+    // cube's block spans several old ones), then one over the new blocks: the cost of what `from` holds,
+    // with nothing of it copied (an adaptive cube after a cold frame holds ~1500 sparse tiles).
+    struct Union {
+        PathRecord record;
+        bool any = false, unknown = false; // unknown: an overlapping old block held unrecorded texels
+    };
+    const int to_per_edge = (to.face_size() + edge - 1) / edge;
+    std::vector<Union> unions(static_cast<std::size_t>(RAYCACHE_FACE_COUNT * to_per_edge * to_per_edge));
     const float fn = static_cast<float>(from.face_size()), tn = static_cast<float>(to.face_size());
-    // Old block columns (or rows) whose texels can overlap new texels [lo, hi): the overlap test below
+    // New block columns (or rows) whose texels can overlap old texels [lo, hi): the overlap test below
     // decides; one block of margin either side for rounding.
     auto range = [&](int lo, int hi) {
-        const float scale = fn / (tn * static_cast<float>(edge));
+        const float scale = tn / (fn * static_cast<float>(edge));
         return std::make_pair(std::max(0, static_cast<int>(static_cast<float>(lo) * scale) - 1),
-                              std::min(per_edge - 1, static_cast<int>(static_cast<float>(hi) * scale) + 1));
+                              std::min(to_per_edge - 1, static_cast<int>(static_cast<float>(hi) * scale) + 1));
     };
-    to.for_each_block_state([&](const Block& t) {
-        PathRecord union_of;
-        bool any = false, unknown = false; // unknown: an overlapping old block held unrecorded texels
-        const auto [c_lo, c_hi] = range(t.column0, t.column1);
-        const auto [r_lo, r_hi] = range(t.row0, t.row1);
+    const int tn_int = to.face_size();
+    from.for_each_block_state([&](const Block& o) {
+        const auto [c_lo, c_hi] = range(o.column0, o.column1);
+        const auto [r_lo, r_hi] = range(o.row0, o.row1);
         for (int br = r_lo; br <= r_hi; ++br)
             for (int bc = c_lo; bc <= c_hi; ++bc) {
-                const int i = at[static_cast<std::size_t>((t.face * per_edge + br) * per_edge + bc)];
-                if (i < 0) continue;
-                const Block& o = old[static_cast<std::size_t>(i)];
-                const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(t.column1) / tn &&
-                                     static_cast<float>(t.column0) / tn < static_cast<float>(o.column1) / fn &&
-                                     static_cast<float>(o.row0) / fn < static_cast<float>(t.row1) / tn &&
-                                     static_cast<float>(t.row0) / tn < static_cast<float>(o.row1) / fn;
+                const int column0 = bc * edge, row0 = br * edge; // the new block's texels, as for_each_block_state's
+                const int column1 = std::min(tn_int, column0 + edge), row1 = std::min(tn_int, row0 + edge);
+                const bool overlap = static_cast<float>(o.column0) / fn < static_cast<float>(column1) / tn &&
+                                     static_cast<float>(column0) / tn < static_cast<float>(o.column1) / fn &&
+                                     static_cast<float>(o.row0) / fn < static_cast<float>(row1) / tn &&
+                                     static_cast<float>(row0) / tn < static_cast<float>(o.row1) / fn;
                 if (!overlap) continue;
-                any = true;
-                unknown = unknown || o.unrecorded_texels > 0;
-                union_of.merge(o.record());
+                Union& u = unions[static_cast<std::size_t>((o.face * to_per_edge + br) * to_per_edge + bc)];
+                u.any = true;
+                u.unknown = u.unknown || o.unrecorded_texels > 0;
+                u.record.merge(o.record());
             }
-        if (any && !unknown) to.record_texels_of_block(t, union_of);
+    });
+    to.for_each_block_state([&](const Block& t) {
+        const Union& u = unions[static_cast<std::size_t>((t.face * to_per_edge + t.row0 / edge) * to_per_edge + t.column0 / edge)];
+        if (u.any && !u.unknown) to.record_texels_of_block(t, u.record);
     });
 }
 

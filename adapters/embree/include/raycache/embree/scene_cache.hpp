@@ -548,8 +548,9 @@ public:
     // pyramid): parallel_for(count, f) must call f(i)
     // once for each i in [0, count), on any threads, and return when all calls have (for example through
     // tbb::parallel_for). There the cubes share only the budget's byte counter, which they give bytes back
-    // to, so the result is begin_frame()'s; what allocates from the budget (the passes before, resizing
-    // adaptive cubes after) runs on the calling thread, in attach order.
+    // to, so the result is begin_frame()'s. What allocates from the budget runs on the calling thread, in
+    // attach order: the passes before, and resizing adaptive cubes after unless the budget has room for
+    // every resized cube whatever it holds (adapt()).
     template <class ParallelFor>
     SceneCacheStatistics begin_frame(ParallelFor&& parallel_for) {
         SceneCacheStatistics total;
@@ -565,10 +566,8 @@ public:
             frames[i] = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
         };
         parallel_for(entries_.size(), end_cube);
-        for (std::size_t i = 0; i < entries_.size(); ++i) {
-            add(total, frames[i]);
-            if (entries_[i].coverage) total.resized_cubes += adapt(entries_[i], frames[i].lookups);
-        }
+        for (const CubeStatistics& frame : frames) add(total, frame);
+        total.resized_cubes = adapt(frames, parallel_for);
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
@@ -838,18 +837,51 @@ private:
         parallel_for(bands.size(), mark);
     }
 
-    // An adaptive entry after a frame of `rays` leaving rays: moves it to the face size they call for.
-    // Returns whether the size changed. Between frames.
-    bool adapt(Entry& e, std::uint64_t rays) {
+    // After a frame, each adaptive entry takes the face size its object's rays (frames[i].lookups) call for.
+    // Choosing the sizes is cheap and serial; the resizes (each a new cube, for a smaller one filled from the
+    // old: resampling, records, confidence test, pyramid) run on the caller's threads when the budget has
+    // room for every new cube with all its tiles allocated: then no allocation can be refused, whatever the
+    // order, and the result is the serial one. Otherwise one after the other in attach order, so which
+    // allocation a full budget refuses does not depend on timing. Returns how many cubes changed size.
+    template <class ParallelFor>
+    std::size_t adapt(const std::vector<CubeStatistics>& frames, ParallelFor&& parallel_for) {
+        struct Resize {
+            std::size_t entry;
+            int face_size;
+        };
+        std::vector<Resize> resizes;
+        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
+        std::size_t worst = 0; // bytes, if every new cube filled all its tiles
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            Entry& e = entries_[i];
+            if (!e.coverage) continue;
+            const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
+            const std::uint64_t rays = frames[i].lookups;
+            const int next = e.sized ? next_face_size(current, rays, e.coverage->fraction(), adaptive_)
+                                     : first_face_size(current, rays, e.coverage->fraction(), adaptive_);
+            e.sized = e.sized || rays > 0;
+            e.coverage->reset();
+            if (next == current) continue;
+            resizes.push_back(Resize{i, next});
+            worst += full_cube_bytes(next, tile, sizeof(void*));
+        }
+        const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
+        const std::size_t used = budget_->used(), limit = budget_->limit();
+        if (used <= limit && worst <= limit - used) {
+            parallel_for(resizes.size(), resize);
+        } else {
+            for (std::size_t k = 0; k < resizes.size(); ++k) resize(k);
+        }
+        return resizes.size();
+    }
+
+    // Gives adaptive entry `e` a cube of `face_size`: a smaller one filled from the old one, a larger one
+    // empty. Between frames; entries may be resized on different threads at once.
+    void resize_entry(Entry& e, int face_size) {
         const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-        const int next = e.sized ? next_face_size(current, rays, e.coverage->fraction(), adaptive_)
-                                 : first_face_size(current, rays, e.coverage->fraction(), adaptive_);
-        e.sized = e.sized || rays > 0;
-        e.coverage->reset();
-        if (next == current) return false;
         Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), nullptr};
-        make_cube(e, next);
-        if (next < current) {
+        make_cube(e, face_size);
+        if (face_size < current) {
             if (technique_ == Technique::cct) {
                 resample_into(*old.cct, *e.cct);
                 carry_path_records(*old.cct, *e.cct); // so exact invalidation still knows what they saw
@@ -861,7 +893,6 @@ private:
             with_cube(e, [](auto& cube) { cube.begin_frame(); }); // the resampled texels are visible next frame
             if (e.cdct) e.cdct->rebuild_pyramid();
         }
-        return true;
     }
 
     // An entry's key in a cache file: object = instance id << 32 | geometry id; part = 0 for a whole
