@@ -118,9 +118,11 @@ std::vector<std::vector<float>> records(const SceneCache& caches) {
     auto add = [&](const auto& cube) {
         std::vector<float>& v = all.emplace_back(1, static_cast<float>(cube.face_size()));
         cube.for_each_block_state([&](const auto& b) {
-            v.insert(v.end(), {static_cast<float>(b.tile), static_cast<float>(b.block), static_cast<float>(b.objects & 0xFFFFFFu),
-                               static_cast<float>(b.objects >> 40), b.vertex_lo.x, b.vertex_hi.y, b.escape_lo.z, b.escape_hi.x,
-                               static_cast<float>(b.path_flags), static_cast<float>(b.unrecorded_texels)});
+            v.insert(v.end(), {static_cast<float>(b.tile), static_cast<float>(b.block), static_cast<float>(b.objects & 0xFFFFu),
+                               static_cast<float>(b.objects >> 16 & 0xFFFFu), static_cast<float>(b.objects >> 32 & 0xFFFFu),
+                               static_cast<float>(b.objects >> 48), static_cast<float>(b.path_flags),
+                               static_cast<float>(b.unrecorded_texels)});
+            for (const glm::vec3* box : {&b.vertex_lo, &b.vertex_hi, &b.escape_lo, &b.escape_hi}) v.insert(v.end(), {box->x, box->y, box->z});
         });
     };
     caches.for_each_cct_cube([&](ObjectId, const raycache::CubeBounds&, const raycache::CctCube* cube) {

@@ -197,9 +197,13 @@ template <class Texel>
 std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse) {
     const int n = coarse.face_size();
     const int fine_n = fine.face_size();
-    struct Best {
+    struct Best { // 8 bytes: one per coarse texel, and cubes may be resampled on several threads at once
         float distance2 = std::numeric_limits<float>::infinity();
-        TexelAddress source{};
+        std::uint32_t source = 0; // the fine texel's linear index
+    };
+    auto address = [](std::size_t i, int size) {
+        const std::size_t n = static_cast<std::size_t>(size);
+        return TexelAddress{static_cast<int>(i / (n * n)), static_cast<int>(i % n), static_cast<int>(i / n % n)};
     };
     std::vector<Best> best(coarse.texel_count());
     fine.for_each_valid_texel([&](const TexelAddress& t) {
@@ -213,7 +217,8 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
         const float v = shared::raycache_texel_position(st.y, scale, n) - (static_cast<float>(a.row) + 0.5f);
         Best& b = best[shared::raycache_texel_linear_index(a, n)];
         const float distance2 = u * u + v * v;
-        if (distance2 < b.distance2) b = Best{distance2, t};
+        if (distance2 < b.distance2) b = Best{distance2, static_cast<std::uint32_t>(shared::raycache_texel_linear_index(
+                                                          shared::raycache_texel_address{t.face, t.column, t.row}, fine_n))};
     });
     // Each coarse tile's origins: the union of the boxes, and the nearest distance, of the fine tiles its
     // texels came from, so the coarse tile answers the rays its values suit and no others.
@@ -231,17 +236,16 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
     std::size_t stored = 0;
     for (std::size_t i = 0; i < best.size(); ++i) {
         if (!std::isfinite(best[i].distance2)) continue;
-        const TexelAddress target{static_cast<int>(i / (static_cast<std::size_t>(n) * n)), static_cast<int>(i % n),
-                                  static_cast<int>(i / n % n)};
+        const TexelAddress target = address(i, n), source = address(best[i].source, fine_n);
         if (coarse.load(target)) continue;
-        if (!coarse.store_at(target, *fine.load(best[i].source))) continue;
+        if (!coarse.store_at(target, *fine.load(source))) continue;
         ++stored;
-        if (const auto box = fine.origin_box(best[i].source)) {
+        if (const auto box = fine.origin_box(source)) {
             Origins& o = tile_of(target);
             o.lo = o.any ? glm::min(o.lo, box->first) : box->first;
             o.hi = o.any ? glm::max(o.hi, box->second) : box->second;
             o.any = true;
-            o.nearest = std::min(o.nearest, fine.nearest_hit(best[i].source));
+            o.nearest = std::min(o.nearest, fine.nearest_hit(source));
         }
     }
     for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)

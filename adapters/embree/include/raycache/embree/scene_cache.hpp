@@ -851,7 +851,7 @@ private:
         };
         std::vector<Resize> resizes;
         const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
-        std::size_t worst = 0; // bytes, if every new cube filled all its tiles
+        std::size_t worst = 0; // bytes, if every smaller new cube filled all its tiles (a larger one starts empty)
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
             if (!e.coverage) continue;
@@ -863,7 +863,7 @@ private:
             e.coverage->reset();
             if (next == current) continue;
             resizes.push_back(Resize{i, next});
-            worst += full_cube_bytes(next, tile, sizeof(void*));
+            worst += next < current ? full_cube_bytes(next, tile, sizeof(void*)) : full_cube_bytes(next, 0, sizeof(void*));
         }
         const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
         const std::size_t used = budget_->used(), limit = budget_->limit();
