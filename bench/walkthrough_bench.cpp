@@ -86,10 +86,15 @@ const char* const usage =
 // cached object of the tracer's scene; nullptr for the modes without caches. Cubes are adaptive (--face-size
 // auto, the default) or of --face-size texels per edge. The CDCT searches over its depth pyramid and
 // rejects crossings more than 0.5 behind the cached surface (our_relief, as in raycache_bench).
-std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o) {
+// first_face_size: where adaptive cubes start (0: AdaptiveResolution's default).
+std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, CacheMode mode, const Options& o,
+                                             int first_face_size = 0) {
     if (!rcx::uses_caches(mode)) return nullptr;
-    auto caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct,
-                                               rcx::bench::our_relief, true);
+    raycache::embree::SceneCacheSettings settings;
+    settings.relief = rcx::bench::our_relief;
+    settings.depth_pyramid = true;
+    if (first_face_size > 0) settings.adaptive.first_face_size = first_face_size;
+    auto caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, settings);
     tracer.attach_caches(*caches, o.face_size);
     return caches;
 }
@@ -257,26 +262,30 @@ void walk(const Options& o, const rcx::embree::Tracer& tracer, PathKind kind, Ou
 }
 
 // A single image, nothing to reuse: the cache off, a cold CCT frame, and CCT frames with a warm-up pass over
-// every 2nd and 4th pixel (RenderSettings::warm_up_stride), each round with fresh caches, the variants in a
-// rotating order; median times over the rounds, PSNR against the uncached image.
+// every 2nd and 4th pixel (RenderSettings::warm_up_stride), the last also with cubes starting at 64-texel
+// faces instead of 256 (AdaptiveResolution::first_face_size: a cheaper first pass, coarser texels), each
+// round with fresh caches, the variants in a rotating order; median times over the rounds, PSNR against
+// the uncached image.
 std::string single_image(const Options& o, const Report& report) {
     std::ofstream csv = report.csv("single_image.csv", "scene,variant,warm_up_stride,median_ms,speedup,psnr,hit_rate");
     std::vector<std::vector<std::string>> rows;
     const int rounds = o.quick ? 1 : 3;
-    const int strides[] = {0, 0, 2, 4}; // off, cold CCT, warm-up 2, warm-up 4
-    const char* labels[] = {"off", "cct, cold", "cct, warm-up 2", "cct, warm-up 4"};
+    constexpr int variants = 5;
+    const int strides[variants] = {0, 0, 2, 4, 4}; // off, cold CCT, warm-up 2, warm-up 4 (first faces 256, 64)
+    const int first_faces[variants] = {0, 0, 0, 0, 64};
+    const char* labels[variants] = {"off", "cct, cold", "cct, warm-up 2", "cct, warm-up 4", "cct, warm-up 4, first faces 64"};
     for (const std::string& name : o.scenes) {
         progress("single image: " + name);
         const rcx::Scene scene = rcx::make_scene(name);
         const rcx::embree::Tracer tracer(scene);
-        std::vector<double> ms[4];
-        double hit_rate[4] = {0, 0, 0, 0};
-        rcx::Image images[4];
+        std::vector<double> ms[variants];
+        double hit_rate[variants] = {};
+        rcx::Image images[variants];
         for (int round = 0; round < rounds; ++round)
-            for (int k = 0; k < 4; ++k) {
-                const int v = (k + round) % 4;
+            for (int k = 0; k < variants; ++k) {
+                const int v = (k + round) % variants;
                 const CacheMode mode = v == 0 ? CacheMode::off : CacheMode::cct;
-                std::unique_ptr<SceneCache> caches = make_scene_cache(tracer, mode, o);
+                std::unique_ptr<SceneCache> caches = make_scene_cache(tracer, mode, o, first_faces[v]);
                 rcx::embree::RenderSettings s;
                 s.width = s.height = o.size;
                 s.mode = mode;
@@ -289,7 +298,7 @@ std::string single_image(const Options& o, const Report& report) {
                 ms[v].push_back(stats.milliseconds + std::chrono::duration<double, std::milli>(Clock::now() - end_start).count());
             }
         const double off_ms = rcx::bench::median(ms[0]);
-        for (int v = 0; v < 4; ++v) {
+        for (int v = 0; v < variants; ++v) {
             const double median = rcx::bench::median(ms[v]);
             const double psnr = rcx::compare(images[v], images[0]).psnr_db;
             csv << name << "," << rcx::bench::csv_text(labels[v]) << "," << strides[v] << "," << median << ","

@@ -203,6 +203,9 @@ TEST_CASE("values: negative numbers, short flags, inf and auto keep their meanin
     CHECK(parse({"--face-size", "auto"}).face_size == 0);
     CHECK(parse({"--face-size=64"}).face_size == 64);
     CHECK(usage_error({"--face-size", "big"}) == "--face-size: 'big' is not an integer");
+    CHECK(parse({}).first_face_size == 256); // raycache::AdaptiveResolution's default
+    CHECK(parse({"--first-face-size", "64"}).first_face_size == 64);
+    CHECK(usage_error({"--first-face-size", "0"}) == "--first-face-size: 0 is out of range 1..4096");
     CHECK(usage_error({"--size", "8"}) == "--size: '8' is not WIDTHxHEIGHT (for example 512x512)");
     CHECK(usage_error({"--cdct-search", "walk"}) == "--cdct-search: 'walk' is not secant or relief");
     CHECK_FALSE(parse({"--cdct-search", "relief"}).secant);

@@ -65,6 +65,8 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.rays_per_texel != defaults.rays_per_texel)
         throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
+    if (o.first_face_size != defaults.first_face_size)
+        throw InputError("--first-face-size is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     if (!o.load_cache.empty() || !o.save_cache.empty())
         throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
                          " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");

@@ -149,6 +149,12 @@ CommandLine::CommandLine(const std::string& program)
                "auto: a frame's leaving rays per covered texel; smaller is sharper\n"
                "and fills more slowly (Embree tracer) " + shown_default(d.rays_per_texel),
                number("--rays-per-texel", o.rays_per_texel, true));
+    add_option("--first-face-size", "N",
+               "auto: the face size cubes start at, 1..4096; smaller makes a first\n"
+               "frame cheaper and its cubes coarser (Embree tracer) [" + std::to_string(d.first_face_size) + "]",
+               [&o](const std::string& text) {
+                   o.first_face_size = static_cast<int>(parse_int_value("--first-face-size", text, 1, 4096));
+               });
     add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"

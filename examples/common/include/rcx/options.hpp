@@ -45,6 +45,7 @@ struct Options {
     CacheMode cache = CacheMode::cct;
     int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
     float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
+    int first_face_size = 256;        // auto face sizes: before a cube's first frame (AdaptiveResolution's default)
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
     int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
