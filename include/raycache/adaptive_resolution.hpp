@@ -201,10 +201,6 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
         float distance2 = std::numeric_limits<float>::infinity();
         std::uint32_t source = 0; // the fine texel's linear index
     };
-    auto address = [](std::size_t i, int size) {
-        const std::size_t n = static_cast<std::size_t>(size);
-        return TexelAddress{static_cast<int>(i / (n * n)), static_cast<int>(i % n), static_cast<int>(i / n % n)};
-    };
     std::vector<Best> best(coarse.texel_count());
     fine.for_each_valid_texel([&](const TexelAddress& t) {
         const glm::vec3 d = texel_direction(t, fine_n);
@@ -217,8 +213,7 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
         const float v = shared::raycache_texel_position(st.y, scale, n) - (static_cast<float>(a.row) + 0.5f);
         Best& b = best[shared::raycache_texel_linear_index(a, n)];
         const float distance2 = u * u + v * v;
-        if (distance2 < b.distance2) b = Best{distance2, static_cast<std::uint32_t>(shared::raycache_texel_linear_index(
-                                                          shared::raycache_texel_address{t.face, t.column, t.row}, fine_n))};
+        if (distance2 < b.distance2) b = Best{distance2, static_cast<std::uint32_t>(texel_linear_index(t, fine_n))};
     });
     // Each coarse tile's origins: the union of the boxes, and the nearest distance, of the fine tiles its
     // texels came from, so the coarse tile answers the rays its values suit and no others.
@@ -236,7 +231,7 @@ std::size_t resample_into(const CacheCube<Texel>& fine, CacheCube<Texel>& coarse
     std::size_t stored = 0;
     for (std::size_t i = 0; i < best.size(); ++i) {
         if (!std::isfinite(best[i].distance2)) continue;
-        const TexelAddress target = address(i, n), source = address(best[i].source, fine_n);
+        const TexelAddress target = texel_at_linear_index(i, n), source = texel_at_linear_index(best[i].source, fine_n);
         if (coarse.load(target)) continue;
         if (!coarse.store_at(target, *fine.load(source))) continue;
         ++stored;

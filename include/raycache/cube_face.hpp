@@ -75,4 +75,10 @@ inline std::size_t texel_linear_index(const TexelAddress& texel, int face_size) 
                                                face_size);
 }
 
+// The texel at `index` of that order (texel_linear_index's inverse); `index` < 6 N^2.
+inline TexelAddress texel_at_linear_index(std::size_t index, int face_size) noexcept {
+    const std::size_t n = static_cast<std::size_t>(face_size);
+    return TexelAddress{static_cast<int>(index / (n * n)), static_cast<int>(index % n), static_cast<int>(index / n % n)};
+}
+
 } // namespace raycache

@@ -343,8 +343,8 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
     using Block = typename CacheCube<Texel>::BlockState;
     constexpr int edge = CacheCube<Texel>::record_edge;
     // One pass over the old blocks, each merged into the few new blocks its rectangle overlaps (a coarser
-    // cube's block spans several old ones), then one over the new blocks: the cost of what `from` holds,
-    // with nothing of it copied (an adaptive cube after a cold frame holds ~1500 sparse tiles).
+    // cube's block spans several old ones), then one over the new blocks: nothing of `from` is copied (an
+    // adaptive cube after a cold frame holds ~1500 sparse tiles); the unions take ~72 bytes a new block.
     struct Union {
         PathRecord record;
         bool any = false, unknown = false; // unknown: an overlapping old block held unrecorded texels

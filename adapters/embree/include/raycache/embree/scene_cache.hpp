@@ -863,7 +863,7 @@ private:
             e.coverage->reset();
             if (next == current) continue;
             resizes.push_back(Resize{i, next});
-            worst += next < current ? full_cube_bytes(next, tile, sizeof(void*)) : full_cube_bytes(next, 0, sizeof(void*));
+            worst += full_cube_bytes(next, next < current ? tile : 0, sizeof(void*));
         }
         const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
         const std::size_t used = budget_->used(), limit = budget_->limit();
