@@ -1,7 +1,8 @@
 // raycache/gpu_frame.hpp: the frame buffer's layout and start words, the end-of-frame pass's group counts,
 // the statistics read back and the face sizes fitted to a storage buffer, against values worked out by hand:
-// - header 8 words, 4 counters a cube: 3 cubes and 100 list entries take 8 + 12 + 100 = 120 words (480 bytes),
-//   of which the first 20 (80 bytes) are rewritten before each frame; entry 0 is word 20.
+// - header 8 words, 52 a cube (4 counters, 48 words of direction-cell bits): 3 cubes and 100 list entries
+//   take 8 + 156 + 100 = 264 words (1056 bytes), of which the first 164 (656 bytes) are rewritten before each
+//   frame; entry 0 is word 164.
 // - groups of 256: 1 entry -> 1 group, 256 -> 1, 257 -> 2, 65535 * 256 -> 65535, one more -> still 65535.
 // - fitting: faces 8, 100, 100 of CCT texels (4 bytes) into 6 * (64 + 2 * 50^2) * 4 = 121,536 bytes gives a
 //   cap of 50 (51 would need 6 * (64 + 2 * 2601) * 4 = 126,384): 8, 50, 50.
@@ -15,19 +16,20 @@
 
 using namespace raycache;
 
-TEST_CASE("the frame buffer holds a header, four counters a cube and the store list") {
+TEST_CASE("the frame buffer holds a header, four counters and the cell bits a cube, and the store list") {
     const GpuFrameLayout f = gpu_frame_layout(3, 100);
-    CHECK(f.words == 120u);
-    CHECK(f.bytes == 480u);
-    CHECK(f.start_bytes == 80u);
-    CHECK(shared::raycache_frame_list_word(3, 0) == 20u);
-    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_REFUSED) == 8u + 8u + 3u);
-    CHECK_THROWS_AS(gpu_frame_layout(3, 100, 479), std::invalid_argument);
-    CHECK_NOTHROW(gpu_frame_layout(3, 100, 480));
-    // The largest list that fits 480 bytes with 3 cubes is 100 entries; never more than the texels.
-    CHECK(gpu_frame_list_capacity(3, 1000, 480) == 100u);
-    CHECK(gpu_frame_list_capacity(3, 40, 480) == 40u);
-    CHECK(gpu_frame_list_capacity(3, 1000, 60) == 0u);
+    CHECK(f.words == 264u);
+    CHECK(f.bytes == 1056u);
+    CHECK(f.start_bytes == 656u);
+    CHECK(shared::raycache_frame_list_word(3, 0) == 164u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_REFUSED) == 8u + 104u + 3u);
+    CHECK(shared::raycache_frame_coverage_word(2, 0) == 8u + 104u + 4u);
+    CHECK_THROWS_AS(gpu_frame_layout(3, 100, 1055), std::invalid_argument);
+    CHECK_NOTHROW(gpu_frame_layout(3, 100, 1056));
+    // The largest list that fits 1056 bytes with 3 cubes is 100 entries; never more than the texels.
+    CHECK(gpu_frame_list_capacity(3, 1000, 1056) == 100u);
+    CHECK(gpu_frame_list_capacity(3, 40, 1056) == 40u);
+    CHECK(gpu_frame_list_capacity(3, 1000, 600) == 0u);
     // One dimension of 65535 groups of 256 covers 16,776,960 entries: no longer list.
     CHECK(gpu_frame_list_capacity(3, 1ull << 30, 1ull << 32) == 16776960u);
     CHECK_NOTHROW(gpu_frame_layout(3, 16776960u));
@@ -37,9 +39,10 @@ TEST_CASE("the frame buffer holds a header, four counters a cube and the store l
 TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1} and zero the counters") {
     const GpuFrameLayout f = gpu_frame_layout(2, 10);
     const std::vector<std::uint32_t> w = gpu_frame_start_words(f);
-    REQUIRE(w.size() == 16u);
-    const std::vector<std::uint32_t> expected = {0, 10, 2, 0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-    CHECK(w == expected);
+    REQUIRE(w.size() == 8u + 2u * 52u);
+    const std::vector<std::uint32_t> header = {0, 10, 2, 0, 0, 1, 1, 0};
+    CHECK(std::vector<std::uint32_t>(w.begin(), w.begin() + 8) == header);
+    for (std::size_t i = 8; i < w.size(); ++i) CHECK(w[i] == 0u); // counters and cell bits
     CHECK(gpu_end_frame_dispatch_offset == 16u);
     CHECK(gpu_bindings.cct_texels == 0u);
     CHECK(gpu_bindings.cdct_pending == 3u);
@@ -70,8 +73,14 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     w[RAYCACHE_FRAME_LIST_COUNT] = 7; // two past the capacity
     w[RAYCACHE_FRAME_OVERFLOW] = 2;
     const std::uint32_t cube0[] = {10, 5, 4, 1}, cube1[] = {0, 3, 2, 6}; // hits, misses, stores, refused
-    for (std::uint32_t k = 0; k < 4; ++k) w[8 + k] = cube0[k], w[12 + k] = cube1[k];
+    for (std::uint32_t k = 0; k < 4; ++k) w[8 + k] = cube0[k], w[60 + k] = cube1[k];
+    // Cube 1's cells: 3 bits in its first word, all 32 of its last: 35 of 1536.
+    w[60 + 4] = 0x00010003u;
+    w[60 + 51] = 0xFFFFFFFFu;
     const GpuFrameStatistics s = read_gpu_statistics(w.data(), f);
+    REQUIRE(s.coverage.size() == 2u);
+    CHECK(s.coverage[0] == 0.0);
+    CHECK(s.coverage[1] == doctest::Approx(35.0 / 1536.0));
     REQUIRE(s.cubes.size() == 2u);
     CHECK(s.cubes[0].lookups == 15u);
     CHECK(s.cubes[0].hits == 10u);

@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 #include <raycache/shared/depth_secant.h>
 #include <raycache/shared/edge_rule.h>
+#include <raycache/gpu_adaptive.hpp>
 #include <raycache/gpu_buffers.hpp>
 #include <raycache/shared/gpu_layout.h>
 
@@ -54,7 +55,69 @@ struct Tracer::Impl {
     double update_ms = 0.0;                 // the last set_scene
     std::uint32_t texel_count = 0;
     bool cdct = false;
+    // The cubes: one per cached object (shapes, in object order; shape_of: per object, its cube or -1), placed
+    // in the texel buffer by `layout`. Adaptive sizes (settings.adaptive): `sized` per cube, for
+    // raycache::next_gpu_face_sizes.
+    std::vector<raycache::GpuCubeShape> shapes;
+    std::vector<int> shape_of;
+    raycache::GpuBufferLayout layout;
+    std::vector<bool> sized;
+    std::uint64_t max_buffer = 0; // maxStorageBufferRange
+    std::uint64_t cube_room = 0;  // of it, what the cubes may take (the frame buffer's counters come first)
+
+    // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
+    // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes)
+    // and the frame buffer sized for the new texel count.
+    void place_cubes(const std::vector<int>& sizes);
 };
+
+void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
+    std::vector<raycache::GpuCubeShape> placed = shapes;
+    for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = sizes[k];
+    raycache::GpuBufferLayout next =
+        cdct ? raycache::gpu_buffer_layout<raycache::CdctTexel>(placed) : raycache::gpu_buffer_layout<raycache::CctTexel>(placed);
+    if (next.bytes > max_buffer)
+        throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(next.bytes) +
+                                    " bytes, more than one storage buffer may hold on this device (" +
+                                    std::to_string(max_buffer) + "); use a smaller --face-size");
+    std::vector<raycache::shared::raycache_gpu_cube> per_object;
+    for (const int k : shape_of) {
+        raycache::shared::raycache_gpu_cube none{};
+        none.face_size = 0; // no texels: lookups miss, stores are refused (counted nowhere: index 0 of face size 0)
+        per_object.push_back(k >= 0 ? next.cubes[static_cast<std::size_t>(k)] : none);
+    }
+    cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, per_object, 16));
+    const std::uint32_t cached = static_cast<std::uint32_t>(shapes.size());
+    frame_layout = raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, next.texels, max_buffer), max_buffer);
+    frame_start = raycache::gpu_frame_start_words(frame_layout);
+    frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(frame_layout.bytes, 16));
+    std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table;
+    if (next.texels > 0) {
+        new_texels = std::make_unique<vk::Buffer>(context, next.bytes);
+        new_pending = std::make_unique<vk::Buffer>(context, next.bytes);
+        new_texels->fill(RAYCACHE_GPU_CLEAR_WORD);
+        new_pending->fill(RAYCACHE_GPU_CLEAR_WORD);
+        new_doubtful = std::make_unique<vk::Buffer>(context, next.doubtful_bytes);
+        new_doubtful->fill(raycache::gpu_doubtful_clear_word);
+        new_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, next.cubes)); // by first_texel, as placed
+        if (texels) { // moving: the device is idle (render() waited for the frame and its end-of-frame passes)
+            if (cdct)
+                raycache::move_gpu_cubes<raycache::CdctTexel>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
+                                                              new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
+                                                              settings.edge_threshold);
+            else
+                raycache::move_gpu_cubes<raycache::CctTexel>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
+                                                             new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
+                                                             settings.edge_threshold);
+        }
+    }
+    texels = std::move(new_texels);
+    pending = std::move(new_pending);
+    doubtful = std::move(new_doubtful);
+    cube_table = std::move(new_table);
+    layout = std::move(next);
+    texel_count = static_cast<std::uint32_t>(layout.texels);
+}
 
 Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spirv_dir, const TracerSettings& settings)
     : impl_(std::make_unique<Impl>(context, scene, settings)) {
@@ -94,41 +157,31 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     }
 
     // Objects: materials, and a cube descriptor for each cached one (face size 0: none).
-    std::vector<raycache::shared::raycache_gpu_cube> cubes;
     const bool caching = uses_caches(settings.mode);
     if (caching && (settings.face_size < 1 || settings.face_size > RAYCACHE_MAX_FACE_SIZE))
         throw std::invalid_argument("Vulkan tracer: --face-size must be 1.." + std::to_string(RAYCACHE_MAX_FACE_SIZE));
+    if (caching && settings.adaptive) raycache::validate(settings.adaptive_resolution);
     // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage buffer
     // (lavapipe: 128 MiB): raycache::fit_gpu_face_sizes lowers the faces to the largest size that fits, leaving
     // room for the frame buffer's counters, so that its store list can hold every texel (up to 16,776,960).
+    // Adaptive cubes start at the first face size and then follow their rays (raycache/gpu_adaptive.hpp).
     const std::uint64_t word_bytes = t.cdct ? 8 : 4;
     const std::uint64_t range = context.properties().limits.maxStorageBufferRange;
     const std::uint32_t cached = caching ? static_cast<std::uint32_t>(scene.cached_object_count()) : 0u;
     const std::uint64_t counter_bytes = 4 * (std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cached} * RAYCACHE_FRAME_CUBE_WORDS);
     if (cached > 0) {
         if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
-        t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, t.settings.face_size), word_bytes,
-                                                            range - counter_bytes)[0];
+        const int start = settings.adaptive ? settings.adaptive_resolution.first_face_size : t.settings.face_size;
+        t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, range - counter_bytes)[0];
     }
-    const GpuObjects packed = pack_objects(scene, caching, t.settings.face_size);
+    t.max_buffer = range;
+    t.cube_room = cached > 0 ? range - counter_bytes : range;
+    GpuObjects packed = pack_objects(scene, caching, t.settings.face_size);
     const std::vector<GpuObject>& objects = packed.objects;
-    const std::vector<raycache::GpuCubeShape>& shapes = packed.shapes;
-    const std::vector<int>& shape_of = packed.shape_of;
-    const raycache::GpuBufferLayout layout =
-        t.cdct ? raycache::gpu_buffer_layout<raycache::CdctTexel>(shapes) : raycache::gpu_buffer_layout<raycache::CctTexel>(shapes);
-    for (const int k : shape_of) {
-        raycache::shared::raycache_gpu_cube none{};
-        none.face_size = 0; // no texels: lookups miss, stores are refused (counted nowhere: index 0 of face size 0)
-        cubes.push_back(k >= 0 ? layout.cubes[static_cast<std::size_t>(k)] : none);
-    }
-    const std::uint64_t texels = layout.texels;
-    if (layout.bytes > range)
-        throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(layout.bytes) +
-                                    " bytes, more than one storage buffer may hold on this device (" +
-                                    std::to_string(range) + "); use a smaller --face-size");
-    t.texel_count = static_cast<std::uint32_t>(texels);
-    t.frame_layout = raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, texels, range), range);
-    t.frame_start = raycache::gpu_frame_start_words(t.frame_layout);
+    t.shapes = std::move(packed.shapes);
+    t.shape_of = std::move(packed.shape_of);
+    t.sized.assign(t.shapes.size(), false);
+    t.place_cubes(std::vector<int>(t.shapes.size(), t.settings.face_size));
 
     // Room for any binary BVH over these primitives (2n - 1 nodes), so set_scene uploads in place.
     t.nodes = std::make_unique<vk::Buffer>(context, std::max(t.bvh.nodes.size(), 2 * t.bvh.primitives.size()) * sizeof(BvhNode));
@@ -136,22 +189,11 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.primitives = std::make_unique<vk::Buffer>(vk::buffer_of(context, rsh ? scene_order : t.bvh.primitives, 16));
     if (rsh && !settings.hybrid) t.bvh_prims = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
     t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
-    t.cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, cubes, 16));
     t.params = std::make_unique<vk::Buffer>(context, sizeof(GpuParams));
-    t.frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(t.frame_layout.bytes, 16));
     t.dummy = std::make_unique<vk::Buffer>(context, 16);
     t.dummy->fill(RAYCACHE_GPU_CLEAR_WORD);
     t.zeros = std::make_unique<vk::Buffer>(context, 32); // no doubtful texels; a cube table of none
     t.zeros->fill(0u);
-    if (texels > 0) {
-        t.texels = std::make_unique<vk::Buffer>(context, texels * word_bytes);
-        t.pending = std::make_unique<vk::Buffer>(context, texels * word_bytes);
-        t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
-        t.pending->fill(RAYCACHE_GPU_CLEAR_WORD);
-        t.doubtful = std::make_unique<vk::Buffer>(context, layout.doubtful_bytes);
-        t.doubtful->fill(raycache::gpu_doubtful_clear_word);
-        t.cube_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, layout.cubes)); // by first_texel, as placed
-    }
     if (settings.hybrid)
         t.raster = std::make_unique<Raster>(
             context, spirv_dir,
@@ -193,7 +235,16 @@ void Tracer::set_scene(const Scene& moved) {
 }
 
 std::size_t Tracer::bvh_nodes() const noexcept { return impl_->rsh && !impl_->bvh_prims ? 0 : impl_->bvh.nodes.size(); }
-int Tracer::face_size() const noexcept { return impl_->settings.face_size; }
+int Tracer::face_size() const noexcept {
+    int largest = 0;
+    for (const auto& cube : impl_->layout.cubes) largest = std::max(largest, cube.face_size);
+    return impl_->layout.cubes.empty() ? impl_->settings.face_size : largest;
+}
+std::vector<int> Tracer::face_sizes() const {
+    std::vector<int> sizes;
+    for (const auto& cube : impl_->layout.cubes) sizes.push_back(cube.face_size);
+    return sizes;
+}
 std::size_t Tracer::cube_bytes() const noexcept {
     return impl_->texels ? static_cast<std::size_t>(2 * impl_->texels->size()) : 0;
 }
@@ -295,6 +346,22 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
                                  std::to_string(t.frame_layout.list_capacity) + ")");
 
+    // Adaptive cubes: each takes the size its rays of this frame call for; cubes that change size are moved
+    // into new buffers now, between frames (raycache/gpu_adaptive.hpp).
+    double resize_ms = 0.0;
+    std::size_t resized = 0;
+    if (t.settings.adaptive && !t.shapes.empty()) {
+        start = std::chrono::steady_clock::now();
+        const raycache::GpuFaceSizes next =
+            t.cdct ? raycache::next_gpu_face_sizes<raycache::CdctTexel>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room)
+                   : raycache::next_gpu_face_sizes<raycache::CctTexel>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room);
+        if (next.changed) {
+            for (std::size_t k = 0; k < next.face_sizes.size(); ++k) resized += next.face_sizes[k] != t.layout.cubes[k].face_size;
+            t.place_cubes(next.face_sizes);
+        }
+        resize_ms = ms_since(start);
+    }
+
     Image image(width, height);
     const float* out = t.output->as<float>();
     for (std::size_t i = 0; i < pixels; ++i) image.pixels[i] = glm::vec3(out[4 * i], out[4 * i + 1], out[4 * i + 2]);
@@ -305,6 +372,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         stats->lookups = gpu_stats.total.lookups;
         stats->hits = gpu_stats.total.hits;
         stats->update_ms = t.update_ms;
+        stats->resize_milliseconds = resize_ms;
+        stats->resized_cubes = resized;
     }
     t.update_ms = 0.0;
     return image;

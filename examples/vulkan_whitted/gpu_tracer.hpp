@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <raycache/adaptive_resolution.hpp>
 #include <rcx/vulkan.hpp>
 
 #include "bvh_builder.hpp"
@@ -31,7 +32,10 @@ const char* to_string(Secondary secondary);
 
 struct TracerSettings {
     CacheMode mode = CacheMode::off;
-    int face_size = 512;      // cube face texels (cct, cdct)
+    int face_size = 512;      // cube face texels (cct, cdct): every cube's, or with `adaptive` the largest allowed
+    bool adaptive = false;    // each cube's face size follows its rays (raycache/gpu_adaptive.hpp), from
+                              // adaptive_resolution.first_face_size
+    raycache::AdaptiveResolution adaptive_resolution{};
     bool secant = true;       // CDCT search: the secant search (a few reads) or, false, the relief walk
     int max_reads = 8;        // CDCT secant search: reads before a miss, 1..64
     float delta = 0.2f;       // CDCT relief walk: step; epsilon (both searches), linear steps, gap (0 = none)
@@ -51,6 +55,8 @@ struct FrameStats {
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
+    double resize_milliseconds = 0.0;    // adaptive: choosing the next face sizes and moving the cubes that changed
+    std::size_t resized_cubes = 0;       // ... how many changed size after this frame
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
                                          // --hybrid, for the primary rays) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces
@@ -82,7 +88,8 @@ public:
     Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr);
 
     std::size_t bvh_nodes() const noexcept;
-    int face_size() const noexcept;          // of the cubes, after fitting them into one buffer
+    int face_size() const noexcept;          // of the cubes (adaptive: the largest now), after fitting them into one buffer
+    std::vector<int> face_sizes() const;     // each cached object's cube, in object order
     std::size_t cube_bytes() const noexcept; // texel + pending buffers
 
     struct Impl;

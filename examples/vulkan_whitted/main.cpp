@@ -63,10 +63,6 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.origin_parallax != defaults.origin_parallax)
         throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
-    if (o.rays_per_texel != defaults.rays_per_texel)
-        throw InputError("--rays-per-texel is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
-    if (o.first_face_size != defaults.first_face_size)
-        throw InputError("--first-face-size is not supported by the Vulkan tracer: its cube sizes are not adaptive yet");
     if (!o.load_cache.empty() || !o.save_cache.empty())
         throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
                          " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
@@ -98,7 +94,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // each (a larger --face-size is lowered to fit); the frame images come on top.
     std::vector<rcx::MemoryNeed> needs{rcx::frame_images(o)};
     if (rcx::uses_caches(o.cache)) {
-        const std::uint64_t n = static_cast<std::uint64_t>(o.face_size);
+        const std::uint64_t n = static_cast<std::uint64_t>(o.face_size > 0 ? o.face_size : o.first_face_size); // auto: where cubes start
         const std::uint64_t cubes = static_cast<std::uint64_t>(scene.cached_object_count()) * 6 * n * n *
                                     (o.cache == rcx::CacheMode::cdct ? 8 : 4);
         const std::uint64_t buffer = std::min<std::uint64_t>(cubes, context->properties().limits.maxStorageBufferRange);
@@ -112,7 +108,10 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
 
     rcx::gpu::TracerSettings settings;
     settings.mode = o.cache;
-    settings.face_size = o.face_size > 0 ? o.face_size : 512; // auto: the largest up to 512 that fits
+    settings.face_size = o.face_size > 0 ? o.face_size : o.first_face_size;
+    settings.adaptive = o.face_size <= 0; // auto: each cube's size follows its rays (raycache/gpu_adaptive.hpp)
+    settings.adaptive_resolution.rays_per_texel = o.rays_per_texel;
+    settings.adaptive_resolution.first_face_size = o.first_face_size;
     settings.secant = o.secant;
     settings.max_reads = o.max_reads;
     settings.delta = o.delta;
@@ -155,8 +154,12 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
                     static_cast<double>(scene.path.step_degrees));
         std::printf("%s; cache %s", hybrid ? "hybrid: primary hits rasterised into a G-buffer, secondary rays in compute" : "all rays in compute",
                     rcx::to_string(o.cache));
-        if (caching) std::printf(", faces %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
-                                 static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
+        if (caching && settings.adaptive)
+            std::printf(", adaptive faces from %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
+                        static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
+        else if (caching)
+            std::printf(", faces %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
+                        static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
         if (o.cache == rcx::CacheMode::cdct && o.secant)
             std::printf(", secant search, epsilon %g, max reads %d", static_cast<double>(o.epsilon), o.max_reads);
         else if (o.cache == rcx::CacheMode::cdct)
@@ -210,6 +213,13 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
                             r.final_ms, stats.rsh.shade_ms);
             } else if (stats.update_ms > 0.0) {
                 std::printf("   BVH rebuild %.1f ms", stats.update_ms);
+            }
+            if (stats.resized_cubes > 0) {
+                const std::vector<int> sizes = tracer->face_sizes();
+                std::printf("   %zu cubes resized in %.1f ms: faces %d..%d, cubes %.1f MiB", stats.resized_cubes,
+                            stats.resize_milliseconds, *std::min_element(sizes.begin(), sizes.end()),
+                            *std::max_element(sizes.begin(), sizes.end()),
+                            static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
             }
             std::printf("\n");
             std::fflush(stdout);

@@ -58,10 +58,10 @@ raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
     return result;
 }
 
-/* raycache_cct_peek, counted as a hit or a miss of the cube in the frame buffer. */
+/* raycache_cct_peek, counted as a hit or a miss of the cube in the frame buffer (and its direction cell marked). */
 raycache_cct_result raycache_cct_lookup(raycache_gpu_cube cube, vec3 direction) {
     raycache_cct_result result = raycache_cct_peek(cube, direction);
-    raycache_count_lookup(cube, result.hit);
+    raycache_count_lookup_toward(cube, direction, result.hit);
     return result;
 }
 

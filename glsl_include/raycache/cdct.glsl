@@ -89,7 +89,7 @@ raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origi
                                  raycache_cdct_color(texel));
     }
     raycache_relief_result result = raycache_relief_walk_result(w);
-    raycache_count_lookup(cube, result.hit);
+    raycache_count_lookup_toward(cube, direction, result.hit);
     return result;
 }
 
@@ -111,7 +111,7 @@ raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 
                                 raycache_cdct_color(texel));
     }
     raycache_relief_result result = raycache_secant_result(s, origin);
-    raycache_count_lookup(cube, result.hit);
+    raycache_count_lookup_toward(cube, direction, result.hit);
     return result;
 }
 

@@ -1,5 +1,5 @@
 /* raycache/frame.glsl: the frame buffer of RayCache's GPU frame protocol (layout: raycache/shared/gpu_layout.h):
- * per-cube counters of lookups and stores, and the list of texels stored this frame, which the
+ * per-cube counters of lookups and stores, the direction cells lookups took, and the list of texels stored this frame, which the
  * end-of-frame pass (raycache/end_frame.glsl) publishes. Included by cube.glsl; declares nothing under
  * RAYCACHE_READ_ONLY (lookups are then not counted).
  *
@@ -24,6 +24,18 @@ void raycache_frame_count(uint index, uint which) {
     if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return;
     uint word = raycache_frame_counter_word(index, which);
     if (word < uint(raycache_frame.length())) atomicAdd(raycache_frame[word], 1u);
+}
+
+/* Sets the coverage bit of the direction cell `direction` falls in (raycache/shared/coverage.h) for the
+ * cube numbered `index`: what the host's adaptive face sizes go by. Reads first, so a cell already marked
+ * costs no atomic. */
+void raycache_frame_mark_direction(uint index, vec3 direction) {
+    if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return;
+    uint cell = raycache_coverage_cell(direction);
+    if (cell == RAYCACHE_NO_COVERAGE_CELL) return;
+    uint word = raycache_frame_coverage_word(index, cell >> 5u);
+    uint bit = 1u << (cell & 31u);
+    if (word < uint(raycache_frame.length()) && (raycache_frame[word] & bit) == 0u) atomicOr(raycache_frame[word], bit);
 }
 
 /* Appends a stored texel's entry to the store list; called once per texel and frame, by the store that

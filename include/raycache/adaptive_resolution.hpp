@@ -32,6 +32,7 @@
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/cube_face.hpp"
+#include "raycache/shared/coverage.h"
 
 namespace raycache {
 
@@ -69,26 +70,27 @@ inline void validate(const AdaptiveResolution& a) {
 // (a relaxed load, and an atomic OR only the first time a cell is met); fraction() and reset() between frames.
 class DirectionCoverage {
 public:
-    static constexpr int cells_per_edge = 16;
-    static constexpr int cell_count = RAYCACHE_FACE_COUNT * cells_per_edge * cells_per_edge;
+    static constexpr int cells_per_edge = RAYCACHE_COVERAGE_CELLS_PER_EDGE;
+    static constexpr int cell_count = static_cast<int>(RAYCACHE_COVERAGE_CELLS);
 
+    // The cell of shared/coverage.h, as the GPU's frame buffer marks it.
     void mark(const glm::vec3& direction) noexcept {
-        const shared::raycache_texel_address a = shared::raycache_texel_of(direction, cells_per_edge);
-        if (a.face == RAYCACHE_NO_FACE) return;
-        mark_cell(a.face, a.column, a.row);
+        const std::uint32_t cell = shared::raycache_coverage_cell(direction);
+        if (cell != RAYCACHE_NO_COVERAGE_CELL) mark_cell(cell);
     }
     // mark() for a ray already found to fall in texel `t` of a cube of `face_size`: spares the second face
     // choice. A texel of a face of 16 texels or more marks the cell its centre falls in; a larger texel
     // every cell it overlaps.
     void mark(const TexelAddress& t, int face_size) noexcept {
         if (face_size >= cells_per_edge) {
-            mark_cell(t.face, (2 * t.column + 1) * (cells_per_edge / 2) / face_size, (2 * t.row + 1) * (cells_per_edge / 2) / face_size);
+            mark_cell(shared::raycache_coverage_cell_of_texel({t.face, t.column, t.row}, face_size));
             return;
         }
         const int c0 = t.column * cells_per_edge / face_size, c1 = ((t.column + 1) * cells_per_edge + face_size - 1) / face_size;
         const int r0 = t.row * cells_per_edge / face_size, r1 = ((t.row + 1) * cells_per_edge + face_size - 1) / face_size;
         for (int row = r0; row < r1; ++row)
-            for (int column = c0; column < c1; ++column) mark_cell(t.face, column, row);
+            for (int column = c0; column < c1; ++column)
+                mark_cell(shared::raycache_texel_linear_index({t.face, column, row}, cells_per_edge));
     }
     // The marked cells as bits (cell (face, column, row) is bit (face * 16 + row) * 16 + column).
     std::array<std::uint64_t, cell_count / 64> marked_cells() const noexcept {
@@ -110,14 +112,22 @@ public:
     }
 
 private:
-    void mark_cell(int face, int column, int row) noexcept {
-        const unsigned cell = shared::raycache_texel_linear_index({face, column, row}, cells_per_edge);
+    void mark_cell(std::uint32_t cell) noexcept {
         const std::uint64_t bit = std::uint64_t{1} << (cell % 64);
         std::atomic<std::uint64_t>& word = words_[cell / 64];
         if (!(word.load(std::memory_order_relaxed) & bit)) word.fetch_or(bit, std::memory_order_relaxed);
     }
     std::atomic<std::uint64_t> words_[cell_count / 64] = {};
 };
+
+// The share of the 1536 cells set in a cube's coverage bits as the GPU's frame buffer holds them
+// (RAYCACHE_COVERAGE_WORDS 32-bit words: shared/coverage.h), 0..1.
+inline double coverage_fraction(const std::uint32_t* words) noexcept {
+    int marked = 0;
+    for (std::uint32_t i = 0; i < RAYCACHE_COVERAGE_WORDS; ++i)
+        for (std::uint32_t bits = words[i]; bits; bits &= bits - 1) ++marked;
+    return static_cast<double>(marked) / RAYCACHE_COVERAGE_CELLS;
+}
 
 // The ideal face size (not yet on the ladder) for `rays` leaving rays of one frame spread over
 // `covered_fraction` (0..1) of all directions: sqrt(rays / (rays_per_texel * 6 * covered_fraction)).
@@ -161,6 +171,14 @@ inline int next_face_size(int current, std::uint64_t rays, double covered_fracti
 inline int first_face_size(int current, std::uint64_t rays, double covered_fraction, const AdaptiveResolution& a) noexcept {
     const double ideal = ideal_face_size(rays, covered_fraction, a.rays_per_texel);
     return ideal > 0.0 ? nearest_face_size_step(ideal, a) : current;
+}
+
+// The face size of an adaptive cube after a frame in which `rays` leaving rays covered `covered_fraction`
+// of the directions: first_face_size() while no frame with rays has sized it yet (`sized` false),
+// next_face_size() after.
+inline int adapted_face_size(int current, bool sized, std::uint64_t rays, double covered_fraction,
+                             const AdaptiveResolution& a) noexcept {
+    return sized ? next_face_size(current, rays, covered_fraction, a) : first_face_size(current, rays, covered_fraction, a);
 }
 
 // The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile

@@ -1,7 +1,8 @@
 // raycache/gpu_frame.hpp: the host side of RayCache's GPU frame protocol (raycache/shared/gpu_layout.h), with
 // no graphics API: the binding numbers, the frame buffer's size and its contents before each frame, the
-// end-of-frame pass's dispatch size, the GPU statistics read back after a frame, and face sizes that fit
-// a device's largest storage buffer.
+// end-of-frame pass's dispatch size, the GPU statistics read back after a frame (with each cube's direction
+// coverage, for adaptive face sizes: raycache/gpu_adaptive.hpp), and face sizes that fit a device's largest
+// storage buffer.
 //
 // A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
 //   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy),
@@ -25,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "raycache/adaptive_resolution.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/statistics.hpp"
 #include "raycache/shared/gpu_layout.h"
@@ -120,6 +122,7 @@ inline GpuGroups gpu_sweep_groups(std::uint64_t elements, std::uint32_t group_si
 // What one frame's frame buffer says: per cube (descriptor index) and in all.
 struct GpuFrameStatistics {
     std::vector<CubeStatistics> cubes; // lookups, hits, misses, stores (reached the pending word), refused_stores
+    std::vector<double> coverage;      // per cube: the share of the 1536 direction cells its lookups took (0..1)
     CubeStatistics total;
     std::uint64_t listed = 0;   // texels the end-of-frame pass publishes
     std::uint64_t overflow = 0; // texels stored that found the list full: sweep the buffers before the next frame
@@ -130,7 +133,9 @@ struct GpuFrameStatistics {
 inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const GpuFrameLayout& f) {
     GpuFrameStatistics s;
     s.cubes.resize(f.cube_count);
+    s.coverage.resize(f.cube_count);
     for (std::uint32_t k = 0; k < f.cube_count; ++k) {
+        s.coverage[k] = coverage_fraction(words + shared::raycache_frame_coverage_word(k, 0));
         CubeStatistics& c = s.cubes[k];
         c.hits = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)];
         c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)];

@@ -21,3 +21,4 @@
 #include "raycache/prefill.hpp"
 #include "raycache/cache_file.hpp"
 #include "raycache/gpu_buffers.hpp"
+#include "raycache/gpu_adaptive.hpp"

@@ -1,6 +1,7 @@
 // The CCT in GLSL (raycache/cct.glsl, driven by shaders/cct_cross.comp) against raycache::CctCube:
 // texels written by C++ read the same in GLSL, and texels stored by GLSL, after the end-frame pass,
-// are word for word what C++ makes of the same stores, and read the same in C++.
+// are word for word what C++ makes of the same stores, and read the same in C++; lookups mark the direction
+// cells C++'s DirectionCoverage marks.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -141,6 +142,26 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     }
     CHECK(gpu_stats.total.lookups == queries.size());
     CHECK(gpu_stats.listed == 0u);
+
+    // Each cube's coverage bits in the frame buffer are the cells C++'s DirectionCoverage marks for the
+    // same lookups' directions (the cells adaptive face sizes go by), and their share is what it counts.
+    const std::uint32_t* frame_words = frame.buffer.as<std::uint32_t>();
+    std::size_t cells_marked = 0;
+    for (std::size_t k = 0; k < s.cubes.size(); ++k) {
+        CAPTURE(k);
+        raycache::DirectionCoverage cpu;
+        for (const Query& q : queries)
+            if (q.cube == k) cpu.mark(q.direction);
+        const auto bits = cpu.marked_cells();
+        const std::uint32_t* gpu_bits = frame_words + gpu::raycache_frame_coverage_word(static_cast<std::uint32_t>(k), 0);
+        bool same_bits = true;
+        for (std::uint32_t w = 0; w < RAYCACHE_COVERAGE_WORDS; ++w)
+            same_bits = same_bits && gpu_bits[w] == static_cast<std::uint32_t>(bits[w / 2] >> (32 * (w % 2)));
+        CHECK(same_bits);
+        CHECK(gpu_stats.coverage[k] == cpu.fraction());
+        cells_marked += static_cast<std::size_t>(cpu.fraction() * RAYCACHE_COVERAGE_CELLS);
+    }
+    CHECK(cells_marked > 4 * RAYCACHE_COVERAGE_CELLS / 2); // the directions spread over most cells of every cube
 }
 
 TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word wins, and C++ reads the result") {

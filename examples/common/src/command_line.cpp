@@ -140,18 +140,17 @@ CommandLine::CommandLine(const std::string& program)
                [&o](const std::string& text) { o.cache = parse_cache_mode(text); });
     add_option("--face-size", "N|auto",
                "texels per cube face side, 1..4096; auto: each cube's size follows\n"
-               "the rays its object receives (Vulkan: the largest up to 512 whose\n"
-               "cubes fit one storage buffer) [auto]",
+               "the rays its object receives (Vulkan: within one storage buffer) [auto]",
                [&o](const std::string& text) {
                    o.face_size = text == "auto" ? 0 : static_cast<int>(parse_int_value("--face-size", text, 1, 4096));
                });
     add_option("--rays-per-texel", "F",
                "auto: a frame's leaving rays per covered texel; smaller is sharper\n"
-               "and fills more slowly (Embree tracer) " + shown_default(d.rays_per_texel),
+               "and fills more slowly " + shown_default(d.rays_per_texel),
                number("--rays-per-texel", o.rays_per_texel, true));
     add_option("--first-face-size", "N",
                "auto: the face size cubes start at, 1..4096; smaller makes a first\n"
-               "frame cheaper and its cubes coarser (Embree tracer) [" + std::to_string(d.first_face_size) + "]",
+               "frame cheaper and its cubes coarser [" + std::to_string(d.first_face_size) + "]",
                [&o](const std::string& text) {
                    o.first_face_size = static_cast<int>(parse_int_value("--first-face-size", text, 1, 4096));
                });

@@ -15,13 +15,15 @@
  *
  * Frame buffer (binding RAYCACHE_FRAME_BINDING, uint words), shared by both techniques:
  *   header (RAYCACHE_FRAME_HEADER_WORDS): list count, list capacity, cube count, overflow, the end-of-frame
- *   pass's VkDispatchIndirectCommand; then RAYCACHE_FRAME_CUBE_WORDS counters per cube (indexed by the
+ *   pass's VkDispatchIndirectCommand; then RAYCACHE_FRAME_CUBE_WORDS words per cube (counters, coverage) (indexed by the
  *   descriptor's `index`); then the store list (list capacity entries: a texel element, with
  *   RAYCACHE_FRAME_CDCT_ENTRY set for a CDCT texel). The host writes the header and zeroes the counters
  *   before every frame (raycache/gpu_frame.hpp: gpu_frame_start_words). Counters are order-independent:
  *   hits and misses per lookup (a CDCT search is one lookup), `stores` = stores that reached the pending
  *   word (C++'s stores plus its same-frame losers), `refused` = stores refused before it (not a direction,
- *   a value that cannot be stored, a texel already visible or outside the buffers).
+ *   a value that cannot be stored, a texel already visible or outside the buffers); then the cube's
+ *   coverage bits (RAYCACHE_COVERAGE_WORDS words: which of 1536 direction cells its lookups took,
+ *   raycache/shared/coverage.h), which the host reads to choose adaptive face sizes.
  *
  * Confidence test (optional: shaders that define RAYCACHE_CONFIDENCE; the rule is raycache/shared/edge_rule.h,
  * as in C++'s raycache::mark_doubtful_edges). Each technique has a doubtful-bit buffer (binding
@@ -44,6 +46,7 @@
 #ifndef RAYCACHE_SHARED_GPU_LAYOUT_H
 #define RAYCACHE_SHARED_GPU_LAYOUT_H
 
+#include "raycache/shared/coverage.h"
 #include "raycache/shared/cube_face.h"
 
 #ifdef __cplusplus
@@ -102,7 +105,8 @@ namespace shared {
 #define RAYCACHE_FRAME_MISSES 1u
 #define RAYCACHE_FRAME_STORES 2u
 #define RAYCACHE_FRAME_REFUSED 3u
-#define RAYCACHE_FRAME_CUBE_WORDS 4u
+#define RAYCACHE_FRAME_COVERAGE 4u /* RAYCACHE_COVERAGE_WORDS words: the direction cells its lookups took */
+#define RAYCACHE_FRAME_CUBE_WORDS (RAYCACHE_FRAME_COVERAGE + RAYCACHE_COVERAGE_WORDS)
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
 #define RAYCACHE_FRAME_CDCT_ENTRY 0x80000000u
 /* The end-of-frame pass: invocations per group, at most this many groups (one dimension), so a store list
@@ -142,6 +146,11 @@ RAYCACHE_FN uint raycache_gpu_cube_texel_count(int face_size) {
 /* Word of the frame buffer holding counter `which` (RAYCACHE_FRAME_HITS...) of cube `index`. */
 RAYCACHE_FN uint raycache_frame_counter_word(uint index, uint which) {
     return RAYCACHE_FRAME_HEADER_WORDS + index * RAYCACHE_FRAME_CUBE_WORDS + which;
+}
+
+/* Word of the frame buffer holding coverage word w (0..RAYCACHE_COVERAGE_WORDS - 1) of cube `index`. */
+RAYCACHE_FN uint raycache_frame_coverage_word(uint index, uint w) {
+    return RAYCACHE_FRAME_HEADER_WORDS + index * RAYCACHE_FRAME_CUBE_WORDS + RAYCACHE_FRAME_COVERAGE + w;
 }
 
 /* Word of the frame buffer holding store-list entry k, with cube_count cubes' counters before the list. */

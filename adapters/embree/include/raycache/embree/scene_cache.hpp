@@ -857,8 +857,7 @@ private:
             if (!e.coverage) continue;
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
             const std::uint64_t rays = frames[i].lookups;
-            const int next = e.sized ? next_face_size(current, rays, e.coverage->fraction(), adaptive_)
-                                     : first_face_size(current, rays, e.coverage->fraction(), adaptive_);
+            const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
             if (next == current) continue;
