@@ -8,7 +8,8 @@
 //   steps around it are 64 (0.29 octave away) and 91 (0.21): 91. The next frame, 24 rays over the same cells
 //   want 4.9: more than two half octaves from 91, so the nearest step at or above the minimum, 8.
 // - moving 24 -> 8 (3 fine texels a coarse one along each edge): the coarse texel (c, r) takes the fine
-//   texel (3c + 1, 3r + 1), whose centre is its centre.
+//   texel (3c + 1, 3r + 1), whose centre is its centre. A kept 16-texel cube after a 24-texel one starts at
+//   element 6 * 576 = 3456, after an 8-texel one at 6 * 64 = 384.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -97,6 +98,17 @@ TEST_CASE("GPU cubes take the face size their rays call for: at once the first t
     std::vector<bool> fresh(2, true);
     const GpuFaceSizes capped = next_gpu_face_sizes<CctTexel>(a, layout, frame_with(2, 0, 6144, 256), fresh, 62976);
     CHECK(capped.face_sizes == std::vector<int>{40, 32});
+    // A cube the cap holds below its size (40, wanting 24,576 rays over a sixth of the cells: 156.8 -> 181)
+    // does not grow by a few texels when the cap moves up a little (42: 6 * (42^2 + 32^2) * 4 = 66,912
+    // bytes; 43 would need 68,952), which would empty it; a cap two half octaves up (80: 178,176 bytes; 81
+    // would need 182,040) lets it grow.
+    const GpuBufferLayout capped_at_40 = gpu_buffer_layout<CctTexel>({GpuCubeShape{40, {}}, GpuCubeShape{32, {}}});
+    std::vector<bool> both_sized(2, true);
+    const GpuFaceSizes small_rise = next_gpu_face_sizes<CctTexel>(a, capped_at_40, frame_with(2, 0, 24576, 256), both_sized, 66912);
+    CHECK(small_rise.face_sizes == std::vector<int>{40, 32});
+    CHECK_FALSE(small_rise.changed);
+    const GpuFaceSizes big_rise = next_gpu_face_sizes<CctTexel>(a, capped_at_40, frame_with(2, 0, 24576, 256), both_sized, 178176);
+    CHECK(big_rise.face_sizes == std::vector<int>{80, 32});
     // Bad input: flags for another number of cubes, a descriptor whose counters the frame does not have.
     std::vector<bool> wrong(3, false);
     CHECK_THROWS_AS(next_gpu_face_sizes<CctTexel>(a, layout, frame_with(2, 0, 1, 1), wrong, ~std::uint64_t{0}), std::invalid_argument);
@@ -104,9 +116,11 @@ TEST_CASE("GPU cubes take the face size their rays call for: at once the first t
 }
 
 TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and tests its edges, and empties a larger one") {
-    // Old: 16 (kept), 24 (shrinks to 8), 8 (grows to 16).
-    const GpuBufferLayout from = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{24, {}}, GpuCubeShape{8, {}}});
-    const GpuBufferLayout to = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{8, {}}, GpuCubeShape{16, {}}});
+    // Old: 24 (shrinks to 8), 16 (kept, moving from element 3456 to 384), 8 (grows to 16).
+    const GpuBufferLayout from = gpu_buffer_layout<CctTexel>({GpuCubeShape{24, {}}, GpuCubeShape{16, {}}, GpuCubeShape{8, {}}});
+    const GpuBufferLayout to = gpu_buffer_layout<CctTexel>({GpuCubeShape{8, {}}, GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
+    REQUIRE(from.cubes[1].first_texel == 3456u);
+    REQUIRE(to.cubes[1].first_texel == 384u);
     CctCube kept(16), shrinking(24), growing(8);
     for (int face = 0; face < 6; ++face) {
         for (int row = 0; row < 16; row += 2)
@@ -119,10 +133,10 @@ TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and test
     for (CctCube* c : {&kept, &shrinking, &growing}) c->begin_frame();
     REQUIRE(kept.set_doubtful(TexelAddress{1, 3, 2}));
     std::vector<std::uint32_t> words = cleared_gpu_words(from), doubtful(from.doubtful_words, 0u);
-    write_gpu_words(kept, from.cubes[0], words.data(), words.size());
-    write_gpu_words(shrinking, from.cubes[1], words.data(), words.size());
+    write_gpu_words(shrinking, from.cubes[0], words.data(), words.size());
+    write_gpu_words(kept, from.cubes[1], words.data(), words.size());
     write_gpu_words(growing, from.cubes[2], words.data(), words.size());
-    const std::uint32_t marked = from.cubes[0].first_texel + static_cast<std::uint32_t>(texel_linear_index({1, 3, 2}, 16));
+    const std::uint32_t marked = from.cubes[1].first_texel + static_cast<std::uint32_t>(texel_linear_index({1, 3, 2}, 16));
     doubtful[shared::raycache_doubtful_word(marked)] |= shared::raycache_doubtful_bit(marked);
 
     std::vector<std::uint32_t> new_words = cleared_gpu_words(to), new_doubtful(to.doubtful_words, 0u);
@@ -130,12 +144,12 @@ TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and test
         move_gpu_cubes<CctTexel>(from, words.data(), doubtful.data(), to, new_words.data(), new_doubtful.data(), 0.1f);
     CHECK(written == kept.valid_texels() + 6u * 8u * 8u);
 
-    // Kept: word for word at its new place (the same here: it comes first), its doubtful bit too.
+    // Kept: word for word at its new place, its doubtful bit too.
     for (int face = 0; face < 6; ++face)
         for (int row = 0; row < 16; ++row)
             for (int column = 0; column < 16; ++column) {
                 const TexelAddress t{face, column, row};
-                const std::uint32_t e = to.cubes[0].first_texel + static_cast<std::uint32_t>(texel_linear_index(t, 16));
+                const std::uint32_t e = to.cubes[1].first_texel + static_cast<std::uint32_t>(texel_linear_index(t, 16));
                 CHECK(new_words[e] == kept.load_word(t));
                 CHECK(gpu_doubtful(new_doubtful.data(), new_doubtful.size(), e) == (face == 1 && column == 3 && row == 2));
             }
@@ -147,7 +161,7 @@ TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and test
                 CAPTURE(face);
                 CAPTURE(column);
                 const TexelAddress t{face, column, row};
-                const std::uint32_t e = to.cubes[1].first_texel + static_cast<std::uint32_t>(texel_linear_index(t, 8));
+                const std::uint32_t e = to.cubes[0].first_texel + static_cast<std::uint32_t>(texel_linear_index(t, 8));
                 REQUIRE(new_words[e] != gpu_clear_word);
                 CHECK(new_words[e] == shrinking.load_word(TexelAddress{face, 3 * column + 1, 3 * row + 1}));
                 CHECK(gpu_doubtful(new_doubtful.data(), new_doubtful.size(), e) == (column == 3 || column == 4));
@@ -157,11 +171,16 @@ TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and test
         CHECK(new_words[to.cubes[2].first_texel + i] == gpu_clear_word);
         CHECK_FALSE(gpu_doubtful(new_doubtful.data(), new_doubtful.size(), to.cubes[2].first_texel + i));
     }
-    // The confidence test off: the shrunk cube has no doubtful texel.
+    // The confidence test off: the shrunk cube has no doubtful texel; the kept one keeps its bit.
     std::vector<std::uint32_t> plain_words = cleared_gpu_words(to), plain_doubtful(to.doubtful_words, 0u);
-    move_gpu_cubes<CctTexel>(from, words.data(), nullptr, to, plain_words.data(), plain_doubtful.data(), -1.0f);
+    move_gpu_cubes<CctTexel>(from, words.data(), doubtful.data(), to, plain_words.data(), plain_doubtful.data(), -1.0f);
     CHECK(plain_words == new_words);
-    for (std::uint32_t w : plain_doubtful) CHECK(w == 0u);
+    const std::uint32_t kept_mark = to.cubes[1].first_texel + static_cast<std::uint32_t>(texel_linear_index({1, 3, 2}, 16));
+    for (std::uint32_t e = 0; e < to.texels; ++e) CHECK(gpu_doubtful(plain_doubtful.data(), plain_doubtful.size(), e) == (e == kept_mark));
+    // Without old doubtful bits, none carried.
+    std::vector<std::uint32_t> no_bits(to.doubtful_words, 0u);
+    move_gpu_cubes<CctTexel>(from, words.data(), nullptr, to, plain_words.data(), no_bits.data(), -1.0f);
+    for (std::uint32_t w : no_bits) CHECK(w == 0u);
     // Layouts of different cubes are refused.
     CHECK_THROWS_AS(move_gpu_cubes<CctTexel>(from, words.data(), nullptr, gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}}),
                                              plain_words.data(), nullptr, 0.1f),
@@ -169,7 +188,8 @@ TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and test
 }
 
 TEST_CASE("moving CDCT cubes keeps both words of each texel") {
-    const GpuBufferLayout from = gpu_buffer_layout<CdctTexel>({GpuCubeShape{8, {}}, GpuCubeShape{24, {}}});
+    // b (24 -> 8) first, then a (8, kept, moving from element 3456 to 384): every word pair lands whole.
+    const GpuBufferLayout from = gpu_buffer_layout<CdctTexel>({GpuCubeShape{24, {}}, GpuCubeShape{8, {}}});
     const GpuBufferLayout to = gpu_buffer_layout<CdctTexel>({GpuCubeShape{8, {}}, GpuCubeShape{8, {}}});
     CdctCube a(8), b(24);
     a.store_at(TexelAddress{4, 1, 6}, DepthSample{glm::vec3(0.5f, 0.25f, 1.0f), 3.5f});
@@ -180,13 +200,13 @@ TEST_CASE("moving CDCT cubes keeps both words of each texel") {
     a.begin_frame();
     b.begin_frame();
     std::vector<std::uint32_t> words = cleared_gpu_words(from);
-    write_gpu_words(a, from.cubes[0], words.data(), words.size());
-    write_gpu_words(b, from.cubes[1], words.data(), words.size());
+    write_gpu_words(b, from.cubes[0], words.data(), words.size());
+    write_gpu_words(a, from.cubes[1], words.data(), words.size());
     std::vector<std::uint32_t> new_words = cleared_gpu_words(to);
     move_gpu_cubes<CdctTexel>(from, words.data(), nullptr, to, new_words.data(), nullptr, 0.1f);
     CdctCube back_a(8), back_b(8);
-    CHECK(read_gpu_words(back_a, to.cubes[0], new_words.data(), new_words.size()) == 1u);
-    CHECK(read_gpu_words(back_b, to.cubes[1], new_words.data(), new_words.size()) == 6u * 64u);
+    CHECK(read_gpu_words(back_a, to.cubes[1], new_words.data(), new_words.size()) == 1u);
+    CHECK(read_gpu_words(back_b, to.cubes[0], new_words.data(), new_words.size()) == 6u * 64u);
     CHECK(back_a.load_word(TexelAddress{4, 1, 6}) == a.load_word(TexelAddress{4, 1, 6}));
     // Coarse column c took fine column 3c + 1: distance 3 + 3c.
     const auto s = back_b.load(TexelAddress{2, 5, 7});

@@ -86,11 +86,13 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
         none.face_size = 0; // no texels: lookups miss, stores are refused (counted nowhere: index 0 of face size 0)
         per_object.push_back(k >= 0 ? next.cubes[static_cast<std::size_t>(k)] : none);
     }
-    cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, per_object, 16));
+    // Everything new is made first and swapped in at the end, so a failed allocation leaves the old cubes whole.
+    auto new_cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, per_object, 16));
     const std::uint32_t cached = static_cast<std::uint32_t>(shapes.size());
-    frame_layout = raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, next.texels, max_buffer), max_buffer);
-    frame_start = raycache::gpu_frame_start_words(frame_layout);
-    frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(frame_layout.bytes, 16));
+    raycache::GpuFrameLayout new_frame_layout =
+        raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, next.texels, max_buffer), max_buffer);
+    std::vector<std::uint32_t> new_frame_start = raycache::gpu_frame_start_words(new_frame_layout);
+    auto new_frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(new_frame_layout.bytes, 16));
     std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table;
     if (next.texels > 0) {
         new_texels = std::make_unique<vk::Buffer>(context, next.bytes);
@@ -111,6 +113,10 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
                                                              settings.edge_threshold);
         }
     }
+    cubes = std::move(new_cubes);
+    frame_layout = new_frame_layout;
+    frame_start = std::move(new_frame_start);
+    frame = std::move(new_frame);
     texels = std::move(new_texels);
     pending = std::move(new_pending);
     doubtful = std::move(new_doubtful);

@@ -32,9 +32,9 @@ const char* to_string(Secondary secondary);
 
 struct TracerSettings {
     CacheMode mode = CacheMode::off;
-    int face_size = 512;      // cube face texels (cct, cdct): every cube's, or with `adaptive` the largest allowed
+    int face_size = 512;      // cube face texels (cct, cdct), every cube's; not used with `adaptive`
     bool adaptive = false;    // each cube's face size follows its rays (raycache/gpu_adaptive.hpp), from
-                              // adaptive_resolution.first_face_size
+                              // adaptive_resolution.first_face_size, within min_face_size..max_face_size
     raycache::AdaptiveResolution adaptive_resolution{};
     bool secant = true;       // CDCT search: the secant search (a few reads) or, false, the relief walk
     int max_reads = 8;        // CDCT secant search: reads before a miss, 1..64

@@ -94,11 +94,16 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // each (a larger --face-size is lowered to fit); the frame images come on top.
     std::vector<rcx::MemoryNeed> needs{rcx::frame_images(o)};
     if (rcx::uses_caches(o.cache)) {
-        const std::uint64_t n = static_cast<std::uint64_t>(o.face_size > 0 ? o.face_size : o.first_face_size); // auto: where cubes start
+        // Adaptive cubes may grow to the largest face size, and while they are resized the old and the new
+        // buffers live together.
+        const bool adaptive = o.face_size <= 0;
+        const std::uint64_t n = static_cast<std::uint64_t>(adaptive ? std::max(o.first_face_size, raycache::AdaptiveResolution{}.max_face_size)
+                                                                    : o.face_size);
         const std::uint64_t cubes = static_cast<std::uint64_t>(scene.cached_object_count()) * 6 * n * n *
                                     (o.cache == rcx::CacheMode::cdct ? 8 : 4);
         const std::uint64_t buffer = std::min<std::uint64_t>(cubes, context->properties().limits.maxStorageBufferRange);
-        needs.push_back({"cube texel and pending buffers", 2 * buffer});
+        needs.push_back({adaptive ? "cube texel and pending buffers, old and new while resizing" : "cube texel and pending buffers",
+                         (adaptive ? 4 : 2) * buffer});
     }
     try {
         rcx::check_memory(needs);

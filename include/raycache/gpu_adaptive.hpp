@@ -4,7 +4,9 @@
 // Why: as on the CPU (raycache/adaptive_resolution.hpp), a cube whose texels outnumber the rays that reach
 // it fills too slowly to be read along a moving camera, and costs memory no ray uses. The GPU's lookups
 // count themselves and mark the direction cell they took in the frame buffer (raycache/shared/coverage.h,
-// raycache/gpu_frame.hpp), so the host can choose each cube's size exactly as SceneCache does.
+// raycache/gpu_frame.hpp), so the host can choose each cube's size by SceneCache's rule (adapted_face_size;
+// the cells are marked by direction, where SceneCache's CCT marks by texel, every cell a texel overlaps on
+// faces under 16 texels).
 //
 // The cubes of a technique lie one after another in one texel buffer (raycache/gpu_buffers.hpp), so a cube
 // that changes size moves the cubes after it. Between frames, with the device done with the buffers:
@@ -24,6 +26,7 @@
 #include "raycache/requires_cpp17.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -49,7 +52,8 @@ struct GpuFaceSizes {
 // cube, all false before the first frame; updated here) says whether a frame with rays has sized the cube:
 // until then it moves to the ideal size at once, and waits at adaptive.min_face_size (or its own size, if
 // smaller) while it gets no ray at all. Then, if the cubes would pass `max_buffer_bytes` (the
-// device's maxStorageBufferRange), the largest are lowered to fit (fit_gpu_face_sizes). Throws
+// device's maxStorageBufferRange), the largest are lowered to fit (fit_gpu_face_sizes); a cube so lowered
+// grows again only when the cap rises by the hysteresis. Throws
 // std::invalid_argument when `sized` does not have one flag per cube, a descriptor's index has no
 // statistics, or a size is not 1..4096.
 template <class Texel>
@@ -77,7 +81,16 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
     }
     GpuFaceSizes next;
     next.face_sizes = fit_gpu_face_sizes(sizes, gpu_words_per_texel<Texel> * sizeof(std::uint32_t), max_buffer_bytes);
-    for (std::size_t k = 0; k < layout.cubes.size(); ++k) next.changed = next.changed || next.face_sizes[k] != layout.cubes[k].face_size;
+    for (std::size_t k = 0; k < layout.cubes.size(); ++k) {
+        // The buffer's cap moves with every other cube's size, and a cube that grows starts empty: a cube held
+        // below its size by the cap grows only when the cap has risen by the hysteresis (keeping it smaller
+        // never breaks the fit).
+        const int current = layout.cubes[k].face_size, fitted = next.face_sizes[k];
+        if (fitted > current && fitted < sizes[k] &&
+            2.0 * std::log2(static_cast<double>(fitted) / current) < adaptive.hysteresis_steps - 1e-9)
+            next.face_sizes[k] = current;
+        next.changed = next.changed || next.face_sizes[k] != current;
+    }
     return next;
 }
 
