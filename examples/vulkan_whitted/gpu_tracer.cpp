@@ -65,6 +65,12 @@ struct Tracer::Impl {
     std::uint64_t max_buffer = 0; // maxStorageBufferRange
     std::uint64_t cube_room = 0;  // of it, what the cubes may take (the frame buffer's counters come first)
 
+    // f(raycache::CctTexel{}) or f(raycache::CdctTexel{}): the library's per-technique calls, chosen once.
+    template <class F>
+    decltype(auto) with_texel(F&& f) const {
+        return cdct ? f(raycache::CdctTexel{}) : f(raycache::CctTexel{});
+    }
+
     // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
     // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes)
     // and the frame buffer sized for the new texel count.
@@ -74,8 +80,7 @@ struct Tracer::Impl {
 void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
     std::vector<raycache::GpuCubeShape> placed = shapes;
     for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = sizes[k];
-    raycache::GpuBufferLayout next =
-        cdct ? raycache::gpu_buffer_layout<raycache::CdctTexel>(placed) : raycache::gpu_buffer_layout<raycache::CctTexel>(placed);
+    raycache::GpuBufferLayout next = with_texel([&](auto texel) { return raycache::gpu_buffer_layout<decltype(texel)>(placed); });
     if (next.bytes > max_buffer)
         throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(next.bytes) +
                                     " bytes, more than one storage buffer may hold on this device (" +
@@ -103,14 +108,11 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
         new_doubtful->fill(raycache::gpu_doubtful_clear_word);
         new_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, next.cubes)); // by first_texel, as placed
         if (texels) { // moving: the device is idle (render() waited for the frame and its end-of-frame passes)
-            if (cdct)
-                raycache::move_gpu_cubes<raycache::CdctTexel>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
-                                                              new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
-                                                              settings.edge_threshold);
-            else
-                raycache::move_gpu_cubes<raycache::CctTexel>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
-                                                             new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
-                                                             settings.edge_threshold);
+            with_texel([&](auto texel) {
+                return raycache::move_gpu_cubes<decltype(texel)>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
+                                                                 new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
+                                                                 settings.edge_threshold);
+            });
         }
     }
     cubes = std::move(new_cubes);
@@ -358,9 +360,9 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     std::size_t resized = 0;
     if (t.settings.adaptive && !t.shapes.empty()) {
         start = std::chrono::steady_clock::now();
-        const raycache::GpuFaceSizes next =
-            t.cdct ? raycache::next_gpu_face_sizes<raycache::CdctTexel>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room)
-                   : raycache::next_gpu_face_sizes<raycache::CctTexel>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room);
+        const raycache::GpuFaceSizes next = t.with_texel([&](auto texel) {
+            return raycache::next_gpu_face_sizes<decltype(texel)>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room);
+        });
         if (next.changed) {
             for (std::size_t k = 0; k < next.face_sizes.size(); ++k) resized += next.face_sizes[k] != t.layout.cubes[k].face_size;
             t.place_cubes(next.face_sizes);

@@ -73,8 +73,8 @@ void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
 /* raycache_count_lookup for a ray going in `direction`, also marking its direction cell, from which the host
  * chooses adaptive face sizes (raycache/gpu_adaptive.hpp). The CCT's lookup and the CDCT's searches call it. */
 void raycache_count_lookup_toward(raycache_gpu_cube cube, vec3 direction, bool hit) {
+    raycache_count_lookup(cube, hit);
 #ifndef RAYCACHE_READ_ONLY
-    raycache_frame_count(cube.index, hit ? RAYCACHE_FRAME_HITS : RAYCACHE_FRAME_MISSES);
     raycache_frame_mark_direction(cube.index, direction);
 #endif
 }

@@ -120,15 +120,6 @@ private:
     std::atomic<std::uint64_t> words_[cell_count / 64] = {};
 };
 
-// The share of the 1536 cells set in a cube's coverage bits as the GPU's frame buffer holds them
-// (RAYCACHE_COVERAGE_WORDS 32-bit words: shared/coverage.h), 0..1.
-inline double coverage_fraction(const std::uint32_t* words) noexcept {
-    int marked = 0;
-    for (std::uint32_t i = 0; i < RAYCACHE_COVERAGE_WORDS; ++i)
-        for (std::uint32_t bits = words[i]; bits; bits &= bits - 1) ++marked;
-    return static_cast<double>(marked) / RAYCACHE_COVERAGE_CELLS;
-}
-
 // The ideal face size (not yet on the ladder) for `rays` leaving rays of one frame spread over
 // `covered_fraction` (0..1) of all directions: sqrt(rays / (rays_per_texel * 6 * covered_fraction)).
 // 0 when no ray came (nothing to go by).

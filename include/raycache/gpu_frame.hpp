@@ -26,7 +26,6 @@
 #include <string>
 #include <vector>
 
-#include "raycache/adaptive_resolution.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/statistics.hpp"
 #include "raycache/shared/gpu_layout.h"
@@ -128,6 +127,15 @@ struct GpuFrameStatistics {
     std::uint64_t overflow = 0; // texels stored that found the list full: sweep the buffers before the next frame
 };
 
+// The share of the 1536 direction cells set in a cube's coverage bits in the frame buffer
+// (RAYCACHE_COVERAGE_WORDS words from raycache_frame_coverage_word(cube, 0): shared/coverage.h), 0..1.
+inline double gpu_coverage_fraction(const std::uint32_t* words) noexcept {
+    int marked = 0;
+    for (std::uint32_t i = 0; i < RAYCACHE_COVERAGE_WORDS; ++i)
+        for (std::uint32_t bits = words[i]; bits; bits &= bits - 1) ++marked;
+    return static_cast<double>(marked) / RAYCACHE_COVERAGE_CELLS;
+}
+
 // Reads the counters and the list's state from the frame buffer's first start_bytes (`words`, read back
 // after the frame). valid_texels and texel_count are left 0 (the GPU does not count them).
 inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const GpuFrameLayout& f) {
@@ -135,7 +143,7 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
     s.cubes.resize(f.cube_count);
     s.coverage.resize(f.cube_count);
     for (std::uint32_t k = 0; k < f.cube_count; ++k) {
-        s.coverage[k] = coverage_fraction(words + shared::raycache_frame_coverage_word(k, 0));
+        s.coverage[k] = gpu_coverage_fraction(words + shared::raycache_frame_coverage_word(k, 0));
         CubeStatistics& c = s.cubes[k];
         c.hits = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)];
         c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)];
