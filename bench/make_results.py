@@ -248,6 +248,10 @@ def main():
     if os.path.exists(lent):  # written by hand from runs on a machine lent for one session
         with open(lent) as f:
             md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/xeon16_h100/`]({rel}/xeon16_h100/).", ""]
+    gpu_adaptive = os.path.join(results, "vulkan_adaptive", "README.md")
+    if os.path.exists(gpu_adaptive):  # written by hand from raycache_vulkan_whitted runs kept beside it
+        with open(gpu_adaptive) as f:
+            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_adaptive/`]({rel}/vulkan_adaptive/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
