@@ -36,13 +36,16 @@ TEST_CASE("the frame buffer holds a header, four counters and the cell bits a cu
     CHECK_THROWS_AS(gpu_frame_layout(3, 16776961u), std::invalid_argument);
 }
 
-TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1} and zero the counters") {
+TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1}, the coverage flag, and zero the counters") {
     const GpuFrameLayout f = gpu_frame_layout(2, 10);
     const std::vector<std::uint32_t> w = gpu_frame_start_words(f);
     REQUIRE(w.size() == 8u + 2u * 52u);
-    const std::vector<std::uint32_t> header = {0, 10, 2, 0, 0, 1, 1, 0};
+    const std::vector<std::uint32_t> header = {0, 10, 2, 0, 0, 1, 1, 1}; // the last: lookups mark their cells
     CHECK(std::vector<std::uint32_t>(w.begin(), w.begin() + 8) == header);
     for (std::size_t i = 8; i < w.size(); ++i) CHECK(w[i] == 0u); // counters and cell bits
+    const std::vector<std::uint32_t> fixed = gpu_frame_start_words(f, false); // fixed face sizes: no marking
+    CHECK(std::vector<std::uint32_t>(fixed.begin(), fixed.begin() + 8) == std::vector<std::uint32_t>{0, 10, 2, 0, 0, 1, 1, 0});
+    CHECK(std::vector<std::uint32_t>(fixed.begin() + 8, fixed.end()) == std::vector<std::uint32_t>(w.begin() + 8, w.end()));
     CHECK(gpu_end_frame_dispatch_offset == 16u);
     CHECK(gpu_bindings.cct_texels == 0u);
     CHECK(gpu_bindings.cdct_pending == 3u);

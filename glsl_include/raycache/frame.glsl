@@ -27,9 +27,10 @@ void raycache_frame_count(uint index, uint which) {
 }
 
 /* Sets the coverage bit of the direction cell `direction` falls in (raycache/shared/coverage.h) for the
- * cube numbered `index`: what the host's adaptive face sizes go by. Reads first, so a cell already marked
- * costs no atomic. */
+ * cube numbered `index`: what the host's adaptive face sizes go by. Only while the frame's flags hold
+ * RAYCACHE_FRAME_MARK_COVERAGE. Reads first, so a cell already marked costs no atomic. */
 void raycache_frame_mark_direction(uint index, vec3 direction) {
+    if ((raycache_frame[RAYCACHE_FRAME_FLAGS] & RAYCACHE_FRAME_MARK_COVERAGE) == 0u) return;
     if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return;
     uint cell = raycache_coverage_cell(direction);
     if (cell == RAYCACHE_NO_COVERAGE_CELL) return;

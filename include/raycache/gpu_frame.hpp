@@ -87,13 +87,16 @@ inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint
 }
 
 // The frame buffer's first start_bytes before a frame: header (list empty, capacity, cube count, dispatch
-// {0, 1, 1}) and zeroed counters. Upload them before every frame.
-inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f) {
+// {0, 1, 1}, flags) and zeroed counters. Upload them before every frame. mark_coverage: lookups mark their
+// direction cells, which next_gpu_face_sizes needs (raycache/gpu_adaptive.hpp); false for fixed face sizes,
+// whose lookups then skip that work (GpuFrameStatistics::coverage reads 0).
+inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true) {
     std::vector<std::uint32_t> words(static_cast<std::size_t>(f.start_bytes / 4), 0u);
     words[RAYCACHE_FRAME_LIST_CAPACITY] = f.list_capacity;
     words[RAYCACHE_FRAME_CUBE_COUNT] = f.cube_count;
     words[RAYCACHE_FRAME_DISPATCH + 1] = 1u;
     words[RAYCACHE_FRAME_DISPATCH + 2] = 1u;
+    words[RAYCACHE_FRAME_FLAGS] = mark_coverage ? RAYCACHE_FRAME_MARK_COVERAGE : 0u;
     return words;
 }
 

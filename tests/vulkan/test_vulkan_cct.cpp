@@ -162,6 +162,21 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
         cells_marked += static_cast<std::size_t>(cpu.fraction() * RAYCACHE_COVERAGE_CELLS);
     }
     CHECK(cells_marked > 4 * RAYCACHE_COVERAGE_CELLS / 2); // the directions spread over most cells of every cube
+
+    // Started without RAYCACHE_FRAME_MARK_COVERAGE (fixed face sizes), the same lookups mark no cell and
+    // count as before.
+    frame.start(false);
+    vk->dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
+    const raycache::GpuFrameStatistics unmarked = frame.statistics();
+    std::size_t words_set = 0;
+    for (std::size_t k = 0; k < s.cubes.size(); ++k) {
+        const std::uint32_t* gpu_bits = frame_words + gpu::raycache_frame_coverage_word(static_cast<std::uint32_t>(k), 0);
+        for (std::uint32_t w = 0; w < RAYCACHE_COVERAGE_WORDS; ++w) words_set += gpu_bits[w] != 0u;
+        CHECK(unmarked.coverage[k] == 0.0);
+        CHECK(unmarked.cubes[k].lookups == gpu_stats.cubes[k].lookups);
+        CHECK(unmarked.cubes[k].hits == gpu_stats.cubes[k].hits);
+    }
+    CHECK(words_set == 0u);
 }
 
 TEST_CASE("CCT stores made in GLSL are invisible that frame, the smallest word wins, and C++ reads the result") {

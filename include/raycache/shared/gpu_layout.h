@@ -23,7 +23,8 @@
  *   word (C++'s stores plus its same-frame losers), `refused` = stores refused before it (not a direction,
  *   a value that cannot be stored, a texel already visible or outside the buffers); then the cube's
  *   coverage bits (RAYCACHE_COVERAGE_WORDS words: which of 1536 direction cells its lookups took,
- *   raycache/shared/coverage.h), which the host reads to choose adaptive face sizes.
+ *   raycache/shared/coverage.h), which the host reads to choose adaptive face sizes, marked only while the
+ *   header's flags hold RAYCACHE_FRAME_MARK_COVERAGE (a renderer with fixed face sizes leaves it off).
  *
  * Confidence test (optional: shaders that define RAYCACHE_CONFIDENCE; the rule is raycache/shared/edge_rule.h,
  * as in C++'s raycache::mark_doubtful_edges). Each technique has a doubtful-bit buffer (binding
@@ -99,7 +100,11 @@ namespace shared {
 #define RAYCACHE_FRAME_CUBE_COUNT 2u    /* cubes with counters (written by the host) */
 #define RAYCACHE_FRAME_OVERFLOW 3u      /* texels stored that found the list full: sweep the buffers this frame */
 #define RAYCACHE_FRAME_DISPATCH 4u      /* 3 words: groups of the end-of-frame pass, 1, 1 (vkCmdDispatchIndirect) */
+#define RAYCACHE_FRAME_FLAGS 7u         /* RAYCACHE_FRAME_MARK_COVERAGE or 0 (written by the host) */
 #define RAYCACHE_FRAME_HEADER_WORDS 8u
+/* Frame flag: lookups mark their direction cells (adaptive face sizes read them); without it they skip
+ * the face choice and the frame-buffer read that marking costs. */
+#define RAYCACHE_FRAME_MARK_COVERAGE 1u
 /* Counters of one cube, after the header. */
 #define RAYCACHE_FRAME_HITS 0u
 #define RAYCACHE_FRAME_MISSES 1u
