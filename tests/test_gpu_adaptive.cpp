@@ -113,6 +113,13 @@ TEST_CASE("GPU cubes take the face size their rays call for: at once the first t
     std::vector<bool> wrong(3, false);
     CHECK_THROWS_AS(next_gpu_face_sizes<CctTexel>(a, layout, frame_with(2, 0, 1, 1), wrong, ~std::uint64_t{0}), std::invalid_argument);
     CHECK_THROWS_AS(next_gpu_face_sizes<CctTexel>(a, layout, frame_with(1, 0, 1, 1), sized, ~std::uint64_t{0}), std::invalid_argument);
+    // A frame started without marking cells (fixed face sizes) cannot size cubes: an error, not a cube that
+    // never adapts. Its statistics say so, read from the start words' flags.
+    const GpuFrameLayout frame2 = gpu_frame_layout(2, 10);
+    CHECK(read_gpu_statistics(gpu_frame_start_words(frame2).data(), frame2).coverage_marked);
+    const GpuFrameStatistics unmarked = read_gpu_statistics(gpu_frame_start_words(frame2, false).data(), frame2);
+    CHECK_FALSE(unmarked.coverage_marked);
+    CHECK_THROWS_AS(next_gpu_face_sizes<CctTexel>(a, layout, unmarked, sized, ~std::uint64_t{0}), std::invalid_argument);
 }
 
 TEST_CASE("moving GPU cubes copies a kept size, resamples a smaller one and tests its edges, and empties a larger one") {

@@ -70,8 +70,9 @@ void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
 #endif
 }
 
-/* raycache_count_lookup for a ray going in `direction`, also marking its direction cell, from which the host
- * chooses adaptive face sizes (raycache/gpu_adaptive.hpp). The CCT's lookup and the CDCT's searches call it. */
+/* raycache_count_lookup for a ray going in `direction`, also marking its direction cell (when the frame's
+ * flags ask for it), from which the host chooses adaptive face sizes (raycache/gpu_adaptive.hpp). The CCT's
+ * lookup and the CDCT's searches call it. */
 void raycache_count_lookup_toward(raycache_gpu_cube cube, vec3 direction, bool hit) {
     raycache_count_lookup(cube, hit);
 #ifndef RAYCACHE_READ_ONLY

@@ -60,6 +60,9 @@ template <class Texel>
 GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBufferLayout& layout,
                                  const GpuFrameStatistics& frame, std::vector<bool>& sized, std::uint64_t max_buffer_bytes) {
     validate(adaptive);
+    if (!frame.coverage_marked)
+        throw std::invalid_argument("RayCache: next_gpu_face_sizes needs the frame's direction cells: start the frame with "
+                                    "gpu_frame_start_words(layout, true)");
     if (sized.size() != layout.cubes.size())
         throw std::invalid_argument("RayCache: next_gpu_face_sizes needs one `sized` flag per cube (" +
                                     std::to_string(layout.cubes.size()) + "), got " + std::to_string(sized.size()));

@@ -128,6 +128,7 @@ struct GpuFrameStatistics {
     CubeStatistics total;
     std::uint64_t listed = 0;   // texels the end-of-frame pass publishes
     std::uint64_t overflow = 0; // texels stored that found the list full: sweep the buffers before the next frame
+    bool coverage_marked = true; // the frame was started with mark_coverage (else `coverage` reads 0 and says nothing)
 };
 
 // The share of the 1536 direction cells set in a cube's coverage bits in the frame buffer
@@ -158,6 +159,7 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
     }
     s.listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);
     s.overflow = words[RAYCACHE_FRAME_OVERFLOW];
+    s.coverage_marked = (words[RAYCACHE_FRAME_FLAGS] & RAYCACHE_FRAME_MARK_COVERAGE) != 0u;
     return s;
 }
 

@@ -15,7 +15,7 @@
  *
  * Frame buffer (binding RAYCACHE_FRAME_BINDING, uint words), shared by both techniques:
  *   header (RAYCACHE_FRAME_HEADER_WORDS): list count, list capacity, cube count, overflow, the end-of-frame
- *   pass's VkDispatchIndirectCommand; then RAYCACHE_FRAME_CUBE_WORDS words per cube (counters, coverage) (indexed by the
+ *   pass's VkDispatchIndirectCommand, flags; then RAYCACHE_FRAME_CUBE_WORDS words per cube (counters, coverage) (indexed by the
  *   descriptor's `index`); then the store list (list capacity entries: a texel element, with
  *   RAYCACHE_FRAME_CDCT_ENTRY set for a CDCT texel). The host writes the header and zeroes the counters
  *   before every frame (raycache/gpu_frame.hpp: gpu_frame_start_words). Counters are order-independent:
@@ -102,8 +102,8 @@ namespace shared {
 #define RAYCACHE_FRAME_DISPATCH 4u      /* 3 words: groups of the end-of-frame pass, 1, 1 (vkCmdDispatchIndirect) */
 #define RAYCACHE_FRAME_FLAGS 7u         /* RAYCACHE_FRAME_MARK_COVERAGE or 0 (written by the host) */
 #define RAYCACHE_FRAME_HEADER_WORDS 8u
-/* Frame flag: lookups mark their direction cells (adaptive face sizes read them); without it they skip
- * the face choice and the frame-buffer read that marking costs. */
+/* Frame flag: lookups mark their direction cells (adaptive face sizes read them); without it they read
+ * only the flags word, skipping the face choice, the coverage word and its atomic. */
 #define RAYCACHE_FRAME_MARK_COVERAGE 1u
 /* Counters of one cube, after the header. */
 #define RAYCACHE_FRAME_HITS 0u
