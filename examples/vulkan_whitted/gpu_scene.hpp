@@ -39,7 +39,7 @@ struct GpuParams {
     float environment[4];     // w: aspect
     std::int32_t frame[4];    // width, height, mode, max depth
     float relief[4];          // step, epsilon, max depth, max gap
-    std::int32_t relief_i[4]; // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads
+    std::int32_t relief_i[4]; // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, pixel stride (warm-up)
 };
 
 inline void set4(float* out, glm::vec3 v, float w) {

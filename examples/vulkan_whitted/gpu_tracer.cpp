@@ -71,6 +71,18 @@ struct Tracer::Impl {
         return cdct ? f(raycache::CdctTexel{}) : f(raycache::CctTexel{});
     }
 
+    // The buffers RayCache's bindings get now (the technique's own, stand-ins for the other's); place_cubes
+    // replaces them, so take them again after it.
+    struct CacheBuffers {
+        const vk::Buffer *cct_texels, *cct_pending, *cdct_texels, *cdct_pending, *cct_doubtful, *cdct_doubtful, *cct_table, *cdct_table;
+    };
+    CacheBuffers cache_buffers() const {
+        auto own = [&](bool mine, const std::unique_ptr<vk::Buffer>& b, const vk::Buffer& other) { return mine && b ? b.get() : &other; };
+        return {own(!cdct, texels, *dummy),   own(!cdct, pending, *dummy),  own(cdct, texels, *dummy),
+                own(cdct, pending, *dummy),   own(!cdct, doubtful, *zeros), own(cdct, doubtful, *zeros),
+                own(!cdct, cube_table, *zeros), own(cdct, cube_table, *zeros)};
+    }
+
     // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
     // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes)
     // and the frame buffer sized for the new texel count.
@@ -96,7 +108,8 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
     const std::uint32_t cached = static_cast<std::uint32_t>(shapes.size());
     raycache::GpuFrameLayout new_frame_layout =
         raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, next.texels, max_buffer), max_buffer);
-    std::vector<std::uint32_t> new_frame_start = raycache::gpu_frame_start_words(new_frame_layout);
+    // Lookups mark their direction cells only for adaptive sizes (fixed ones never read them).
+    std::vector<std::uint32_t> new_frame_start = raycache::gpu_frame_start_words(new_frame_layout, settings.adaptive);
     auto new_frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(new_frame_layout.bytes, 16));
     std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table;
     if (next.texels > 0) {
@@ -257,9 +270,10 @@ std::size_t Tracer::cube_bytes() const noexcept {
     return impl_->texels ? static_cast<std::size_t>(2 * impl_->texels->size()) : 0;
 }
 
-Image Tracer::render(const Camera& camera, int width, int height, FrameStats* stats) {
+Image Tracer::render(const Camera& camera, int width, int height, FrameStats* stats, int warm_up_stride) {
     if (width < 1 || height < 1)
         throw std::invalid_argument("Vulkan tracer: image size must be at least 1x1");
+    if (warm_up_stride < 0) throw std::invalid_argument("Vulkan tracer: the warm-up stride must be 0 or more");
     Impl& t = *impl_;
     const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     if (!t.output || t.output->size() < pixels * 16) t.output = std::make_unique<vk::Buffer>(t.context, pixels * 16);
@@ -282,20 +296,105 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.relief_i[0] = t.settings.max_steps;
     p.relief_i[1] = t.settings.secant ? RAYCACHE_DEPTH_SEARCH_SECANT : RAYCACHE_DEPTH_SEARCH_RELIEF;
     p.relief_i[2] = t.settings.max_reads;
+    p.relief_i[3] = 1; // every pixel
     t.params->upload(&p, sizeof p);
     t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); // RayCache's frame buffer, started
 
-    const vk::Buffer& cct_texels = (!t.cdct && t.texels) ? *t.texels : *t.dummy;
-    const vk::Buffer& cct_pending = (!t.cdct && t.pending) ? *t.pending : *t.dummy;
-    const vk::Buffer& cdct_texels = (t.cdct && t.texels) ? *t.texels : *t.dummy;
-    const vk::Buffer& cdct_pending = (t.cdct && t.pending) ? *t.pending : *t.dummy;
-    const vk::Buffer& cct_doubtful = (!t.cdct && t.doubtful) ? *t.doubtful : *t.zeros;
-    const vk::Buffer& cdct_doubtful = (t.cdct && t.doubtful) ? *t.doubtful : *t.zeros;
-    const vk::Buffer& cct_table = (!t.cdct && t.cube_table) ? *t.cube_table : *t.zeros;
-    const vk::Buffer& cdct_table = (t.cdct && t.cube_table) ? *t.cube_table : *t.zeros;
+    const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
+
+    // The tracing dispatch over the pixels whose x and y are multiples of `stride` (1: all), after the raster
+    // pass when `raster` (hybrid: it fills the G-buffer the dispatch reads).
+    auto trace_pass = [&](int stride, bool raster) {
+        const std::uint64_t columns = (static_cast<std::uint64_t>(width) + stride - 1) / stride;
+        const std::uint64_t rows = (static_cast<std::uint64_t>(height) + stride - 1) / stride;
+        const Impl::CacheBuffers c = t.cache_buffers();
+        t.context.submit([&](vk::Commands& commands) {
+            if (raster) {
+                t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
+                commands.barrier(); // the copy's writes, visible to the tracing shader
+            }
+            commands.dispatch(*t.whitted,
+                              {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame, *t.nodes, *t.primitives,
+                               *t.objects, *t.params, *t.output, *t.cubes, gbuffer, *c.cct_doubtful, *c.cdct_doubtful},
+                              nullptr, 0, vk::group_count(columns, 8), vk::group_count(rows, 8));
+        });
+    };
+    // RayCache's end-of-frame pass over the texels stored since the frame buffer was started, dispatched from
+    // the frame buffer's own group count (the tracing submission has completed, so its writes are visible to
+    // this one); then, after a barrier (it reads the texels just published), the confidence test's mark pass
+    // over the same list.
+    auto end_of_frame = [&]() {
+        if (t.end_frame && t.texel_count > 0) {
+            struct Pass {
+                std::uint32_t mark;
+                float threshold;
+            };
+            const Impl::CacheBuffers c = t.cache_buffers();
+            t.context.submit([&](vk::Commands& commands) {
+                auto pass = [&](std::uint32_t mark) {
+                    const Pass push{mark, t.settings.edge_threshold};
+                    commands.dispatch_indirect(*t.end_frame,
+                                               {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame,
+                                                *c.cct_doubtful, *c.cdct_doubtful, *c.cct_table, *c.cdct_table},
+                                               &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
+                };
+                pass(0u);
+                if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
+                    commands.barrier();
+                    pass(1u);
+                }
+            });
+        }
+    };
+    // The frame buffer's counters and list, read back after the end of frame.
+    auto frame_statistics = [&]() {
+        const raycache::GpuFrameStatistics frame_stats = raycache::read_gpu_statistics(t.frame->as<std::uint32_t>(), t.frame_layout);
+        // The list holds every texel, or 16,776,960 of them for larger cubes: more stores in one frame would need
+        // the library's sweep, which this tracer does not run.
+        if (frame_stats.overflow > 0)
+            throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
+                                     std::to_string(t.frame_layout.list_capacity) + ")");
+        return frame_stats;
+    };
+    // Adaptive cubes: each takes the size the rays just ended call for; cubes that change size are moved into
+    // new buffers (raycache/gpu_adaptive.hpp), counted in `resized`, timed in `resize_ms`.
+    double resize_ms = 0.0;
+    std::size_t resized = 0;
+    auto resize = [&](const raycache::GpuFrameStatistics& frame_stats) {
+        if (!t.settings.adaptive || t.shapes.empty()) return;
+        const auto resize_start = std::chrono::steady_clock::now();
+        const raycache::GpuFaceSizes next = t.with_texel([&](auto texel) {
+            return raycache::next_gpu_face_sizes<decltype(texel)>(t.settings.adaptive_resolution, t.layout, frame_stats, t.sized, t.cube_room);
+        });
+        if (next.changed) {
+            for (std::size_t k = 0; k < next.face_sizes.size(); ++k) resized += next.face_sizes[k] != t.layout.cubes[k].face_size;
+            t.place_cubes(next.face_sizes);
+        }
+        resize_ms += ms_since(resize_start);
+    };
+
+    // A warm-up pass (caches only): traced and ended like a frame of its own (adaptive cubes resized to its
+    // rays, as the Embree adapter's begin_frame() does), then the frame buffer is started again, so the full
+    // pass reads what the warm-up stored, and its counters and cells are the full pass's alone.
+    double warm_up_ms = 0.0;
+    std::uint64_t warm_up_stored = 0;
+    const bool warm_up = warm_up_stride > 1 && t.end_frame && t.texel_count > 0;
+    if (warm_up) {
+        const auto warm_up_start = std::chrono::steady_clock::now();
+        p.relief_i[3] = warm_up_stride;
+        t.params->upload(&p, sizeof p);
+        trace_pass(warm_up_stride, t.raster != nullptr);
+        end_of_frame();
+        const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
+        warm_up_stored = warm_up_stats.listed;
+        warm_up_ms = ms_since(warm_up_start);
+        resize(warm_up_stats);
+        p.relief_i[3] = 1;
+        t.params->upload(&p, sizeof p);
+        t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4);
+    }
 
     auto start = std::chrono::steady_clock::now();
-    const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
     if (t.rsh) {
         if (t.raster)
             t.context.submit([&](vk::Commands& commands) {
@@ -308,72 +407,23 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         b.bvh_nodes = t.bvh_prims ? t.nodes.get() : nullptr;
         b.bvh_prims = t.bvh_prims.get();
         t.rsh->render(width, height, t.scene.max_depth, b, *t.output, stats ? &stats->rsh : nullptr);
-    } else t.context.submit([&](vk::Commands& commands) {
-        if (t.raster) {
-            t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
-            commands.barrier(); // the copy's writes, visible to the tracing shader
-        }
-        commands.dispatch(*t.whitted,
-                          {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame, *t.nodes, *t.primitives, *t.objects,
-                           *t.params, *t.output, *t.cubes, gbuffer, cct_doubtful, cdct_doubtful},
-                          nullptr, 0, vk::group_count(static_cast<std::uint64_t>(width), 8),
-                          vk::group_count(static_cast<std::uint64_t>(height), 8));
-    });
+    } else {
+        trace_pass(1, t.raster && !warm_up); // after a warm-up the G-buffer already holds this camera's primary hits
+    }
     const double ms = ms_since(start);
 
-    // RayCache's end-of-frame pass over the texels stored this frame, dispatched from the frame buffer's own
-    // group count (the frame's submission has completed, so its writes are visible to this one); then, after a
-    // barrier (it reads the texels just published), the confidence test's mark pass over the same list.
-    double end_ms = 0.0;
-    if (t.end_frame && t.texel_count > 0) {
-        start = std::chrono::steady_clock::now();
-        struct Pass {
-            std::uint32_t mark;
-            float threshold;
-        };
-        t.context.submit([&](vk::Commands& commands) {
-            auto pass = [&](std::uint32_t mark) {
-                const Pass push{mark, t.settings.edge_threshold};
-                commands.dispatch_indirect(*t.end_frame,
-                                           {cct_texels, cct_pending, cdct_texels, cdct_pending, *t.frame, cct_doubtful,
-                                            cdct_doubtful, cct_table, cdct_table},
-                                           &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
-            };
-            pass(0u);
-            if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
-                commands.barrier();
-                pass(1u);
-            }
-        });
-        end_ms = ms_since(start);
-    }
-    const raycache::GpuFrameStatistics gpu_stats = raycache::read_gpu_statistics(t.frame->as<std::uint32_t>(), t.frame_layout);
-    // The list holds every texel, or 16,776,960 of them for larger cubes: more stores in one frame would need
-    // the library's sweep, which this tracer does not run.
-    if (gpu_stats.overflow > 0)
-        throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
-                                 std::to_string(t.frame_layout.list_capacity) + ")");
-
-    // Adaptive cubes: each takes the size its rays of this frame call for; cubes that change size are moved
-    // into new buffers now, between frames (raycache/gpu_adaptive.hpp).
-    double resize_ms = 0.0;
-    std::size_t resized = 0;
-    if (t.settings.adaptive && !t.shapes.empty()) {
-        start = std::chrono::steady_clock::now();
-        const raycache::GpuFaceSizes next = t.with_texel([&](auto texel) {
-            return raycache::next_gpu_face_sizes<decltype(texel)>(t.settings.adaptive_resolution, t.layout, gpu_stats, t.sized, t.cube_room);
-        });
-        if (next.changed) {
-            for (std::size_t k = 0; k < next.face_sizes.size(); ++k) resized += next.face_sizes[k] != t.layout.cubes[k].face_size;
-            t.place_cubes(next.face_sizes);
-        }
-        resize_ms = ms_since(start);
-    }
+    start = std::chrono::steady_clock::now();
+    end_of_frame();
+    const double end_ms = t.end_frame && t.texel_count > 0 ? ms_since(start) : 0.0;
+    const raycache::GpuFrameStatistics gpu_stats = frame_statistics();
+    resize(gpu_stats);
 
     Image image(width, height);
     const float* out = t.output->as<float>();
     for (std::size_t i = 0; i < pixels; ++i) image.pixels[i] = glm::vec3(out[4 * i], out[4 * i + 1], out[4 * i + 2]);
     if (stats) {
+        stats->warm_up_milliseconds = warm_up_ms;
+        stats->warm_up_stored_texels = warm_up_stored;
         stats->milliseconds = ms;
         stats->end_frame_milliseconds = end_ms;
         stats->stored_texels = gpu_stats.listed;

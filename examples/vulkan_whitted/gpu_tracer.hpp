@@ -49,14 +49,17 @@ struct TracerSettings {
 };
 
 struct FrameStats {
-    double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for
+    double warm_up_milliseconds = 0.0;   // a warm-up pass (render's warm_up_stride): its dispatch and end-of-frame passes
+    std::uint64_t warm_up_stored_texels = 0; // ... the texels it stored, which the full pass can read
+    double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for (hybrid: with the raster
+                                         // pass, which a warm-up records in its own submission instead)
     double end_frame_milliseconds = 0.0; // RayCache's end-of-frame passes (cct, cdct: publish, then mark), over
                                          // the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
     double resize_milliseconds = 0.0;    // adaptive: choosing the next face sizes and moving the cubes that changed
-    std::size_t resized_cubes = 0;       // ... how many changed size after this frame
+    std::size_t resized_cubes = 0;       // ... how many changed size after this frame (and after its warm-up)
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
                                          // --hybrid, for the primary rays) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces
@@ -85,7 +88,12 @@ public:
     // Renders one frame, then (cct, cdct) runs the end-frame pass so this frame's stores become visible, and
     // the mark pass (RayCache's confidence test, unless edge_threshold < 0): texels whose colour differs from
     // a neighbour's by more than edge_threshold read as empty from the next frame on, so their rays are traced.
-    Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr);
+    // warm_up_stride > 1 (cct, cdct): first a warm-up pass over the pixels whose x and y are multiples of it,
+    // ended as a frame is (its stores published and tested), so the full pass reads what it stored: a single
+    // image reuses its own rays, as the Embree tracer's RenderSettings::warm_up_stride. Adaptive cubes are
+    // resized to the warm-up's rays before the full pass (as the Embree adapter's begin_frame() does after it),
+    // so the full pass's rays share their texels, and again after the full pass, to its rays.
+    Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr, int warm_up_stride = 0);
 
     std::size_t bvh_nodes() const noexcept;
     int face_size() const noexcept;          // of the cubes (adaptive: the largest now), after fitting them into one buffer

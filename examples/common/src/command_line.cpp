@@ -157,7 +157,7 @@ CommandLine::CommandLine(const std::string& program)
     add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"
-               "traced, not answered (CCT and CDCT); negative: off (Embree tracer) " + shown_default(d.edge_threshold),
+               "traced, not answered (CCT and CDCT); negative: off " + shown_default(d.edge_threshold),
                number("--edge-threshold", o.edge_threshold, false));
     add_option("--origin-drift", "F",
                "CCT: a tile met by a ray leaving further than F x the cube's\n"
@@ -209,7 +209,7 @@ CommandLine::CommandLine(const std::string& program)
                file("--save-cache", o.save_cache, "file"));
     add_option("--warm-up", "S",
                "first frame: a pass over every S-th pixel in x and y first, whose\n"
-               "stores the full pass reads (for single images; Embree tracer);\n"
+               "stores the full pass reads (for single images);\n"
                "0: off " + shown_default(std::to_string(d.warm_up)),
                integer("--warm-up", o.warm_up, 0, 64));
 

@@ -40,7 +40,8 @@ layout(std430, binding = 8) readonly buffer Params {
     vec4 environment;     // w: aspect
     ivec4 frame;          // width, height, mode, max depth
     vec4 relief;          // step, epsilon, max depth, max gap
-    ivec4 relief_i;       // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, -
+    ivec4 relief_i;       // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, pixel stride (whitted.comp:
+                          // a warm-up pass traces pixels whose x and y are multiples of it; 0 or 1: every pixel)
 };
 
 // ---- intersection ------------------------------------------------------------------------------------

@@ -158,7 +158,8 @@ vec3 trace_primary(vec3 o0, vec3 d0, uint pixel) {
 
 void main() {
     int width = frame.x, height = frame.y;
-    int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+    int stride = max(relief_i.w, 1); // a warm-up pass: one invocation per stride-th pixel in x and y
+    int x = int(gl_GlobalInvocationID.x) * stride, y = int(gl_GlobalInvocationID.y) * stride;
     if (x >= width || y >= height) return;
     vec3 d = primary_direction(x, y);
     vec3 color = trace_primary(eye.xyz, d, uint(y * width + x));
