@@ -252,6 +252,10 @@ def main():
     if os.path.exists(gpu_adaptive):  # written by hand from raycache_vulkan_whitted runs kept beside it
         with open(gpu_adaptive) as f:
             md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_adaptive/`]({rel}/vulkan_adaptive/).", ""]
+    gpu_single = os.path.join(results, "vulkan_single_image", "README.md")
+    if os.path.exists(gpu_single):  # written by hand from raycache_vulkan_whitted runs kept beside it
+        with open(gpu_single) as f:
+            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_single_image/`]({rel}/vulkan_single_image/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
