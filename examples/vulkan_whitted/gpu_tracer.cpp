@@ -296,15 +296,19 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.relief_i[0] = t.settings.max_steps;
     p.relief_i[1] = t.settings.secant ? RAYCACHE_DEPTH_SEARCH_SECANT : RAYCACHE_DEPTH_SEARCH_RELIEF;
     p.relief_i[2] = t.settings.max_reads;
-    p.relief_i[3] = 1; // every pixel
+    p.relief_i[3] = 1; // every pixel (trace_pass sets its own stride)
     t.params->upload(&p, sizeof p);
-    t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); // RayCache's frame buffer, started
+    // RayCache's frame buffer, started: before the frame, and again between a warm-up and the full pass.
+    auto start_frame_buffer = [&] { t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); };
+    start_frame_buffer();
 
     const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
 
     // The tracing dispatch over the pixels whose x and y are multiples of `stride` (1: all), after the raster
     // pass when `raster` (hybrid: it fills the G-buffer the dispatch reads).
     auto trace_pass = [&](int stride, bool raster) {
+        p.relief_i[3] = stride;
+        t.params->upload(&p, sizeof p);
         const std::uint64_t columns = (static_cast<std::uint64_t>(width) + stride - 1) / stride;
         const std::uint64_t rows = (static_cast<std::uint64_t>(height) + stride - 1) / stride;
         const Impl::CacheBuffers c = t.cache_buffers();
@@ -322,9 +326,10 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     // RayCache's end-of-frame pass over the texels stored since the frame buffer was started, dispatched from
     // the frame buffer's own group count (the tracing submission has completed, so its writes are visible to
     // this one); then, after a barrier (it reads the texels just published), the confidence test's mark pass
-    // over the same list.
+    // over the same list. False when there is nothing to end (no cubes).
     auto end_of_frame = [&]() {
-        if (t.end_frame && t.texel_count > 0) {
+        const bool cubes = t.end_frame && t.texel_count > 0;
+        if (cubes) {
             struct Pass {
                 std::uint32_t mark;
                 float threshold;
@@ -345,6 +350,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
                 }
             });
         }
+        return cubes;
     };
     // The frame buffer's counters and list, read back after the end of frame.
     auto frame_statistics = [&]() {
@@ -381,17 +387,13 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     const bool warm_up = warm_up_stride > 1 && t.end_frame && t.texel_count > 0;
     if (warm_up) {
         const auto warm_up_start = std::chrono::steady_clock::now();
-        p.relief_i[3] = warm_up_stride;
-        t.params->upload(&p, sizeof p);
         trace_pass(warm_up_stride, t.raster != nullptr);
         end_of_frame();
         const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
         warm_up_stored = warm_up_stats.listed;
         warm_up_ms = ms_since(warm_up_start);
         resize(warm_up_stats);
-        p.relief_i[3] = 1;
-        t.params->upload(&p, sizeof p);
-        t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4);
+        start_frame_buffer(); // after the resize: the frame buffer it made, if any
     }
 
     auto start = std::chrono::steady_clock::now();
@@ -413,8 +415,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     const double ms = ms_since(start);
 
     start = std::chrono::steady_clock::now();
-    end_of_frame();
-    const double end_ms = t.end_frame && t.texel_count > 0 ? ms_since(start) : 0.0;
+    const double end_ms = end_of_frame() ? ms_since(start) : 0.0;
     const raycache::GpuFrameStatistics gpu_stats = frame_statistics();
     resize(gpu_stats);
 

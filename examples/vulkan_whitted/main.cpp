@@ -158,12 +158,9 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
                     static_cast<double>(scene.path.step_degrees));
         std::printf("%s; cache %s", hybrid ? "hybrid: primary hits rasterised into a G-buffer, secondary rays in compute" : "all rays in compute",
                     rcx::to_string(o.cache));
-        if (caching && settings.adaptive)
-            std::printf(", adaptive faces from %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
-                        static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
-        else if (caching)
-            std::printf(", faces %dx%d, cubes %.1f MiB", tracer->face_size(), tracer->face_size(),
-                        static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
+        if (caching)
+            std::printf(", %s %dx%d, cubes %.1f MiB", settings.adaptive ? "adaptive faces from" : "faces", tracer->face_size(),
+                        tracer->face_size(), static_cast<double>(tracer->cube_bytes()) / (1024.0 * 1024.0));
         if (o.cache == rcx::CacheMode::cdct && o.secant)
             std::printf(", secant search, epsilon %g, max reads %d", static_cast<double>(o.epsilon), o.max_reads);
         else if (o.cache == rcx::CacheMode::cdct)

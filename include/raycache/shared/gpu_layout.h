@@ -155,7 +155,7 @@ RAYCACHE_FN uint raycache_frame_counter_word(uint index, uint which) {
 
 /* Word of the frame buffer holding coverage word w (0..RAYCACHE_COVERAGE_WORDS - 1) of cube `index`. */
 RAYCACHE_FN uint raycache_frame_coverage_word(uint index, uint w) {
-    return RAYCACHE_FRAME_HEADER_WORDS + index * RAYCACHE_FRAME_CUBE_WORDS + RAYCACHE_FRAME_COVERAGE + w;
+    return raycache_frame_counter_word(index, RAYCACHE_FRAME_COVERAGE + w);
 }
 
 /* Word of the frame buffer holding store-list entry k, with cube_count cubes' counters before the list. */
