@@ -4,7 +4,9 @@
 // corners, faces and inside, through directions sampled in the region, intersected with the sphere).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <glm/glm.hpp>
@@ -315,4 +317,134 @@ TEST_CASE("rays from a ball through a box of unit directions: spheres away from 
     }
     CHECK(rejected > cases / 4);            // a real bound
     CHECK(rejected_by_box_alone > cases / 20); // and one the cone alone does not give
+}
+
+namespace {
+
+// The distance from p to the convex hull of the balls (a, ra) and (b, rb), by brute force: the hull is the
+// union of the balls a + l (b - a), radius ra + l (rb - ra), l in [0, 1] (convex combinations of the two
+// balls), so the distance is the least over l of |p - centre(l)| - radius(l); sampled at 20001 values of l
+// (from above: never less than the true least).
+float hull_distance(glm::vec3 a, float ra, glm::vec3 b, float rb, glm::vec3 p) {
+    float best = std::numeric_limits<float>::infinity();
+    for (int k = 0; k <= 20000; ++k) {
+        const float l = static_cast<float>(k) / 20000.0f;
+        best = std::min(best, glm::length(p - (a + l * (b - a))) - (ra + l * (rb - ra)));
+    }
+    return best;
+}
+
+bool hull_meets(glm::vec3 a, float ra, glm::vec3 b, float rb, glm::vec3 s, float r) {
+    return raycache::shared::raycache_ball_hull_meets_sphere(a, ra, b, rb, s, r);
+}
+
+// Whether the segment p -> q meets the sphere (s, r).
+bool segment_meets_sphere(glm::vec3 p, glm::vec3 q, glm::vec3 s, float r) {
+    const glm::vec3 d = q - p;
+    const float t = glm::dot(d, d) > 0.0f ? glm::clamp(glm::dot(s - p, d) / glm::dot(d, d), 0.0f, 1.0f) : 0.0f;
+    const glm::vec3 x = p + t * d;
+    return glm::dot(x - s, x - s) <= r * r;
+}
+
+} // namespace
+
+TEST_CASE("the hull of two balls against a sphere, on hand-derived cases: beside a capsule, beside a tapered one, behind the larger ball") {
+    // A capsule along x (radius 1 at both ends, 10 long): a sphere 2.5 from its axis at the middle meets it
+    // exactly when its radius is at least 1.5.
+    CHECK_FALSE(hull_meets({0, 0, 0}, 1.0f, {10, 0, 0}, 1.0f, {5, 2.5f, 0}, 1.4f));
+    CHECK(hull_meets({0, 0, 0}, 1.0f, {10, 0, 0}, 1.0f, {5, 2.5f, 0}, 1.6f));
+    // Radii 3 and 1, 10 apart: the outer tangent's normal is (sin, cos) = (0.2, 0.9798) in the plane of the
+    // axis, and the tangent line is 0.2 x + 0.9798 y = 3. The point (5, 4) lies 0.2 x 5 + 0.9798 x 4 - 3 =
+    // 1.919 beyond it, and projects onto the tangent between the tangent points (0.9798 x 5 - 0.2 x 4 =
+    // 4.099, within [0, 9.798]): a sphere there meets the hull when its radius reaches 1.919.
+    CHECK_FALSE(hull_meets({0, 0, 0}, 3.0f, {10, 0, 0}, 1.0f, {5, 0, 4}, 1.85f));
+    CHECK(hull_meets({0, 0, 0}, 3.0f, {10, 0, 0}, 1.0f, {5, 0, 4}, 1.99f));
+    // The same, turned: the small ball first.
+    CHECK_FALSE(hull_meets({10, 0, 0}, 1.0f, {0, 0, 0}, 3.0f, {5, -4, 0}, 1.85f));
+    CHECK(hull_meets({10, 0, 0}, 1.0f, {0, 0, 0}, 3.0f, {5, -4, 0}, 1.99f));
+    // Behind the larger ball, on the axis: 5 from its centre, so 2 from the hull.
+    CHECK_FALSE(hull_meets({0, 0, 0}, 3.0f, {10, 0, 0}, 1.0f, {-5, 0, 0}, 1.9f));
+    CHECK(hull_meets({0, 0, 0}, 3.0f, {10, 0, 0}, 1.0f, {-5, 0, 0}, 2.1f));
+    // One ball inside the other: the hull is the larger one.
+    CHECK_FALSE(hull_meets({0, 0, 0}, 5.0f, {1, 0, 0}, 1.0f, {0, 8, 0}, 2.9f));
+    CHECK(hull_meets({0, 0, 0}, 5.0f, {1, 0, 0}, 1.0f, {0, 8, 0}, 3.1f));
+    // Two equal balls at one place.
+    CHECK(hull_meets({2, 2, 2}, 1.0f, {2, 2, 2}, 1.0f, {2, 4.9f, 2}, 2.0f));
+    CHECK_FALSE(hull_meets({2, 2, 2}, 1.0f, {2, 2, 2}, 1.0f, {2, 5.1f, 2}, 2.0f));
+}
+
+TEST_CASE("the hull of two balls against a sphere: never misses a segment between the balls that meets it, and agrees with the brute-force distance") {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    auto ball_point = [&](glm::vec3 c, float r) {
+        for (;;) {
+            const glm::vec3 q(u(rng), u(rng), u(rng));
+            if (glm::dot(q, q) <= 1.0f) return c + r * q;
+        }
+    };
+    int met = 0, rejected = 0, segments_met = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        const glm::vec3 a(2.0f * u(rng), 2.0f * u(rng), 2.0f * u(rng));
+        const float ra = 0.2f + 1.5f * (u(rng) + 1.0f);
+        const glm::vec3 b = a + (trial % 3 == 0 ? 1.0f : 12.0f) * glm::vec3(u(rng), u(rng), u(rng));
+        const float rb = 0.05f + (trial % 2 ? 0.3f : 2.0f) * (u(rng) + 1.0f);
+        const glm::vec3 s = 0.5f * (a + b) + 5.0f * glm::vec3(u(rng), u(rng), u(rng));
+        const float r = 0.1f + 1.5f * (u(rng) + 1.0f);
+        const bool said = hull_meets(a, ra, b, rb, s, r);
+        // Against the brute-force distance: a sphere reaching the hull is met; one clearly short of it is not.
+        const float d = hull_distance(a, ra, b, rb, s);
+        const float tolerance = 1e-3f * (1.0f + glm::length(b - a) + ra + rb + r);
+        if (d <= r) REQUIRE(said);
+        if (d > r + tolerance) REQUIRE_FALSE(said);
+        met += said;
+        rejected += !said;
+        // Segments between the balls' points (inside and on their surfaces): one that meets the sphere is seen.
+        for (int k = 0; k < 300; ++k) {
+            glm::vec3 p = ball_point(a, ra), q = ball_point(b, rb);
+            if (k % 3 == 0) p = a + ra * glm::normalize(p - a + glm::vec3(1e-6f));
+            if (k % 5 == 0) q = b + rb * glm::normalize(q - b + glm::vec3(1e-6f));
+            if (segment_meets_sphere(p, q, s, r)) {
+                ++segments_met;
+                REQUIRE(said);
+            }
+        }
+    }
+    MESSAGE(met << " configurations met, " << rejected << " rejected; " << segments_met << " sampled segments met a sphere");
+    CHECK(met > 100);
+    CHECK(rejected > 100);
+}
+
+TEST_CASE("the ball around a cone's shell holds every point of it, and is no larger than its farthest point needs") {
+    using namespace raycache::shared;
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    // By hand: a cone of half-angle 60 degrees around +z from the origin, distances 3 to 5. The centre sits
+    // at 4 on the axis; the farthest points are on the rim, at distance 3 or 5: 9 + 16 - 24 x 0.5 = 13 and
+    // 25 + 16 - 40 x 0.5 = 21, so the radius is sqrt(21) = 4.583.
+    const raycache_direction_cone c60{glm::vec3(0, 0, 1), 0.5f, std::sqrt(0.75f)};
+    const raycache_ball hand = raycache_cone_shell_ball(glm::vec3(0.0f), c60, 3.0f, 5.0f);
+    CHECK(hand.centre.z == doctest::Approx(4.0f));
+    CHECK(hand.radius >= std::sqrt(21.0f));
+    CHECK(hand.radius <= std::sqrt(21.0f) * 1.001f);
+    for (int trial = 0; trial < 300; ++trial) {
+        const glm::vec3 apex(10.0f * u(rng) - 5.0f, 10.0f * u(rng) - 5.0f, 10.0f * u(rng) - 5.0f);
+        const glm::vec3 axis = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+        const float spread = (trial % 2 ? 0.05f : 1.2f) * u(rng);
+        const raycache_direction_cone cone{axis, std::cos(spread), std::sin(spread)};
+        const float near = 20.0f * u(rng), far = near + (trial % 3 ? 1.0f : 0.01f) * 10.0f * u(rng);
+        const raycache_ball ball = raycache_cone_shell_ball(apex, cone, near, far);
+        // Any unit direction within the spread, at any distance in [near, far]: inside the ball.
+        const glm::vec3 side = glm::normalize(glm::cross(axis, std::abs(axis.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
+        const glm::vec3 other = glm::cross(axis, side);
+        float farthest = 0.0f;
+        for (int k = 0; k < 400; ++k) {
+            const float angle = (k % 4 == 0 ? 1.0f : u(rng)) * spread, around = 6.2831853f * u(rng);
+            const glm::vec3 d = std::cos(angle) * axis + std::sin(angle) * (std::cos(around) * side + std::sin(around) * other);
+            const float r = k % 8 == 0 ? near : k % 8 == 4 ? far : near + (far - near) * u(rng); // the rim at both ends
+            const float from_centre = glm::length(apex + r * d - ball.centre);
+            farthest = std::max(farthest, from_centre);
+            REQUIRE(from_centre <= ball.radius + 1e-6f * (1.0f + glm::length(apex) + far)); // this test's own rounding
+        }
+        CHECK(ball.radius <= farthest * 1.01f + 1e-3f * (1.0f + far));
+    }
 }

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -250,4 +251,43 @@ TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invali
                   << " answered");
     CHECK(aimed > 100);
     CHECK(answered_at_ball == 0);
+}
+
+TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from the box to it, keeps the texel; one on such a segment drops it") {
+    // One texel, holding a point 10 along +z from the centre of the unit box (the segments it answers run
+    // from the box's ball, radius sqrt(3), to the shell of its directions at 10 - 0.5 .. 10 + 0.5). Its
+    // path hit one object (key 5) there, and nothing else: no light, no further bounce.
+    auto one_texel = [] {
+        auto cube = std::make_unique<CdctCube>(32);
+        PathRecord path;
+        const glm::vec3 direction = glm::normalize(glm::vec3(0.01f, 0.01f, 1.0f));
+        path.hit(5, 10.0f * direction);
+        raycache::store_traced(*cube, box, glm::vec3(0.0f), direction, {glm::vec3(0.5f), 10.0f}, parameters, &path);
+        cube->begin_frame();
+        REQUIRE(cube->valid_texels() == 1);
+        return cube;
+    };
+    const std::uint64_t mover = 77;
+    REQUIRE((raycache::object_bits(5) & raycache::object_bits(mover)) != raycache::object_bits(mover)); // no Bloom alias
+    auto after_move = [&](glm::vec3 to, float radius) {
+        std::unique_ptr<CdctCube> cube = one_texel();
+        raycache::SceneChanges changes;
+        changes.moved.push_back({mover, {glm::vec3(0.0f, 40.0f, 0.0f), radius}, {to, radius}}); // from far away
+        const raycache::InvalidationCounts counts = raycache::invalidate_changes(*cube, box, parameters, changes);
+        return counts.dropped_by_cone;
+    };
+    // Beside the stored point: radius 0.5 at (1.8, 0, 10), spanning z 9.5 .. 10.5, at least 1.3 from the z
+    // axis. The texel (face coordinates 0 .. 1/16 of the +z face) holds directions within 0.09 rad of +z, so
+    // its shell (9.5 .. 10.5 out) lies within 0.95 of the axis, and a segment from the box (within 1.42 of
+    // the axis, z <= 1) to it stays within 0.95 + 0.47 x 1.5 / 8.5 < 1.3 of the axis for z >= 9.5: none
+    // meets the sphere. The cone from the box's ball would (the sphere lies 0.15 rad off the texel's axis,
+    // inside its 0.04 rad spread plus asin((0.5 + 1.73) / 10.2) = 0.22; and 10.2 - 0.5 < 10.5 away).
+    CHECK(after_move({1.8f, 0.0f, 10.0f}, 0.5f) == 0);
+    // On a segment: from the box's corner (1, 1, 1) to the stored point (0.1, 0.1, 10), the point at z = 8
+    // is (0.3, 0.3, 8); a sphere of radius 0.3 around (0.5, 0.5, 8) holds it.
+    CHECK(after_move({0.5f, 0.5f, 8.0f}, 0.3f) == 1);
+    // Behind the stored surface (z 11.5 .. 12.5: past 10 + 0.5), in line with it: kept, as before.
+    CHECK(after_move({0.1f, 0.1f, 12.0f}, 0.5f) == 0);
+    // In front of the box, next to the origins: met.
+    CHECK(after_move({0.0f, 0.0f, 3.0f}, 0.5f) == 1);
 }

@@ -5,12 +5,14 @@
 // tile's origin box) in its directions. A CDCT texel holds a point P seen in its directions from the cube's
 // centre and answers rays from the box that meet P; every point of such a ray's segment up to P is a point
 // of the ball around the box plus a multiple of P's direction (a convex combination of the origin and P,
-// both in that set), so it lies in the texel's cone from the box's ball too: one test serves both.
+// both in that set), so it lies in the texel's cone from the box's ball too: the regions' tests serve
+// both, and a CDCT texel is finally tested with the segments themselves.
 // A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
 //     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, an 8 x 8 group of 4 x 4
-//     record blocks, a block, then each texel), and, for a CDCT texel, the sphere comes nearer the centre
-//     than the texel's rays reach (its distance plus the search's gap limit: the segments end there);
+//     record blocks, a block, then each texel); for a CDCT texel, whose searches end on its stored surface
+//     (its distance, give or take the search's gap limit), the segments from the origins' ball to that
+//     shell of its directions meet the sphere (the hull of two balls: raycache_ball_hull_meets_sphere);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
 //     raycache/path_record.hpp, tested once the union of its 8 x 8 group of blocks met X): X among the
 //     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
@@ -100,20 +102,41 @@ inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm:
     return ball;
 }
 
-// Whether rays from `ball` in the directions of cone_of() (called at most once, and only when a moved sphere
-// lies within reach: for most CDCT texels none does, and a region's cone costs five normalisations) can
-// meet a moved sphere. `reach`: how far from the cube's centre the rays end (infinity: they do not); a segment between
-// two points of a ball around the centre stays in that ball, so rays from the cube's ball ending within
-// `reach` stay within the larger of the two radii, and a sphere beyond that cannot meet them.
+// Whether rays from `ball` in the directions of cone_of() can meet a moved sphere.
 template <class ConeOf>
-bool any_sphere_in_cone(const OriginBall& ball, ConeOf&& cone_of, const std::vector<SceneChanges::Move>& moved,
-                        const OriginBall& cube_ball, float reach = std::numeric_limits<float>::infinity()) {
-    const float bound = std::max(cube_ball.radius, reach);
-    std::optional<shared::raycache_direction_cone> cone;
+bool any_sphere_in_cone(const OriginBall& ball, ConeOf&& cone_of, const std::vector<SceneChanges::Move>& moved) {
+    if (moved.empty()) return false;
+    const shared::raycache_direction_cone cone = cone_of();
+    for (const SceneChanges::Move& m : moved)
+        for (const BoundingSphere& s : {m.before, m.after})
+            if (shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, s.centre, s.radius)) return true;
+    return false;
+}
+
+// Where the rays a texel answers end, as distances from the cube's centre: a CDCT texel's searches end on
+// its stored surface, within [near, far]; a CCT texel's rays, and a CDCT escape's, do not end (far infinite).
+struct TexelReach {
+    float near = 0.0f;
+    float far = std::numeric_limits<float>::infinity();
+};
+
+// Whether a moved sphere can meet the rays of one texel from `ball`. Rays that do not end: its cone
+// (any_sphere_in_cone). Rays that end in the shell [reach.near, reach.far] of the texel's directions:
+// every such segment runs from a point of `ball` to a point of the shell's ball, so within the hull of the
+// two balls, which ends at the stored surface where the cone from the ball would widen on.
+template <class ConeOf>
+bool texel_rays_meet(const OriginBall& ball, ConeOf&& cone_of, const std::vector<SceneChanges::Move>& moved,
+                     const OriginBall& cube_ball, const TexelReach& reach) {
+    if (!std::isfinite(reach.far)) return any_sphere_in_cone(ball, cone_of, moved);
+    // A segment between two points of a ball around the centre stays in it: rays from the cube's ball ending
+    // within reach.far stay within the larger radius, so a sphere beyond that cannot meet them (most spheres,
+    // for most texels: the shell's ball, which costs a normalisation, is made only when one is nearer).
+    const float bound = std::max(cube_ball.radius, reach.far);
+    std::optional<shared::raycache_ball> end;
     auto meets = [&](const BoundingSphere& s) {
         if (glm::length(s.centre - cube_ball.centre) - s.radius > bound) return false;
-        if (!cone) cone = cone_of();
-        return shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, *cone, s.centre, s.radius);
+        if (!end) end = shared::raycache_cone_shell_ball(cube_ball.centre, cone_of(), reach.near, reach.far);
+        return shared::raycache_ball_hull_meets_sphere(ball.centre, ball.radius, end->centre, end->radius, s.centre, s.radius);
     };
     for (const SceneChanges::Move& m : moved)
         if (meets(m.before) || meets(m.after)) return true;
@@ -171,8 +194,8 @@ struct SerialFor {
     }
 };
 
-// invalidate_changes() below; reach(texel): how far from the cube's centre the rays a texel answers end
-// (infinity for the CCT). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
+// invalidate_changes() below; reach(texel): where the rays a texel answers end (TexelReach: nowhere for the
+// CCT). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
 // and returns when all have: runs of tiles go to f, and tiles share nothing they write but the cube's
 // atomic counts, so the result does not depend on the threads.
 template <class Texel, class Reach, class ParallelFor>
@@ -189,7 +212,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     bool face_meets[RAYCACHE_FACE_COUNT];
     const OriginBall cube_ball = origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
     for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-        face_meets[face] = any_sphere_in_cone(cube_ball, [&] { return shared::raycache_region_cone(face, 0, 0, n, n, n); }, changes.moved, cube_ball);
+        face_meets[face] = any_sphere_in_cone(cube_ball, [&] { return shared::raycache_region_cone(face, 0, 0, n, n, n); }, changes.moved);
 
     using Block = typename CacheCube<Texel>::BlockState;
     const bool geometric = !changes.moved.empty() || changes.light_moved; // else only names of changed objects
@@ -224,7 +247,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         const bool tile_cone_meets =
             geometric && face_meets[head.face] &&
             any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
-                               changes.moved, cube_ball);
+                               changes.moved);
         std::array<Group, group_count> groups{};
         std::array<PathRecord, CacheCube<Texel>::record_blocks> records;
         for (std::size_t i = 0; i < count; ++i) {
@@ -245,7 +268,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
             group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, [&] {
                 return shared::raycache_region_cone(head.face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
-            }, changes.moved, cube_ball);
+            }, changes.moved);
         }
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
@@ -261,13 +284,13 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             const bool cone_meets =
                 group_cone_meets[k] &&
                 any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n); },
-                                   changes.moved, cube_ball);
+                                   changes.moved);
             if (cone_meets) ++c.blocks_by_texel;
             else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
-                const bool meets = cone_meets && any_sphere_in_cone(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
-                                                                    changes.moved, cube_ball, reach(a));
+                const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
+                                                                 changes.moved, cube_ball, reach(a));
                 c.dropped_by_cone += meets;
                 return meets;
             });
@@ -303,14 +326,15 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 template <class Texel, class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
-    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return std::numeric_limits<float>::infinity(); },
-                              parallel_for);
+    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return detail::TexelReach{}; }, parallel_for);
 }
 
 // invalidate_changes() over a CDCT cube in `bounds`, searched with `p`: its rays leave from anywhere in the
-// box, and a texel holding distance s answers only rays that meet the stored surface at most
-// max(p.max_gap, p.epsilon) behind it (the searches' gap test), so its rays end within s + that of the
-// centre: a moved sphere farther out cannot have changed it (none for an escape, or with no gap limit).
+// box, and a texel holding distance s answers only rays that meet its stored surface, within epsilon of it
+// or at most max_gap behind it (the searches' tests; or at the box's exit, inside the box's ball), so its
+// rays end between s - g and s + g from the centre, g = max(p.max_gap, p.epsilon): only a moved sphere that
+// meets the segments from the box's ball to that shell can have changed it (an escape's rays, or any with
+// no gap limit, do not end: the texel's cone).
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
@@ -319,8 +343,11 @@ InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, 
         cube, CubeRays{bounds, -1.0f}, changes,
         [&](const TexelAddress& a) {
             const std::optional<DepthSample> texel = cube.load(a);
-            if (!texel || !(texel->distance < p.max_depth)) return std::numeric_limits<float>::infinity(); // an escape, or clamped
-            return (texel->distance + gap) * 1.0001f + 1e-4f;
+            detail::TexelReach reach;
+            if (!texel || !(texel->distance < p.max_depth) || !std::isfinite(gap)) return reach; // an escape, clamped, or no limit
+            reach.near = std::max(0.0f, (texel->distance - gap) * 0.9999f - 1e-4f);
+            reach.far = (texel->distance + gap) * 1.0001f + 1e-4f;
+            return reach;
         },
         parallel_for);
 }

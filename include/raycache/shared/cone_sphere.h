@@ -186,6 +186,57 @@ RAYCACHE_FN bool raycache_direction_box_may_reach_sphere(vec3 ball_centre, float
     return best >= cos_cap;
 }
 
+/* A ball: a centre and a radius. */
+struct raycache_ball {
+    vec3 centre;
+    float radius;
+};
+
+/* A ball holding every point apex + r u with u a unit direction of `cone` and near_distance <= r <=
+ * far_distance (0 <= near_distance <= far_distance, finite: where a CDCT texel's searches end). Its
+ * centre lies on the axis at the middle distance m; |r u - m axis|^2 = (r - m)^2 + 2 r m (1 - cos(angle)) grows with the angle and is convex in r, so the farthest
+ * points lie on the cone's rim at the nearest or farthest distance. Widened for rounding. */
+RAYCACHE_FN raycache_ball raycache_cone_shell_ball(vec3 apex, raycache_direction_cone cone, float near_distance, float far_distance) {
+    float m = 0.5f * (near_distance + far_distance);
+    /* 1 - cos as sin^2 / (1 + cos) for cones under 90 degrees, which keeps narrow cones' digits */
+    float c = max(cone.cos_spread, -1.0f);
+    float one_minus_cos = (c > 0.0f) ? cone.sin_spread * cone.sin_spread / (1.0f + c) : 1.0f - c;
+    float at_near = (near_distance - m) * (near_distance - m) + 2.0f * near_distance * m * one_minus_cos;
+    float at_far = (far_distance - m) * (far_distance - m) + 2.0f * far_distance * m * one_minus_cos;
+    raycache_ball ball;
+    ball.centre = apex + m * cone.axis;
+    ball.radius = sqrt(max(max(at_near, at_far), 0.0f)) * 1.0001f + 1.0e-5f * far_distance;
+    return ball;
+}
+
+/* True when the sphere (centre, radius) meets the convex hull of the balls (a, ra) and (b, rb): when some
+ * segment from a point of one ball to a point of the other can meet it (a CDCT texel answers rays from the
+ * box's ball that end at its stored surface). Growing both balls by `radius` reduces this to whether the
+ * centre lies in the hull of the grown balls (radii ga = ra + radius, gb = rb + radius), a round cone. In the plane of its axis and the point (x along
+ * the axis from a, y >= 0 away from it), that hull is the two discs and the quadrilateral a, T_a, T_b, b
+ * between them, T_a and T_b where the outer common tangent touches: its normal is n = (sin, cos), sin =
+ * (ga - gb) / |b - a|, the tangent line n . q = ga, and along it t = (cos, -sin), t . T_a = 0, t . T_b =
+ * cos |b - a|. Errs on the side of "meets" (radii and bounds widened for rounding). */
+RAYCACHE_FN bool raycache_ball_hull_meets_sphere(vec3 a, float ra, vec3 b, float rb, vec3 centre, float radius) {
+    vec3 ab = b - a;
+    vec3 ap = centre - a;
+    vec3 bp = centre - b;
+    float l = length(ab);
+    float slack = 1.0e-5f * (l + length(ap) + ra + rb + radius) + 1.0e-6f;
+    float ga = (ra + radius) * 1.00001f + slack;
+    float gb = (rb + radius) * 1.00001f + slack;
+    if (dot(ap, ap) <= ga * ga || dot(bp, bp) <= gb * gb) return true;
+    if (!(l > abs(ga - gb))) return false; /* one ball holds the other: the hull is that ball, tested above */
+    vec3 axis = ab / l;
+    float x = dot(ap, axis);
+    float y = length(ap - x * axis); /* not sqrt(|ap|^2 - x^2), which loses y near the axis */
+    float s = (ga - gb) / l;
+    float c = sqrt(max(0.0f, 1.0f - s * s));
+    float along = c * x - s * y;
+    float across = s * x + c * y;
+    return along >= -slack && along <= c * l + slack && across <= ga;
+}
+
 /* True when the sphere (centre, radius) meets the box [lo, hi] (distance from the centre to the box). */
 RAYCACHE_FN bool raycache_box_meets_sphere(vec3 lo, vec3 hi, vec3 centre, float radius) {
     vec3 nearest = vec3(clamp(centre.x, lo.x, hi.x), clamp(centre.y, lo.y, hi.y), clamp(centre.z, lo.z, hi.z));
