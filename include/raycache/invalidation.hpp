@@ -158,28 +158,32 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
     for (std::uint64_t key : changes.changed)
         if (tagged(key)) return true;
     if (changes.moved.empty()) return false;
-    // The ball around the hit points, and the cone of the escaped bounces' directions: once per union.
+    // The ball around the hit points, once per union.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
     // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
     const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
     const float escapes_from = radius + 1e-3f * scale; // the ball the escaped bounces leave from
-    const shared::raycache_direction_cone escapes =
-        has_escapes ? shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi) : shared::raycache_direction_cone{};
+    // The escapes' cone costs eight normalisations: made only for a sphere that the escapes' directions face.
+    std::optional<shared::raycache_direction_cone> escapes;
     for (const SceneChanges::Move& m : changes.moved) {
         if (tagged(m.key)) return true;
         if (!has_vertices) continue;
+        // Cheapest first (any one meeting decides): bounces between hit points, shadow rays, escaped bounces.
+        for (const BoundingSphere& s : {m.before, m.after})
+            if (t.chained && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
         for (const BoundingSphere& s : {m.before, m.after}) {
-            // Escaped bounces: rays from the hit points' ball in the escapes' cone, and facing the sphere.
-            if (has_escapes && shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, escapes, s.centre, s.radius) &&
-                shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius))
-                return true;
             if (t.lit)
                 for (const glm::vec3& light : changes.lights)
                     if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
                                                            s.radius))
                         return true;
-            if (t.chained && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
+            // Escaped bounces: rays from the hit points' ball facing the sphere, and in the escapes' cone.
+            if (has_escapes &&
+                shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius)) {
+                if (!escapes) escapes = shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi);
+                if (shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, *escapes, s.centre, s.radius)) return true;
+            }
         }
     }
     return false;
