@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include <raycache/raycache.hpp>
 
@@ -604,6 +605,41 @@ TEST_CASE("the secant search misses on an empty texel, and behind a depth discon
     CHECK(glm::length(taken.point - centre) == doctest::Approx(1.9f).epsilon(0.01));
     p.max_gap = 0.3f;
     CHECK_FALSE(secant_search(edge, bounds, o, dir, p).hit);
+}
+
+TEST_CASE("the secant search's gap test reads the far end's distance as read, not as Illinois steps halved it") {
+    // The state machine driven by hand: a ray from the centre along +z, so a point at t is t from the centre.
+    // Reads: t = 1 sees depth 3 (before it: the next read jumps to t = 3); t = 3 sees depth 2.5 (0.5 past
+    // it: the far end); every later read, short of t = 3, sees a surface 0.06 beyond itself (before it, by
+    // more than epsilon 0.05). False position then walks the near end up to t = 3 (2.6, 2.643, 2.712,
+    // 2.805, 2.901, 2.966), halving the far end's f on each repeated near-end read (Illinois: 0.5 down to
+    // 0.0156), until the bracket is shorter than epsilon. The far end lies 0.5 past its surface, more than
+    // max_gap 0.2: a miss (a search that took it would answer from a surface 0.5 nearer than the ray got).
+    using namespace raycache::shared;
+    raycache_secant_search s = raycache_secant_begin(glm::vec3(0.0f), glm::vec3(0, 0, 1), 1.0f, 0.05f, 0.2f, 16);
+    std::vector<float> read_at;
+    while (s.status == RAYCACHE_SECANT_READ) {
+        REQUIRE(read_at.size() < 16);
+        read_at.push_back(s.t);
+        const float depth = read_at.size() == 1 ? 3.0f : s.t >= 3.0f ? 2.5f : s.t + 0.06f;
+        raycache_secant_advance(s, true, depth, glm::vec3(depth));
+    }
+    REQUIRE(read_at.size() == 8);
+    CHECK(read_at[1] == 3.0f);
+    CHECK(read_at[2] == doctest::Approx(2.6f));
+    CHECK(read_at[7] == doctest::Approx(2.966f).epsilon(0.001));
+    CHECK(s.hi_f < 0.02f); // halved five times
+    CHECK(s.status == RAYCACHE_SECANT_MISS);
+    // The same reads with max_gap 0.6: the far end is within it, so the bracket's far end is taken.
+    s = raycache_secant_begin(glm::vec3(0.0f), glm::vec3(0, 0, 1), 1.0f, 0.05f, 0.6f, 16);
+    int reads = 0;
+    while (s.status == RAYCACHE_SECANT_READ) {
+        const float depth = ++reads == 1 ? 3.0f : s.t >= 3.0f ? 2.5f : s.t + 0.06f;
+        raycache_secant_advance(s, true, depth, glm::vec3(depth));
+    }
+    CHECK(s.status == RAYCACHE_SECANT_HIT);
+    CHECK(s.t == 3.0f);
+    CHECK(s.color.x == 2.5f);
 }
 
 TEST_CASE("secant parameters are validated, and bad input misses without reading") {

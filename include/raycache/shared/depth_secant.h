@@ -51,8 +51,9 @@ struct raycache_secant_search {
     vec3 color;       /* the answer's colour (on a hit) */
     float lo_t;       /* the last point before the surface, and its f (< 0) */
     float lo_f;
-    float hi_t;       /* the first point known past the surface, its f (>= 0) and colour */
-    float hi_f;
+    float hi_t;       /* the first point known past the surface, its f (>= 0; halved by Illinois steps, for the */
+    float hi_f;       /* false position only) and colour */
+    float hi_gap;     /* that point's f as read: how far past its texel's surface it lies (the max_gap test) */
     vec3 hi_color;
     bool bracketed;   /* hi_* is set */
     int last_side;    /* which end the last read replaced: -1 lo, +1 hi, 0 none (Illinois) */
@@ -97,6 +98,7 @@ RAYCACHE_FN raycache_secant_search raycache_secant_begin(vec3 start, vec3 d, flo
     s.lo_f = 0.0f;
     s.hi_t = t_start;
     s.hi_f = 0.0f;
+    s.hi_gap = 0.0f;
     s.hi_color = vec3(0.0f, 0.0f, 0.0f);
     s.bracketed = false;
     s.last_side = 0;
@@ -142,6 +144,7 @@ RAYCACHE_FN void raycache_secant_advance(RAYCACHE_INOUT(raycache_secant_search) 
         if (s.last_side > 0) s.lo_f = raycache_no_fma(0.5f * s.lo_f);
         s.hi_t = s.t;
         s.hi_f = f;
+        s.hi_gap = f;
         s.hi_color = color;
         s.bracketed = true;
         s.last_side = 1;
@@ -149,7 +152,7 @@ RAYCACHE_FN void raycache_secant_advance(RAYCACHE_INOUT(raycache_secant_search) 
     if (s.bracketed && s.hi_t - s.lo_t <= s.epsilon) {
         /* The crossing lies within epsilon: take the far end unless it is far behind its surface (the ray
          * passed behind an edge, where the cube saw nothing). */
-        s.status = (s.hi_f <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
+        s.status = (s.hi_gap <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
         s.t = s.hi_t;
         s.color = s.hi_color;
         return;
@@ -171,7 +174,7 @@ RAYCACHE_FN void raycache_secant_advance(RAYCACHE_INOUT(raycache_secant_search) 
     }
     if (!(next > s.lo_t) || (s.bracketed && !(next < s.hi_t))) {
         /* No room to move on (rounding): the bracket, if any, is as short as floats allow. */
-        s.status = (s.bracketed && s.hi_f <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
+        s.status = (s.bracketed && s.hi_gap <= s.max_gap) ? RAYCACHE_SECANT_HIT : RAYCACHE_SECANT_MISS;
         s.t = s.hi_t;
         s.color = s.hi_color;
         return;
