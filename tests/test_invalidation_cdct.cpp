@@ -288,6 +288,6 @@ TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from 
     CHECK(after_move({0.5f, 0.5f, 8.0f}, 0.3f) == 1);
     // Behind the stored surface (z 11.5 .. 12.5: past 10 + 0.5), in line with it: kept, as before.
     CHECK(after_move({0.1f, 0.1f, 12.0f}, 0.5f) == 0);
-    // In front of the box, next to the origins: met.
+    // Between the box and the stored point, on the texel's axis: met.
     CHECK(after_move({0.0f, 0.0f, 3.0f}, 0.5f) == 1);
 }

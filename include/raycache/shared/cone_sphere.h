@@ -194,18 +194,18 @@ struct raycache_ball {
 
 /* A ball holding every point apex + r u with u a unit direction of `cone` and near_distance <= r <=
  * far_distance (0 <= near_distance <= far_distance, finite: where a CDCT texel's searches end). Its
- * centre lies on the axis at the middle distance m; |r u - m axis|^2 = (r - m)^2 + 2 r m (1 - cos(angle)) grows with the angle and is convex in r, so the farthest
- * points lie on the cone's rim at the nearest or farthest distance. Widened for rounding. */
+ * centre lies on the axis at the middle distance m; |r u - m axis|^2 = (r - m)^2 + 2 r m (1 - cos(angle))
+ * grows with the angle and, m being the middle, is largest at the far end: on the rim at far_distance.
+ * Widened for rounding. */
 RAYCACHE_FN raycache_ball raycache_cone_shell_ball(vec3 apex, raycache_direction_cone cone, float near_distance, float far_distance) {
     float m = 0.5f * (near_distance + far_distance);
     /* 1 - cos as sin^2 / (1 + cos) for cones under 90 degrees, which keeps narrow cones' digits */
     float c = max(cone.cos_spread, -1.0f);
     float one_minus_cos = (c > 0.0f) ? cone.sin_spread * cone.sin_spread / (1.0f + c) : 1.0f - c;
-    float at_near = (near_distance - m) * (near_distance - m) + 2.0f * near_distance * m * one_minus_cos;
     float at_far = (far_distance - m) * (far_distance - m) + 2.0f * far_distance * m * one_minus_cos;
     raycache_ball ball;
     ball.centre = apex + m * cone.axis;
-    ball.radius = sqrt(max(max(at_near, at_far), 0.0f)) * 1.0001f + 1.0e-5f * far_distance;
+    ball.radius = sqrt(max(at_far, 0.0f)) * 1.0001f + 1.0e-5f * far_distance;
     return ball;
 }
 
