@@ -102,15 +102,22 @@ inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm:
     return ball;
 }
 
+// Whether meets(sphere) holds for the sphere of a moved object before or after its move.
+template <class Meets>
+bool any_moved_sphere(const std::vector<SceneChanges::Move>& moved, Meets&& meets) {
+    for (const SceneChanges::Move& m : moved)
+        if (meets(m.before) || meets(m.after)) return true;
+    return false;
+}
+
 // Whether rays from `ball` in the directions of cone_of() can meet a moved sphere.
 template <class ConeOf>
 bool any_sphere_in_cone(const OriginBall& ball, ConeOf&& cone_of, const std::vector<SceneChanges::Move>& moved) {
     if (moved.empty()) return false;
     const shared::raycache_direction_cone cone = cone_of();
-    for (const SceneChanges::Move& m : moved)
-        for (const BoundingSphere& s : {m.before, m.after})
-            if (shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, s.centre, s.radius)) return true;
-    return false;
+    return any_moved_sphere(moved, [&](const BoundingSphere& s) {
+        return shared::raycache_rays_from_ball_meet_sphere(ball.centre, ball.radius, cone, s.centre, s.radius);
+    });
 }
 
 // Where the rays a texel answers end, as distances from the cube's centre: a CDCT texel's searches end on
@@ -133,14 +140,11 @@ bool texel_rays_meet(const OriginBall& ball, ConeOf&& cone_of, const std::vector
     // for most texels: the shell's ball, which costs a normalisation, is made only when one is nearer).
     const float bound = std::max(cube_ball.radius, reach.far);
     std::optional<shared::raycache_ball> end;
-    auto meets = [&](const BoundingSphere& s) {
+    return any_moved_sphere(moved, [&](const BoundingSphere& s) {
         if (glm::length(s.centre - cube_ball.centre) - s.radius > bound) return false;
         if (!end) end = shared::raycache_cone_shell_ball(cube_ball.centre, cone_of(), reach.near, reach.far);
         return shared::raycache_ball_hull_meets_sphere(ball.centre, ball.radius, end->centre, end->radius, s.centre, s.radius);
-    };
-    for (const SceneChanges::Move& m : moved)
-        if (meets(m.before) || meets(m.after)) return true;
-    return false;
+    });
 }
 
 // Whether the rest of the paths whose union is `t` (a record block's, or a group of blocks') can have met a

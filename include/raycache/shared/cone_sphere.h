@@ -212,11 +212,12 @@ RAYCACHE_FN raycache_ball raycache_cone_shell_ball(vec3 apex, raycache_direction
 /* True when the sphere (centre, radius) meets the convex hull of the balls (a, ra) and (b, rb): when some
  * segment from a point of one ball to a point of the other can meet it (a CDCT texel answers rays from the
  * box's ball that end at its stored surface). Growing both balls by `radius` reduces this to whether the
- * centre lies in the hull of the grown balls (radii ga = ra + radius, gb = rb + radius), a round cone. In the plane of its axis and the point (x along
- * the axis from a, y >= 0 away from it), that hull is the two discs and the quadrilateral a, T_a, T_b, b
- * between them, T_a and T_b where the outer common tangent touches: its normal is n = (sin, cos), sin =
- * (ga - gb) / |b - a|, the tangent line n . q = ga, and along it t = (cos, -sin), t . T_a = 0, t . T_b =
- * cos |b - a|. Errs on the side of "meets" (radii and bounds widened for rounding). */
+ * centre lies in the hull of the grown balls (radii ga = ra + radius, gb = rb + radius), a round cone. In
+ * the plane of its axis and the point (x along the axis from a, y >= 0 away from it), that hull is the two
+ * discs and the quadrilateral a, T_a, T_b, b between them, T_a and T_b where the outer common tangent
+ * touches: its normal is n = (sin, cos), sin = (ga - gb) / |b - a|, the tangent line n . q = ga, and along
+ * it t = (cos, -sin), t . T_a = 0, t . T_b = cos |b - a|. Errs on the side of "meets" (radii and bounds
+ * widened for rounding). */
 RAYCACHE_FN bool raycache_ball_hull_meets_sphere(vec3 a, float ra, vec3 b, float rb, vec3 centre, float radius) {
     vec3 ab = b - a;
     vec3 ap = centre - a;
