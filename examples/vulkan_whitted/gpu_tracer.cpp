@@ -269,6 +269,10 @@ std::vector<int> Tracer::face_sizes() const {
 std::size_t Tracer::cube_bytes() const noexcept {
     return impl_->texels ? static_cast<std::size_t>(2 * impl_->texels->size()) : 0;
 }
+VkMemoryPropertyFlags Tracer::scene_memory_flags() const noexcept { return impl_->nodes->memory_flags(); }
+VkMemoryPropertyFlags Tracer::cube_memory_flags() const noexcept {
+    return impl_->texels ? impl_->texels->memory_flags() : 0;
+}
 
 Image Tracer::render(const Camera& camera, int width, int height, FrameStats* stats, int warm_up_stride) {
     if (width < 1 || height < 1)
@@ -276,7 +280,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     if (warm_up_stride < 0) throw std::invalid_argument("Vulkan tracer: the warm-up stride must be 0 or more");
     Impl& t = *impl_;
     const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    if (!t.output || t.output->size() < pixels * 16) t.output = std::make_unique<vk::Buffer>(t.context, pixels * 16);
+    if (!t.output || t.output->size() < pixels * 16) t.output = std::make_unique<vk::Buffer>(t.context, pixels * 16, vk::BufferUse::readback);
     if (t.raster && (!t.gbuffer || t.gbuffer->size() < pixels * 16)) t.gbuffer = std::make_unique<vk::Buffer>(t.context, pixels * 16);
 
     // The camera basis as the Embree tracer computes it (on the CPU, with glm); the shaders finish

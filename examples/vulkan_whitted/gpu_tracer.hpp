@@ -99,6 +99,9 @@ public:
     int face_size() const noexcept;          // of the cubes (adaptive: the largest now), after fitting them into one buffer
     std::vector<int> face_sizes() const;     // each cached object's cube, in object order
     std::size_t cube_bytes() const noexcept; // texel + pending buffers
+    // The property flags of the memory the BVH nodes and the cube texels were placed in (0: no cubes).
+    VkMemoryPropertyFlags scene_memory_flags() const noexcept;
+    VkMemoryPropertyFlags cube_memory_flags() const noexcept;
 
     struct Impl;
 

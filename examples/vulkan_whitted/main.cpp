@@ -50,6 +50,7 @@ struct VulkanOptions {
     bool hybrid = false;
     rcx::gpu::Secondary secondary = rcx::gpu::Secondary::bvh;
     std::uint32_t pair_capacity = 1u << 21;
+    rcx::vk::BufferMemory buffer_memory = rcx::vk::BufferMemory::host; // --buffer-memory
 };
 
 int run(const rcx::Options& o, const VulkanOptions& v) {
@@ -81,6 +82,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
 
     rcx::vk::ContextOptions context_options;
     context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct || v.secondary == rcx::gpu::Secondary::rsh;
+    context_options.buffer_memory = v.buffer_memory;
     std::unique_ptr<rcx::vk::Context> context;
     try {
         context = std::make_unique<rcx::vk::Context>(context_options);
@@ -156,6 +158,10 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
                     scene.spheres.size(), scene.meshes.size(), scene.cached_object_count(), tracer->bvh_nodes(), o.width,
                     o.height, scene.max_depth, rcx::to_string(scene.path.kind), frames,
                     static_cast<double>(scene.path.step_degrees));
+        std::printf("buffers: scene in %s memory", rcx::vk::memory_description(tracer->scene_memory_flags()).c_str());
+        if (tracer->cube_memory_flags())
+            std::printf(", cubes in %s memory", rcx::vk::memory_description(tracer->cube_memory_flags()).c_str());
+        std::printf("\n");
         std::printf("%s; cache %s", hybrid ? "hybrid: primary hits rasterised into a G-buffer, secondary rays in compute" : "all rays in compute",
                     rcx::to_string(o.cache));
         if (caching)
@@ -279,6 +285,16 @@ int main(int argc, char** argv) {
                             [&vulkan](const std::string& text) {
                                 vulkan.pair_capacity =
                                     static_cast<std::uint32_t>(rcx::parse_int_value("--pair-capacity", text, 64, 1l << 24));
+                            });
+    command_line.add_option("--buffer-memory", "M",
+                            "memory the scene's and the cubes' buffers prefer: host (the first mappable\n"
+                            "type), cached (host-cached) or device (device-local memory the host can\n"
+                            "map); one type on lavapipe " + rcx::shown_default("host"),
+                            [&vulkan](const std::string& text) {
+                                if (text == "host") vulkan.buffer_memory = rcx::vk::BufferMemory::host;
+                                else if (text == "cached") vulkan.buffer_memory = rcx::vk::BufferMemory::host_cached;
+                                else if (text == "device") vulkan.buffer_memory = rcx::vk::BufferMemory::device_local;
+                                else throw rcx::UsageError("--buffer-memory: '" + text + "' is not host, cached or device");
                             });
     command_line.add_note("Vulkan tracer: --threads is ignored; the options marked (Embree tracer), --prefill,\n"
                           "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"

@@ -182,7 +182,8 @@ VkDebugUtilsMessengerCreateInfoEXT messenger_info(Context::Messenger* state) {
 
 } // namespace
 
-Context::Context(const ContextOptions& options) : messenger_state_(new Messenger) {
+Context::Context(const ContextOptions& options)
+    : messenger_state_(new Messenger), buffer_memory_(options.buffer_memory) {
     // --- Instance.
     std::uint32_t loader_version = VK_API_VERSION_1_0;
     // vkEnumerateInstanceVersion is absent from 1.0 loaders; the loader exports it from 1.1 on.
@@ -502,7 +503,34 @@ void Commands::fill(const Buffer& buffer, std::uint32_t word) {
 
 // ---- Buffer ----------------------------------------------------------------------------------------
 
-Buffer::Buffer(Context& context, VkDeviceSize bytes) : device_(context.device()), size_(bytes) {
+std::string memory_description(VkMemoryPropertyFlags flags) {
+    static const std::pair<VkMemoryPropertyFlags, const char*> names[] = {
+        {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, "device-local"},   {VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, "host-visible"},
+        {VK_MEMORY_PROPERTY_HOST_COHERENT_BIT, "host-coherent"}, {VK_MEMORY_PROPERTY_HOST_CACHED_BIT, "host-cached"},
+        {VK_MEMORY_PROPERTY_LAZILY_ALLOCATED_BIT, "lazily allocated"}};
+    std::string text;
+    for (const auto& [bit, name] : names)
+        if (flags & bit) text += (text.empty() ? "" : ", ") + std::string(name);
+    return text.empty() ? "no-property" : text;
+}
+
+std::vector<std::uint32_t> buffer_memory_types(const VkPhysicalDeviceMemoryProperties& memory, std::uint32_t type_bits,
+                                               BufferUse use, BufferMemory preference) {
+    const VkMemoryPropertyFlags mappable = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    VkMemoryPropertyFlags first = 0; // the flag that puts a type in the first group
+    if (use == BufferUse::readback || preference == BufferMemory::host_cached) first = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+    else if (preference == BufferMemory::device_local) first = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+    std::vector<std::uint32_t> preferred, others;
+    for (std::uint32_t i = 0; i < memory.memoryTypeCount && i < 32; ++i) {
+        const VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
+        if (!(type_bits & (1u << i)) || (flags & mappable) != mappable) continue;
+        (first && (flags & first) ? preferred : others).push_back(i);
+    }
+    preferred.insert(preferred.end(), others.begin(), others.end());
+    return preferred;
+}
+
+Buffer::Buffer(Context& context, VkDeviceSize bytes, BufferUse use) : device_(context.device()), size_(bytes) {
     if (bytes == 0) throw Error("rcx::vk: a Buffer needs at least 1 byte");
     VkBufferCreateInfo info{};
     info.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
@@ -514,12 +542,23 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes) : device_(context.device())
     try {
         VkMemoryRequirements needs;
         vkGetBufferMemoryRequirements(device_, buffer_, &needs);
+        const std::vector<std::uint32_t> types =
+            buffer_memory_types(context.memory_properties(), needs.memoryTypeBits, use, context.buffer_memory());
+        if (types.empty())
+            throw Error("rcx::vk: no host-visible, host-coherent memory type for a buffer on " + context.device_name());
         VkMemoryAllocateInfo allocate{};
         allocate.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
         allocate.allocationSize = needs.size;
-        allocate.memoryTypeIndex = context.memory_type(
-            needs.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-        check(vkAllocateMemory(device_, &allocate, nullptr, &memory_), "vkAllocateMemory (buffer)");
+        VkResult result = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+        for (const std::uint32_t type : types) {
+            allocate.memoryTypeIndex = type;
+            result = vkAllocateMemory(device_, &allocate, nullptr, &memory_);
+            if (result != VK_SUCCESS) memory_ = VK_NULL_HANDLE;
+            // A full heap (a small PCI window onto device memory, say) sends the buffer to the next type.
+            if (result != VK_ERROR_OUT_OF_DEVICE_MEMORY && result != VK_ERROR_OUT_OF_HOST_MEMORY) break;
+        }
+        check(result, "vkAllocateMemory (buffer)");
+        memory_flags_ = context.memory_properties().memoryTypes[allocate.memoryTypeIndex].propertyFlags;
         check(vkBindBufferMemory(device_, buffer_, memory_, 0), "vkBindBufferMemory");
         check(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
     } catch (...) {
@@ -531,7 +570,8 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes) : device_(context.device())
 Buffer::~Buffer() { release(); }
 
 Buffer::Buffer(Buffer&& other) noexcept
-    : device_(other.device_), buffer_(other.buffer_), memory_(other.memory_), size_(other.size_), mapped_(other.mapped_) {
+    : device_(other.device_), buffer_(other.buffer_), memory_(other.memory_), size_(other.size_), mapped_(other.mapped_),
+      memory_flags_(other.memory_flags_) {
     other.buffer_ = VK_NULL_HANDLE;
     other.memory_ = VK_NULL_HANDLE;
     other.mapped_ = nullptr;
@@ -546,6 +586,7 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept {
         memory_ = other.memory_;
         size_ = other.size_;
         mapped_ = other.mapped_;
+        memory_flags_ = other.memory_flags_;
         other.buffer_ = VK_NULL_HANDLE;
         other.memory_ = VK_NULL_HANDLE;
         other.mapped_ = nullptr;

@@ -1,7 +1,7 @@
 // rcx/vulkan.hpp: a tiny Vulkan compute harness for RayCache's GLSL tests and its Vulkan example tracer.
 //
 // One Context (instance, one device with a compute queue, validation when installed), host-visible
-// storage buffers, compute pipelines loaded from SPIR-V files, a sampled cube image, and submissions
+// storage buffers (in the memory ContextOptions::buffer_memory prefers), compute pipelines loaded from SPIR-V files, a sampled cube image, and submissions
 // that record dispatches and wait for them. Everything is synchronous and single-threaded: made for
 // tests and small tracers, not for a renderer's frame loop.
 //
@@ -40,6 +40,24 @@ struct Error : std::runtime_error {
 // The name of a VkResult ("VK_ERROR_OUT_OF_DEVICE_MEMORY"), or its number.
 std::string to_string(VkResult result);
 
+// What a buffer is for, which chooses its memory. Every Buffer stays mapped whatever its memory, so the
+// host can always read and write it; the choice only decides who pays for the distance.
+enum class BufferUse {
+    device,   // read and written by shaders; the host writes it at set-up and reads it now and then
+    readback, // read by the host after most frames (a rendered image): host-cached memory first
+};
+
+// Which memory type a BufferUse::device buffer prefers (on a CPU device such as lavapipe all are one).
+// On a discrete GPU, measured on an NVIDIA H200 (docs/RESULTS.md): its shaders read the small scenes of the
+// examples as fast from host memory as from its own, while the host reads device memory across the bus
+// uncached, so resizing cubes (which reads them on the host) took seconds there.
+enum class BufferMemory {
+    host,         // the first host-visible, host-coherent type, as the harness always took
+    host_cached,  // host-cached host memory first: host reads at memory speed
+    device_local, // device-local memory that the host can map first (PCI window, resizable BAR; small heaps
+                  // that fill send further buffers to the next type)
+};
+
 struct ContextOptions {
     // Enable VK_LAYER_KHRONOS_validation when it is installed (environment RCX_VULKAN_VALIDATION=0
     // turns it off). Warnings and errors are printed to stderr; errors of type VALIDATION are counted
@@ -54,7 +72,20 @@ struct ContextOptions {
     // false: never enable shaderInt64 and shaderBufferInt64Atomics, so that a test can check that a shader
     // needs neither (the validation layer then reports a shader that declares Int64).
     bool enable_int64 = true;
+    // Where buffers of BufferUse::device go (BufferMemory).
+    BufferMemory buffer_memory = BufferMemory::host;
 };
+
+// "device-local, host-visible, host-coherent" and so on: the property flags' names, for messages.
+std::string memory_description(VkMemoryPropertyFlags flags);
+
+// The memory types a buffer of `use` may be placed in, best first, among `type_bits` (a
+// VkMemoryRequirements::memoryTypeBits) of the device described by `memory`; all are host-visible and
+// host-coherent, in index order except that the preferred ones come first: HOST_CACHED for readback and
+// host_cached, DEVICE_LOCAL for device_local, none for host. Empty when no allowed type is host-visible and
+// host-coherent.
+std::vector<std::uint32_t> buffer_memory_types(const VkPhysicalDeviceMemoryProperties& memory, std::uint32_t type_bits,
+                                               BufferUse use, BufferMemory preference);
 
 class Context;
 class ComputePipeline;
@@ -62,8 +93,9 @@ class ComputePipeline;
 // A storage buffer in host-visible, host-coherent memory, mapped for its whole life.
 class Buffer {
 public:
-    // `bytes` > 0. Usage: storage, indirect dispatch arguments, transfer source and destination.
-    Buffer(Context& context, VkDeviceSize bytes);
+    // `bytes` > 0. Usage: storage, indirect dispatch arguments, transfer source and destination. Memory:
+    // the first of buffer_memory_types(...) that the allocation succeeds in (Error if none does).
+    Buffer(Context& context, VkDeviceSize bytes, BufferUse use = BufferUse::device);
     ~Buffer();
     Buffer(Buffer&& other) noexcept;
     Buffer& operator=(Buffer&& other) noexcept;
@@ -79,6 +111,8 @@ public:
     void upload(const void* source, std::size_t bytes);
     // Sets every 32-bit word of the buffer to `word` (on the host).
     void fill(std::uint32_t word) noexcept;
+    // The property flags of the memory type the buffer was placed in.
+    VkMemoryPropertyFlags memory_flags() const noexcept { return memory_flags_; }
 
 private:
     void release() noexcept;
@@ -87,6 +121,7 @@ private:
     VkDeviceMemory memory_ = VK_NULL_HANDLE;
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
+    VkMemoryPropertyFlags memory_flags_ = 0;
 };
 
 // A buffer holding a copy of `values`, at least `min_bytes` long (a Vulkan buffer cannot be empty).
@@ -221,6 +256,9 @@ public:
 
     // Index of a memory type allowed by `type_bits` with all of `flags`; Error if none.
     std::uint32_t memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags flags) const;
+    const VkPhysicalDeviceMemoryProperties& memory_properties() const noexcept { return memory_properties_; }
+    // ContextOptions::buffer_memory as given.
+    BufferMemory buffer_memory() const noexcept { return buffer_memory_; }
 
     struct Messenger; // debug-utils state, shared with the callback
 
@@ -241,6 +279,7 @@ private:
     VkCommandPool command_pool_ = VK_NULL_HANDLE;
     bool validation_ = false;
     bool int64_atomics_ = false;
+    BufferMemory buffer_memory_ = BufferMemory::host;
     std::uint64_t submissions_ = 0;
 };
 
