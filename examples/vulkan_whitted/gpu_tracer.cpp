@@ -43,6 +43,7 @@ struct Tracer::Impl {
     TracerSettings settings;
     FlatBvh bvh;
     std::unique_ptr<vk::ComputePipeline> whitted, end_frame;
+    std::unique_ptr<vk::Timestamps> timestamps; // of a frame's submission (render's trace_pass)
     std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, dummy, texels, pending;
     std::unique_ptr<vk::Buffer> output, frame, gbuffer;
     std::unique_ptr<vk::Buffer> doubtful, cube_table, zeros; // RayCache's confidence test: doubtful bits, cube table
@@ -308,53 +309,67 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
 
     const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
 
-    // The tracing dispatch over the pixels whose x and y are multiples of `stride` (1: all), after the raster
-    // pass when `raster` (hybrid: it fills the G-buffer the dispatch reads).
+    // RayCache's end-of-frame pass over the texels stored since the frame buffer was started, dispatched from
+    // the frame buffer's own group count; then, after a barrier (it reads the texels just published), the
+    // confidence test's mark pass over the same list. Recorded after the tracing dispatch and a barrier, in
+    // its submission: a second submission cost the frame a trip to the host and back.
+    auto record_end_of_frame = [&](vk::Commands& commands) {
+        struct Pass {
+            std::uint32_t mark;
+            float threshold;
+        };
+        const Impl::CacheBuffers c = t.cache_buffers();
+        auto pass = [&](std::uint32_t mark) {
+            const Pass push{mark, t.settings.edge_threshold};
+            commands.dispatch_indirect(*t.end_frame,
+                                       {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame,
+                                        *c.cct_doubtful, *c.cdct_doubtful, *c.cct_table, *c.cdct_table},
+                                       &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
+        };
+        pass(0u);
+        if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
+            commands.barrier();
+            pass(1u);
+        }
+    };
+
+    // One submission: the raster pass when `raster` (hybrid: it fills the G-buffer the dispatch reads), the
+    // tracing dispatch over the pixels whose x and y are multiples of `stride` (1: all), and with caches the
+    // end-of-frame passes. Returns their GPU times (timestamps 0..2; 0 where the queue has none).
+    struct PassTimes {
+        double trace_ms = 0.0, end_frame_ms = 0.0;
+    };
+    if (!t.timestamps) t.timestamps = std::make_unique<vk::Timestamps>(t.context, 3);
     auto trace_pass = [&](int stride, bool raster) {
         p.relief_i[3] = stride;
         t.params->upload(&p, sizeof p);
         const std::uint64_t columns = (static_cast<std::uint64_t>(width) + stride - 1) / stride;
         const std::uint64_t rows = (static_cast<std::uint64_t>(height) + stride - 1) / stride;
         const Impl::CacheBuffers c = t.cache_buffers();
+        const bool caching = t.end_frame && t.texel_count > 0; // (a warm-up's resizing may change the cubes)
         t.context.submit([&](vk::Commands& commands) {
+            t.timestamps->reset(commands);
             if (raster) {
                 t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
                 commands.barrier(); // the copy's writes, visible to the tracing shader
             }
+            t.timestamps->write(commands, 0);
             commands.dispatch(*t.whitted,
                               {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame, *t.nodes, *t.primitives,
                                *t.objects, *t.params, *t.output, *t.cubes, gbuffer, *c.cct_doubtful, *c.cdct_doubtful},
                               nullptr, 0, vk::group_count(columns, 8), vk::group_count(rows, 8));
+            t.timestamps->write(commands, 1);
+            if (caching) {
+                commands.barrier(); // the stores and the list's group count, visible to the passes
+                record_end_of_frame(commands);
+                t.timestamps->write(commands, 2);
+            }
         });
-    };
-    // RayCache's end-of-frame pass over the texels stored since the frame buffer was started, dispatched from
-    // the frame buffer's own group count (the tracing submission has completed, so its writes are visible to
-    // this one); then, after a barrier (it reads the texels just published), the confidence test's mark pass
-    // over the same list. False when there is nothing to end (no cubes).
-    auto end_of_frame = [&]() {
-        const bool cubes = t.end_frame && t.texel_count > 0;
-        if (cubes) {
-            struct Pass {
-                std::uint32_t mark;
-                float threshold;
-            };
-            const Impl::CacheBuffers c = t.cache_buffers();
-            t.context.submit([&](vk::Commands& commands) {
-                auto pass = [&](std::uint32_t mark) {
-                    const Pass push{mark, t.settings.edge_threshold};
-                    commands.dispatch_indirect(*t.end_frame,
-                                               {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame,
-                                                *c.cct_doubtful, *c.cdct_doubtful, *c.cct_table, *c.cdct_table},
-                                               &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
-                };
-                pass(0u);
-                if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
-                    commands.barrier();
-                    pass(1u);
-                }
-            });
-        }
-        return cubes;
+        PassTimes times;
+        const std::vector<std::uint64_t> ticks = t.timestamps->ticks(caching ? 3 : 2);
+        if (ticks.size() >= 2) times.trace_ms = t.timestamps->milliseconds(ticks[0], ticks[1]);
+        if (ticks.size() >= 3) times.end_frame_ms = t.timestamps->milliseconds(ticks[1], ticks[2]);
+        return times;
     };
     // The frame buffer's counters and list, read back after the end of frame.
     auto frame_statistics = [&]() {
@@ -392,7 +407,6 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     if (warm_up) {
         const auto warm_up_start = std::chrono::steady_clock::now();
         trace_pass(warm_up_stride, t.raster != nullptr);
-        end_of_frame();
         const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
         warm_up_stored = warm_up_stats.listed;
         warm_up_ms = ms_since(warm_up_start);
@@ -401,6 +415,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     }
 
     auto start = std::chrono::steady_clock::now();
+    PassTimes times;
     if (t.rsh) {
         if (t.raster)
             t.context.submit([&](vk::Commands& commands) {
@@ -414,12 +429,10 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         b.bvh_prims = t.bvh_prims.get();
         t.rsh->render(width, height, t.scene.max_depth, b, *t.output, stats ? &stats->rsh : nullptr);
     } else {
-        trace_pass(1, t.raster && !warm_up); // after a warm-up the G-buffer already holds this camera's primary hits
+        times = trace_pass(1, t.raster && !warm_up); // after a warm-up the G-buffer already holds this camera's primary hits
     }
     const double ms = ms_since(start);
 
-    start = std::chrono::steady_clock::now();
-    const double end_ms = end_of_frame() ? ms_since(start) : 0.0;
     const raycache::GpuFrameStatistics gpu_stats = frame_statistics();
     resize(gpu_stats);
 
@@ -430,7 +443,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         stats->warm_up_milliseconds = warm_up_ms;
         stats->warm_up_stored_texels = warm_up_stored;
         stats->milliseconds = ms;
-        stats->end_frame_milliseconds = end_ms;
+        stats->gpu_trace_milliseconds = times.trace_ms;
+        stats->end_frame_milliseconds = times.end_frame_ms;
         stats->stored_texels = gpu_stats.listed;
         stats->lookups = gpu_stats.total.lookups;
         stats->hits = gpu_stats.total.hits;

@@ -49,12 +49,13 @@ struct TracerSettings {
 };
 
 struct FrameStats {
-    double warm_up_milliseconds = 0.0;   // a warm-up pass (render's warm_up_stride): its dispatch and end-of-frame passes
+    double warm_up_milliseconds = 0.0;   // a warm-up pass (render's warm_up_stride): its submission, waited for
     std::uint64_t warm_up_stored_texels = 0; // ... the texels it stored, which the full pass can read
-    double milliseconds = 0.0;           // the tracing dispatch, submitted and waited for (hybrid: with the raster
+    double milliseconds = 0.0;           // the frame's submission, waited for on the host: the tracing dispatch and
+                                         // (cct, cdct) RayCache's end-of-frame passes after it (hybrid: with the raster
                                          // pass, which a warm-up records in its own submission instead)
-    double end_frame_milliseconds = 0.0; // RayCache's end-of-frame passes (cct, cdct: publish, then mark), over
-                                         // the texels stored
+    double gpu_trace_milliseconds = 0.0; // of `milliseconds`, the tracing dispatch on the GPU (timestamps; 0 without)
+    double end_frame_milliseconds = 0.0; // ... and the end-of-frame passes (publish, then mark) over the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it

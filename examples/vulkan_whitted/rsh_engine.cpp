@@ -53,9 +53,7 @@ struct RshEngine::Impl {
     std::unique_ptr<vk::Buffer> control, spheres, nodes, pairs[2], flags, scan_words, count_word;
     std::uint32_t off1 = 0, off2 = 0, off3 = 0;
     std::uint32_t batch = 0;
-    VkQueryPool queries = VK_NULL_HANDLE;
-    static constexpr std::uint32_t query_count = 8192;
-    double tick_ns = 0.0;
+    std::unique_ptr<vk::Timestamps> timestamps; // with settings.timestamps
     // The recording since begin(): batches and levels recorded, buffers it uses that were replaced since.
     bool recording = false;
     std::uint32_t recorded_batches = 0, recorded_levels = 0, recorded_traces = 0;
@@ -77,38 +75,32 @@ struct RshEngine::Impl {
     // Timestamps of one submission: the interval before each mark belongs to the mark's phase.
     std::vector<int> marks;
     void mark(vk::Commands& c, int phase) {
-        if (!queries) return;
-        if (marks.size() >= query_count) {
+        if (!timestamps || !timestamps->available()) return;
+        if (marks.size() >= timestamps->count()) {
             marks_full = true;
             return;
         }
-        vkCmdWriteTimestamp(c.handle(), VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, static_cast<std::uint32_t>(marks.size()));
+        timestamps->write(c, static_cast<std::uint32_t>(marks.size()));
         marks.push_back(phase);
     }
     void begin_marks(vk::Commands& c) {
         marks.clear();
         marks_full = false;
-        if (!queries) return;
-        vkCmdResetQueryPool(c.handle(), queries, 0, query_count);
+        if (!timestamps) return;
+        timestamps->reset(c);
         mark(c, -1);
     }
     void collect(RshStats& s) {
-        if (!queries || marks.size() < 2) return;
-        std::vector<std::uint64_t> t(marks.size());
-        if (vkGetQueryPoolResults(context.device(), queries, 0, static_cast<std::uint32_t>(marks.size()),
-                                  t.size() * sizeof(std::uint64_t), t.data(), sizeof(std::uint64_t),
-                                  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) != VK_SUCCESS)
-            return;
+        if (!timestamps || marks.size() < 2) return;
+        const std::vector<std::uint64_t> t = timestamps->ticks(static_cast<std::uint32_t>(marks.size()));
+        if (t.size() != marks.size()) return;
         double* ms[phase_count] = {&s.build_ms, &s.traverse_ms, &s.compaction_ms, &s.final_ms};
         for (std::size_t i = 1; i < marks.size(); ++i)
-            if (marks[i] >= 0 && t[i] >= t[i - 1]) *ms[marks[i]] += static_cast<double>(t[i] - t[i - 1]) * tick_ns * 1e-6;
+            if (marks[i] >= 0) *ms[marks[i]] += timestamps->milliseconds(t[i - 1], t[i]);
         s.timed = !marks_full; // more passes than timestamps: the phases are partial
     }
 
     Impl(vk::Context& c, const RshSettings& s) : context(c), settings(s) {}
-    ~Impl() {
-        if (queries) vkDestroyQueryPool(context.device(), queries, nullptr);
-    }
 };
 
 RshEngine::RshEngine(vk::Context& context, const std::string& spirv_dir, const RshSettings& settings)
@@ -144,20 +136,7 @@ RshEngine::RshEngine(vk::Context& context, const std::string& spirv_dir, const R
     e.scan_words = std::make_unique<vk::Buffer>(context, (static_cast<std::uint64_t>(e.off3) + 4) * 4);
     e.batch = settings.pair_capacity;
 
-    if (settings.timestamps && context.properties().limits.timestampComputeAndGraphics) {
-        std::uint32_t families = 0;
-        vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, nullptr);
-        std::vector<VkQueueFamilyProperties> props(families);
-        vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, props.data());
-        if (context.queue_family() < families && props[context.queue_family()].timestampValidBits > 0) {
-            VkQueryPoolCreateInfo info{};
-            info.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
-            info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-            info.queryCount = Impl::query_count;
-            if (vkCreateQueryPool(context.device(), &info, nullptr, &e.queries) != VK_SUCCESS) e.queries = VK_NULL_HANDLE;
-            e.tick_ns = context.properties().limits.timestampPeriod;
-        }
-    }
+    if (settings.timestamps) e.timestamps = std::make_unique<vk::Timestamps>(context, 8192);
 }
 
 RshEngine::~RshEngine() = default;

@@ -10,6 +10,7 @@
 // after it and keeps answering, two tracers agree. No validation error.
 // Exit 77 (CTest: skipped) only when there is no Vulkan device.
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -108,7 +109,11 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         rcx::gpu::Tracer a(context, scene, spirv, settings), b(context, scene, spirv, settings);
         rcx::gpu::FrameStats cold_stats, warm_stats, twin_stats;
         const rcx::Image cold = a.render(scene.camera, size, size, &cold_stats);
+        const std::uint64_t submissions_before = context.submissions();
         const rcx::Image warm = a.render(scene.camera, size, size, &warm_stats);
+        const std::uint64_t submissions = context.submissions() - submissions_before;
+        // The end-of-frame passes are recorded after the tracing dispatch, so the host waits once a frame.
+        check(submissions == 1, name + format(": a frame takes one submission (%.0f)", double(submissions)));
         b.render(scene.camera, size, size);
         const rcx::Image twin = b.render(scene.camera, size, size, &twin_stats);
 
@@ -220,7 +225,10 @@ void run_warm_up_case(rcx::vk::Context& context, const char* scene_name, rcx::Ca
     const std::string name = std::string(scene_name) + " " + rcx::to_string(mode) + " warm-up 4";
     rcx::gpu::Tracer a(context, scene, spirv, settings), b(context, scene, spirv, settings);
     rcx::gpu::FrameStats stats, twin_stats;
+    const std::uint64_t submissions_before = context.submissions();
     const rcx::Image image = a.render(scene.camera, size, size, &stats, stride);
+    const std::uint64_t submissions = context.submissions() - submissions_before;
+    check(submissions == 2, name + format(": the warm-up and the full pass take one submission each (%.0f)", double(submissions)));
     const rcx::Image twin = b.render(scene.camera, size, size, &twin_stats, stride);
     check(stats.warm_up_stored_texels > 0 && stats.warm_up_milliseconds > 0.0,
           name + format(": the warm-up pass stored %.0f texels", double(stats.warm_up_stored_texels)));

@@ -743,6 +743,47 @@ void SampledCubeImage::upload(const void* texels, std::size_t bytes) {
     });
 }
 
+// ---- Timestamps ------------------------------------------------------------------------------------
+
+Timestamps::Timestamps(Context& context, std::uint32_t count) : device_(context.device()), count_(count) {
+    if (count == 0 || !context.properties().limits.timestampComputeAndGraphics) return;
+    std::uint32_t families = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, nullptr);
+    std::vector<VkQueueFamilyProperties> properties(families);
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, properties.data());
+    const std::uint32_t bits = context.queue_family() < families ? properties[context.queue_family()].timestampValidBits : 0;
+    if (bits == 0) return;
+    VkQueryPoolCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = count;
+    if (vkCreateQueryPool(device_, &info, nullptr, &pool_) != VK_SUCCESS) pool_ = VK_NULL_HANDLE;
+    valid_mask_ = bits >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << bits) - 1;
+    nanoseconds_per_tick_ = context.properties().limits.timestampPeriod;
+}
+
+Timestamps::~Timestamps() {
+    if (pool_) vkDestroyQueryPool(device_, pool_, nullptr);
+}
+
+void Timestamps::reset(Commands& commands) noexcept {
+    if (pool_) vkCmdResetQueryPool(commands.handle(), pool_, 0, count_);
+}
+
+void Timestamps::write(Commands& commands, std::uint32_t index) noexcept {
+    if (pool_ && index < count_) vkCmdWriteTimestamp(commands.handle(), VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, index);
+}
+
+std::vector<std::uint64_t> Timestamps::ticks(std::uint32_t n) const {
+    std::vector<std::uint64_t> t(std::min(n, count_));
+    if (!pool_ || t.empty()) return {};
+    if (vkGetQueryPoolResults(device_, pool_, 0, static_cast<std::uint32_t>(t.size()), t.size() * sizeof(std::uint64_t), t.data(),
+                              sizeof(std::uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) != VK_SUCCESS)
+        return {};
+    for (std::uint64_t& v : t) v &= valid_mask_;
+    return t;
+}
+
 // ---- ComputePipeline -------------------------------------------------------------------------------
 
 std::vector<std::uint32_t> read_spirv(const std::string& path) {

@@ -283,6 +283,38 @@ private:
     std::uint64_t submissions_ = 0;
 };
 
+// A pool of GPU timestamps on the context's queue, for timing the passes of one submission: reset() it
+// while recording, write(i) after the commands whose end timestamp i marks, and after the submission has
+// completed, ticks(n) reads the first n. On a queue without timestamps available() is false, every call
+// records nothing and ticks() is empty, so callers need no second path.
+class Timestamps {
+public:
+    Timestamps(Context& context, std::uint32_t count);
+    ~Timestamps();
+    Timestamps(const Timestamps&) = delete;
+    Timestamps& operator=(const Timestamps&) = delete;
+
+    bool available() const noexcept { return pool_ != VK_NULL_HANDLE; }
+    std::uint32_t count() const noexcept { return count_; }
+    void reset(Commands& commands) noexcept;
+    // Timestamp `index` (< count()), taken when every command recorded before it has completed.
+    void write(Commands& commands, std::uint32_t index) noexcept;
+    // Timestamps 0..n-1 of the completed submission, in ticks (their valid bits only); empty when
+    // unavailable or when the device does not return them.
+    std::vector<std::uint64_t> ticks(std::uint32_t n) const;
+    // Milliseconds between two tick values (0 when `to` is before `from`).
+    double milliseconds(std::uint64_t from, std::uint64_t to) const noexcept {
+        return to > from ? static_cast<double>(to - from) * nanoseconds_per_tick_ * 1e-6 : 0.0;
+    }
+
+private:
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueryPool pool_ = VK_NULL_HANDLE;
+    std::uint32_t count_ = 0;
+    std::uint64_t valid_mask_ = 0;
+    double nanoseconds_per_tick_ = 0.0;
+};
+
 // A compute pipeline made from a SPIR-V file (entry point "main"), with one descriptor set (set 0)
 // whose bindings 0..n-1 have the given types, and `push_constant_bytes` of push constants.
 class ComputePipeline {
