@@ -5,7 +5,7 @@ Reads: walkthrough.md and walkthrough_frames.csv when present (raycache_walkthro
 the top), table_5_2.md, tables.md, table_5_2.csv, figure_5_9.csv, quality.csv, table_5_3.csv (raycache_bench),
 rsh_frames.csv and rsh.md when present (raycache_rsh_bench; bench/rsh_results.py makes that section),
 vulkan_tables.md and table_5_1.csv when present (raycache_vulkan_bench), dynamic.md when present
-(raycache_dynamic_bench), xeon16_h100/README.md when present (runs on a second machine, summarised by hand)
+(raycache_dynamic_bench), xeon16_h100/README.md and h200_vulkan/README.md when present (runs on lent machines, summarised by hand)
 and micro.json
 (raycache_micro_bench, Google Benchmark's JSON). Usage: make_results.py RESULTS_DIR OUTPUT_MD
 """
@@ -256,6 +256,10 @@ def main():
     if os.path.exists(gpu_single):  # written by hand from raycache_vulkan_whitted runs kept beside it
         with open(gpu_single) as f:
             md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_single_image/`]({rel}/vulkan_single_image/).", ""]
+    gpu_h200 = os.path.join(results, "h200_vulkan", "README.md")
+    if os.path.exists(gpu_h200):  # written by hand from raycache_vulkan_whitted runs on a lent GPU, kept beside it
+        with open(gpu_h200) as f:
+            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/h200_vulkan/`]({rel}/h200_vulkan/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")
