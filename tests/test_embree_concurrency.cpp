@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -219,6 +220,32 @@ TEST_CASE("adaptive cubes resized over 4 threads hold what resizing them one by 
             CHECK(contents(parallel) == contents(serial));
             CHECK(serial.statistics().allocated_bytes == parallel.statistics().allocated_bytes);
             CHECK(serial.statistics().allocated_bytes <= budget);
+        }
+    }
+}
+
+TEST_CASE("scene_changed refuses a sphere, light or cube that is not finite, before any cube moves or loses a texel") {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    SceneCache caches(Technique::cct);
+    fill(caches);
+    const std::vector<std::vector<float>> before = contents(caches);
+    const raycache::CubeBounds bounds = *caches.object_bounds(ObjectId{3});
+    for (const Invalidation policy : {Invalidation::none, Invalidation::all, Invalidation::exact}) {
+        for (int k = 0; k < 5; ++k) {
+            CAPTURE(k);
+            raycache::embree::SceneChange change;
+            change.moved.push_back({ObjectId{3}, {centre_of(3), radius}, {centre_of(3) + glm::vec3(0.0f, 0.4f, 0.0f), radius}, std::nullopt});
+            change.lights = {glm::vec3(0.0f, 10.0f, 0.0f)};
+            if (k == 0) change.moved[0].after.centre.z = nan;
+            if (k == 1) change.moved[0].before.radius = -1.0f;
+            if (k == 2) change.moved[0].after.radius = inf;
+            if (k == 3) change.lights[0].x = nan;
+            if (k == 4) change.moved[0].cube = raycache::CubeBounds{centre_of(3), nan};
+            CHECK_THROWS_AS(caches.scene_changed(change, policy), std::invalid_argument);
+            CHECK(contents(caches) == before);
+            const raycache::CubeBounds now = *caches.object_bounds(ObjectId{3});
+            CHECK(now.centre == bounds.centre);
+            CHECK(now.half_size == bounds.half_size);
         }
     }
 }

@@ -8,6 +8,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <random>
 #include <vector>
 
@@ -424,4 +426,36 @@ TEST_CASE("two rays stored into one texel in one frame leave the same path recor
     const std::uint64_t both = raycache::object_bits(5) | raycache::object_bits(6);
     CHECK(objects_after(dim, saw_5, bright, saw_6) == both);   // the larger word came second and lost
     CHECK(objects_after(bright, saw_6, dim, saw_5) == both);   // the larger word came first and was replaced
+}
+
+TEST_CASE("changes with a sphere or light that is not finite, or a negative radius, are refused before any texel goes") {
+    const World before = make_world();
+    CctCube cube(32);
+    fill(cube, before, 30000, 3);
+    const std::size_t valid = cube.valid_texels();
+    REQUIRE(valid > 4000);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    // A move that would drop texels if it were taken as given: a ball swept through the cube's surroundings.
+    raycache::SceneChanges good;
+    good.moved.push_back({7u, {glm::vec3(0.0f, 0.0f, 3.0f), 0.5f}, {glm::vec3(0.0f, 0.0f, 2.0f), 0.5f}});
+    auto bad = [&](auto&& edit) {
+        raycache::SceneChanges c = good;
+        edit(c);
+        return c;
+    };
+    const raycache::SceneChanges refused[] = {
+        bad([&](raycache::SceneChanges& c) { c.moved[0].after.centre.y = nan; }),
+        bad([&](raycache::SceneChanges& c) { c.moved[0].before.centre.x = inf; }),
+        bad([&](raycache::SceneChanges& c) { c.moved[0].after.radius = nan; }),
+        bad([&](raycache::SceneChanges& c) { c.moved[0].before.radius = -0.5f; }),
+        bad([&](raycache::SceneChanges& c) { c.moved[0].after.radius = inf; }),
+        bad([&](raycache::SceneChanges& c) { c.lights = {glm::vec3(0.0f, nan, 0.0f)}; }),
+    };
+    for (const raycache::SceneChanges& c : refused) {
+        CHECK_THROWS_AS(raycache::invalidate_changes(cube, {box, -1.0f}, c), std::invalid_argument);
+        CHECK(cube.valid_texels() == valid);
+    }
+    // A radius of 0 (a point) is a sphere; the good change itself goes through and drops something.
+    CHECK_NOTHROW(raycache::invalidate_changes(cube, {box, -1.0f}, bad([](raycache::SceneChanges& c) { c.moved[0].after.radius = 0.0f; })));
+    CHECK(cube.valid_texels() < valid);
 }

@@ -32,6 +32,8 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -64,6 +66,31 @@ struct SceneChanges {
     std::vector<glm::vec3> lights;
     bool light_moved = false;
 };
+
+// Throws std::invalid_argument naming `what` unless the sphere's centre and radius are finite and the
+// radius is not negative: every test below would take a NaN for "does not meet" and keep what it changed.
+inline void check_bounding_sphere(const BoundingSphere& s, const std::string& what) {
+    if (!std::isfinite(s.centre.x) || !std::isfinite(s.centre.y) || !std::isfinite(s.centre.z) || !std::isfinite(s.radius) ||
+        !(s.radius >= 0.0f))
+        throw std::invalid_argument("RayCache: " + what + " needs a finite centre and a finite radius >= 0");
+}
+
+// Throws std::invalid_argument unless every light position is finite.
+inline void check_lights(const std::vector<glm::vec3>& lights) {
+    for (const glm::vec3& light : lights)
+        if (!std::isfinite(light.x) || !std::isfinite(light.y) || !std::isfinite(light.z))
+            throw std::invalid_argument("RayCache: a light of the scene's changes is not finite");
+}
+
+// Throws std::invalid_argument unless every moved object's spheres (check_bounding_sphere) and every light
+// are finite. invalidate_changes() calls it before touching any texel.
+inline void check_scene_changes(const SceneChanges& changes) {
+    for (const SceneChanges::Move& m : changes.moved) {
+        check_bounding_sphere(m.before, "a moved object's sphere before the move");
+        check_bounding_sphere(m.after, "a moved object's sphere after the move");
+    }
+    check_lights(changes.lights);
+}
 
 // Where a cube's rays leave from: its box and the CCT's origin test.
 struct CubeRays {
@@ -210,6 +237,7 @@ template <class Texel, class Reach, class ParallelFor>
 InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach,
                               ParallelFor&& parallel_for) {
     cube.assert_between_frames();
+    check_scene_changes(changes);
     cube.settle_budget(); // the tiles this frame keeps, before their records are read
     InvalidationCounts counts;
     counts.valid_before = cube.valid_texels();
@@ -328,6 +356,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 
 // One pass of exact invalidation over a cube: a CCT cube (`rays` with its origin test), or a CDCT cube
 // (rays from anywhere in its box: origin_drift < 0; a CdctCache: the overloads below). Between frames only.
+// Throws std::invalid_argument for changes check_scene_changes() refuses, before touching any texel.
 // Deterministic: the result depends on the cube's contents and `changes` alone. parallel_for(count, f):
 // f(i) once for each i in [0, count), on any threads, returning when all have (as tbb::parallel_for);
 // runs of the cube's tiles go to f. Without it, on this thread.

@@ -457,7 +457,9 @@ public:
     // cones, and what their paths saw as leaving_ray's recording callback reported it; texels filled through
     // the plain callback or loaded count as having seen everything), then, transitively, the texels whose
     // paths hit a cached object whose cube lost texels.
-    // Deterministic; between frames only (before or after begin_frame()).
+    // Deterministic; between frames only (before or after begin_frame()). Throws std::invalid_argument, before
+    // anything changes, for a sphere or light that is not finite, a negative radius, or a moved cube's bounds
+    // that are empty or not finite.
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy) {
         return scene_changed(change, policy, detail::SerialFor{});
     }
@@ -468,6 +470,14 @@ public:
     // depends on its own texels and the changes alone, so the result is scene_changed()'s.
     template <class ParallelFor>
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy, ParallelFor&& parallel_for) {
+        // Bad input is refused before anything moves (check_scene_changes for the spheres and lights).
+        for (const ObjectMove& m : change.moved) {
+            check_bounding_sphere(m.before, "scene_changed: a moved object's sphere before the move");
+            check_bounding_sphere(m.after, "scene_changed: a moved object's sphere after the move");
+            if (m.cube && !raycache::detail::is_usable(*m.cube))
+                throw std::invalid_argument("RayCache: scene_changed: a moved object's cube has empty or infinite bounds");
+        }
+        check_lights(change.lights);
         const auto started = std::chrono::steady_clock::now();
         InvalidationStatistics stats;
         for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
