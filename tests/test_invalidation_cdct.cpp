@@ -5,7 +5,8 @@
 // points of the box toward points at distance s in random directions of the texel, in the world before and
 // after the move; a sample counts when, before the move, the ray met a surface within 2% of that distance
 // (the texel's surface, not something in front of it or a miss beside it), or, for a stored escape, met
-// nothing. A texel is stale when a counted sample sees another colour after the move.
+// nothing. A texel is stale when a counted sample sees another colour after the move. A second oracle asks
+// the searches themselves: an answer that was right before a move is right after it, or a miss.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -290,4 +291,67 @@ TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from 
     CHECK(after_move({0.1f, 0.1f, 12.0f}, 0.5f) == 0);
     // Between the box and the stored point, on the texel's axis: met.
     CHECK(after_move({0.0f, 0.0f, 3.0f}, 0.5f) == 1);
+}
+
+TEST_CASE("CDCT: every search answer that was right before a move is right after exact invalidation, or the search misses") {
+    // The oracle of the searches themselves, not of straight segments: fresh rays from the mirror ball are
+    // looked up before and after the move. An answer counts as right when its colour is the traced colour
+    // (within the texel encoding's rounding); one right before must, after exact invalidation, be right in
+    // the moved world or become a miss. Without invalidation some become wrong, so the check can fail.
+    const World before = make_world();
+    const float tolerance = 0.02f; // colour units; the RGB9E5 rounding of colours up to 1 is under 1/256
+    auto wrong = [&](const glm::vec3& answer, const glm::vec3& truth) {
+        return glm::any(glm::greaterThan(glm::abs(answer - truth), glm::vec3(tolerance)));
+    };
+    // The oracle's moves, and two larger ones: ball 4 rising by 0.6, and ball 0 coming close to the mirror,
+    // where it blocks many of the rays the cube answered.
+    std::vector<std::pair<std::size_t, World>> moves = test_moves(before);
+    moves.push_back({4, before});
+    moves.back().second.balls[4].centre += glm::vec3(0.0f, 0.6f, 0.0f);
+    moves.push_back({0, before});
+    moves.back().second.balls[0].centre = glm::vec3(2.6f, 0.1f, 0.3f);
+    for (const raycache::DepthSearch search : {raycache::DepthSearch::secant, raycache::DepthSearch::relief}) {
+        for (const auto& [moved, after] : moves) {
+            CAPTURE(moved);
+            CAPTURE(search == raycache::DepthSearch::secant ? "secant" : "relief");
+            raycache::ReliefParameters p = parameters;
+            p.search = search;
+            CdctCache exact(32, box, p), kept(32, box, p);
+            for (CdctCache* cache : {&exact, &kept}) {
+                LeavingRays leaving(8);
+                for (int k = 0; k < 30000; ++k) {
+                    const auto [n, d] = leaving.next();
+                    cache->cached_trace(n, d, [&, n = n, d = d](PathRecord& path) { return before.traced(n, d, &path); });
+                    if (k % 5000 == 4999) cache->begin_frame();
+                }
+                cache->begin_frame();
+            }
+            LeavingRays queries(99);
+            std::vector<std::pair<glm::vec3, glm::vec3>> right_before; // rays the cache answered right
+            for (int k = 0; k < 20000; ++k) {
+                const auto [o, d] = queries.next();
+                const raycache::ReliefResult r = exact.lookup(o, d);
+                if (r.hit && !wrong(r.color, before.trace(o, d))) right_before.push_back({o, d});
+            }
+            const raycache::InvalidationCounts counts = raycache::invalidate_changes(exact, move_of(before, after, moved));
+            std::size_t changed = 0, still_answered = 0, wrong_after = 0, wrong_kept = 0;
+            for (const auto& [o, d] : right_before) {
+                const glm::vec3 truth = after.trace(o, d);
+                changed += wrong(before.trace(o, d), truth);
+                const raycache::ReliefResult r = exact.lookup(o, d);
+                still_answered += r.hit;
+                wrong_after += r.hit && wrong(r.color, truth);
+                const raycache::ReliefResult k = kept.lookup(o, d);
+                wrong_kept += k.hit && wrong(k.color, truth);
+            }
+            MESSAGE(right_before.size() << " of 20000 answered right before, " << changed << " of them changed by the move; "
+                                        << counts.dropped << " texels dropped; after: " << still_answered << " answered, "
+                                        << wrong_after << " wrong (without invalidation: " << wrong_kept << ")");
+            CHECK(right_before.size() > 5000);
+            CHECK(changed > 0);
+            CHECK(wrong_kept > 0);
+            CHECK(wrong_after == 0);
+            CHECK(still_answered > right_before.size() / 2); // it keeps answering most of them
+        }
+    }
 }
