@@ -335,7 +335,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
 
     // One submission: the raster pass when `raster` (hybrid: it fills the G-buffer the dispatch reads), the
     // tracing dispatch over the pixels whose x and y are multiples of `stride` (1: all), and with caches the
-    // end-of-frame passes. Returns their GPU times (timestamps 0..2; 0 where the queue has none).
+    // end-of-frame passes. Returns their GPU times (timestamps 0..2: raster pass and tracing, then the
+    // end-of-frame passes; 0 where the queue has none).
     struct PassTimes {
         double trace_ms = 0.0, end_frame_ms = 0.0;
     };
@@ -349,11 +350,11 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         const bool caching = t.end_frame && t.texel_count > 0; // (a warm-up's resizing may change the cubes)
         t.context.submit([&](vk::Commands& commands) {
             t.timestamps->reset(commands);
+            t.timestamps->write(commands, 0);
             if (raster) {
                 t.raster->record(commands.handle(), width, height, static_cast<std::uint32_t>(t.bvh.primitives.size()), gbuffer);
                 commands.barrier(); // the copy's writes, visible to the tracing shader
             }
-            t.timestamps->write(commands, 0);
             commands.dispatch(*t.whitted,
                               {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame, *t.nodes, *t.primitives,
                                *t.objects, *t.params, *t.output, *t.cubes, gbuffer, *c.cct_doubtful, *c.cdct_doubtful},

@@ -54,7 +54,8 @@ struct FrameStats {
     double milliseconds = 0.0;           // the frame's submission, waited for on the host: the tracing dispatch and
                                          // (cct, cdct) RayCache's end-of-frame passes after it (hybrid: with the raster
                                          // pass, which a warm-up records in its own submission instead)
-    double gpu_trace_milliseconds = 0.0; // of `milliseconds`, the tracing dispatch on the GPU (timestamps; 0 without)
+    double gpu_trace_milliseconds = 0.0; // of `milliseconds`, the raster pass (hybrid) and the tracing dispatch on the
+                                         // GPU (timestamps; 0 without them, and for --secondary rsh)
     double end_frame_milliseconds = 0.0; // ... and the end-of-frame passes (publish, then mark) over the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
     std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)

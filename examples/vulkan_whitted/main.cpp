@@ -211,8 +211,14 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
             char hit[32] = "    -";
             if (caching && stats.lookups > 0)
                 std::snprintf(hit, sizeof hit, "%5.1f%%", 100.0 * static_cast<double>(stats.hits) / static_cast<double>(stats.lookups));
-            std::printf("%5d %10.2f %11.2f %10.2f   %s", f, stats.milliseconds, stats.gpu_trace_milliseconds,
-                        stats.end_frame_milliseconds, hit);
+            // GPU times come from timestamps: "-" where there are none (no timestamps, rsh, no end-of-frame passes).
+            auto gpu_ms = [](double ms) {
+                char text[32] = "-";
+                if (ms > 0.0) std::snprintf(text, sizeof text, "%.2f", ms);
+                return std::string(text);
+            };
+            std::printf("%5d %10.2f %11s %10s   %s", f, stats.milliseconds, gpu_ms(stats.gpu_trace_milliseconds).c_str(),
+                        gpu_ms(stats.end_frame_milliseconds).c_str(), hit);
             if (o.compare) std::printf(" %14.2f %8.2fx   %s", plain_ms, plain_ms / ms, rcx::psnr_text(psnr).c_str());
             if (v.secondary == rcx::gpu::Secondary::rsh) {
                 const rcx::gpu::RshStats& r = stats.rsh.trace;
@@ -288,9 +294,10 @@ int main(int argc, char** argv) {
                                     static_cast<std::uint32_t>(rcx::parse_int_value("--pair-capacity", text, 64, 1l << 24));
                             });
     command_line.add_option("--buffer-memory", "M",
-                            "memory the scene's and the cubes' buffers prefer: host (the first mappable\n"
-                            "type), cached (host-cached) or device (device-local memory the host can\n"
-                            "map); one type on lavapipe " + rcx::shown_default("host"),
+                            "memory the shaders' buffers prefer (scene, cubes, frame buffer; not the\n"
+                            "image, read back from host-cached memory): host (the first mappable type),\n"
+                            "cached (host-cached) or device (device-local memory the host can map);\n"
+                            "one type on lavapipe " + rcx::shown_default("host"),
                             [&vulkan](const std::string& text) {
                                 if (text == "host") vulkan.buffer_memory = rcx::vk::BufferMemory::host;
                                 else if (text == "cached") vulkan.buffer_memory = rcx::vk::BufferMemory::host_cached;

@@ -69,10 +69,10 @@ struct SceneChanges {
 
 // Throws std::invalid_argument naming `what` unless the sphere's centre and radius are finite and the
 // radius is not negative: every test below would take a NaN for "does not meet" and keep what it changed.
-inline void check_bounding_sphere(const BoundingSphere& s, const std::string& what) {
+inline void check_bounding_sphere(const BoundingSphere& s, const char* what) {
     if (!std::isfinite(s.centre.x) || !std::isfinite(s.centre.y) || !std::isfinite(s.centre.z) || !std::isfinite(s.radius) ||
         !(s.radius >= 0.0f))
-        throw std::invalid_argument("RayCache: " + what + " needs a finite centre and a finite radius >= 0");
+        throw std::invalid_argument(std::string("RayCache: ") + what + " needs a finite centre and a finite radius >= 0");
 }
 
 // Throws std::invalid_argument unless every light position is finite.

@@ -93,7 +93,9 @@ void run_case(rcx::vk::Context& context, const Case& c) {
     const std::string spirv = rcx::gpu::default_spirv_dir();
     rcx::gpu::TracerSettings plain;
     rcx::gpu::Tracer reference(context, scene, spirv, plain);
-    const rcx::Image uncached = reference.render(scene.camera, size, size);
+    rcx::gpu::FrameStats uncached_stats;
+    const rcx::Image uncached = reference.render(scene.camera, size, size, &uncached_stats);
+    check(uncached_stats.end_frame_milliseconds == 0.0, std::string(c.scene) + ": an uncached frame has no end-of-frame passes to time");
 
     // CCT; CDCT with the relief walk; CDCT with the secant search.
     for (int run = 0; run < 3; ++run) {
@@ -114,6 +116,13 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         const std::uint64_t submissions = context.submissions() - submissions_before;
         // The end-of-frame passes are recorded after the tracing dispatch, so the host waits once a frame.
         check(submissions == 1, name + format(": a frame takes one submission (%.0f)", double(submissions)));
+        // GPU times lie within the host's wait for the submission; with timestamps (lavapipe has them) the
+        // end-of-frame passes take some, and the uncached reference's, which has none, reads 0.
+        check(warm_stats.gpu_trace_milliseconds + warm_stats.end_frame_milliseconds <= warm_stats.milliseconds,
+              name + format(": GPU times %.3f ms within the submission's %.3f ms",
+                            warm_stats.gpu_trace_milliseconds + warm_stats.end_frame_milliseconds, warm_stats.milliseconds));
+        if (warm_stats.gpu_trace_milliseconds > 0.0)
+            check(warm_stats.end_frame_milliseconds > 0.0, name + ": timestamps time the end-of-frame passes");
         b.render(scene.camera, size, size);
         const rcx::Image twin = b.render(scene.camera, size, size, &twin_stats);
 
