@@ -97,6 +97,25 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     CHECK(s.overflow == 2u);
 }
 
+TEST_CASE("a GPU byte budget caps a texel buffer so that texels, pending twin and doubtful bits fit it, to the texel") {
+    // t texels take 2 x 4w t bytes (texels and pending, w words a texel) and 4 ceil(t / 32) bytes of doubtful
+    // bits. 1 MiB, CCT (w = 1): 129,055 texels take 2 x 516,220 + 4 x 4,033 = 1,048,572 bytes; one more,
+    // 1,048,580. CDCT (w = 2): 65,027 texels take 2 x 520,216 + 4 x 2,033 = 1,048,564; one more, 1,048,580.
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20) == 516220u);
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CdctTexel>(1u << 20) == 520216u);
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(3) == 0u);
+    // One cube in 1 MiB: 6 N^2 <= 129,055 gives N = 146 (127,896 texels; 147 would take 129,654).
+    CHECK(fit_gpu_face_sizes({512}, 4, raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20)) == std::vector<int>{146});
+    // behind-32's 33 cubes at 512 texels in 64 MiB, CDCT: the laid-out buffers stay within it.
+    const std::uint64_t budget = 64u << 20;
+    const std::vector<int> sizes = fit_gpu_face_sizes(std::vector<int>(33, 512), 8, raycache::gpu_texel_bytes_within<raycache::CdctTexel>(budget));
+    std::vector<raycache::GpuCubeShape> shapes;
+    for (int n : sizes) shapes.push_back({n, raycache::CubeBounds{glm::vec3(0.0f), 1.0f}});
+    const raycache::GpuBufferLayout layout = raycache::gpu_buffer_layout<raycache::CdctTexel>(shapes);
+    CHECK(2 * layout.bytes + layout.doubtful_bytes <= budget);
+    CHECK(2 * layout.bytes + layout.doubtful_bytes > budget * 9 / 10); // and use most of it
+}
+
 TEST_CASE("face sizes fitted to a storage buffer lower only the cubes above the largest cap that fits") {
     const std::vector<int> requested = {8, 100, 100};
     CHECK(fit_gpu_face_sizes(requested, 4, 121536) == std::vector<int>{8, 50, 50});

@@ -107,6 +107,7 @@ int run(const rcx::Options& o) {
             cache_settings.depth_pyramid = o.pyramid;
             cache_settings.adaptive.rays_per_texel = o.rays_per_texel;
             cache_settings.adaptive.first_face_size = o.first_face_size;
+            cache_settings.budget_bytes = static_cast<std::size_t>(o.budget_mib) << 20;
             cache_settings.filtered = o.filtered;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;

@@ -64,7 +64,7 @@ struct Tracer::Impl {
     raycache::GpuBufferLayout layout;
     std::vector<bool> sized;
     std::uint64_t max_buffer = 0; // maxStorageBufferRange
-    std::uint64_t cube_room = 0;  // of it, what the cubes may take (the frame buffer's counters come first)
+    std::uint64_t cube_room = 0;  // of it, what the cubes may take (the frame buffer's counters come first; the budget)
 
     // f(raycache::CctTexel{}) or f(raycache::CdctTexel{}): the library's per-technique calls, chosen once.
     template <class F>
@@ -184,20 +184,24 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         throw std::invalid_argument("Vulkan tracer: --face-size must be 1.." + std::to_string(RAYCACHE_MAX_FACE_SIZE));
     if (caching && settings.adaptive) raycache::validate(settings.adaptive_resolution);
     // The GLSL include reads one texel buffer per technique, so all cubes must fit in one storage buffer
-    // (lavapipe: 128 MiB): raycache::fit_gpu_face_sizes lowers the faces to the largest size that fits, leaving
-    // room for the frame buffer's counters, so that its store list can hold every texel (up to 16,776,960).
+    // (lavapipe: 128 MiB), and with their pending twin and doubtful bits within the budget:
+    // raycache::fit_gpu_face_sizes lowers the faces to the largest size that fits, leaving room in the buffer
+    // for the frame buffer's counters, so that its store list can hold every texel (up to 16,776,960).
     // Adaptive cubes start at the first face size and then follow their rays (raycache/gpu_adaptive.hpp).
     const std::uint64_t word_bytes = t.cdct ? 8 : 4;
     const std::uint64_t range = context.properties().limits.maxStorageBufferRange;
     const std::uint32_t cached = caching ? static_cast<std::uint32_t>(scene.cached_object_count()) : 0u;
     const std::uint64_t counter_bytes = 4 * (std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{cached} * RAYCACHE_FRAME_CUBE_WORDS);
+    t.max_buffer = range;
+    t.cube_room = range;
     if (cached > 0) {
         if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
+        const std::uint64_t within = t.cdct ? raycache::gpu_texel_bytes_within<raycache::CdctTexel>(settings.budget_bytes)
+                                            : raycache::gpu_texel_bytes_within<raycache::CctTexel>(settings.budget_bytes);
+        t.cube_room = std::min(range - counter_bytes, within);
         const int start = settings.adaptive ? settings.adaptive_resolution.first_face_size : t.settings.face_size;
-        t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, range - counter_bytes)[0];
+        t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, t.cube_room)[0];
     }
-    t.max_buffer = range;
-    t.cube_room = cached > 0 ? range - counter_bytes : range;
     GpuObjects packed = pack_objects(scene, caching, t.settings.face_size);
     const std::vector<GpuObject>& objects = packed.objects;
     t.shapes = std::move(packed.shapes);

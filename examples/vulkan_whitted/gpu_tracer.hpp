@@ -36,6 +36,9 @@ struct TracerSettings {
     bool adaptive = false;    // each cube's face size follows its rays (raycache/gpu_adaptive.hpp), from
                               // adaptive_resolution.first_face_size, within min_face_size..max_face_size
     raycache::AdaptiveResolution adaptive_resolution{};
+    // Bytes the cubes' texel, pending and doubtful-bit buffers may take together (raycache::gpu_texel_bytes_within):
+    // fixed faces are lowered to fit it, adaptive cubes are fitted to it after every frame (largest first).
+    std::uint64_t budget_bytes = std::uint64_t{256} << 20;
     bool secant = true;       // CDCT search: the secant search (a few reads) or, false, the relief walk
     int max_reads = 8;        // CDCT secant search: reads before a miss, 1..64
     float delta = 0.2f;       // CDCT relief walk: step; epsilon (both searches), linear steps, gap (0 = none)

@@ -92,7 +92,8 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     }
 
     // The cubes live in two host-visible buffers (texels and pending) of at most maxStorageBufferRange
-    // each (a larger --face-size is lowered to fit); the frame images come on top.
+    // each, within the budget with their doubtful bits (a larger --face-size is lowered to fit); the frame
+    // images come on top.
     std::vector<rcx::MemoryNeed> needs{rcx::frame_images(o)};
     if (rcx::uses_caches(o.cache)) {
         // Adaptive cubes may grow to the largest face size, and while they are resized the old and the new
@@ -103,8 +104,9 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         const std::uint64_t cubes = static_cast<std::uint64_t>(scene.cached_object_count()) * 6 * n * n *
                                     (o.cache == rcx::CacheMode::cdct ? 8 : 4);
         const std::uint64_t buffer = std::min<std::uint64_t>(cubes, context->properties().limits.maxStorageBufferRange);
+        const std::uint64_t held = std::min<std::uint64_t>(2 * buffer, std::uint64_t(o.budget_mib) << 20);
         needs.push_back({adaptive ? "cube texel and pending buffers, old and new while resizing" : "cube texel and pending buffers",
-                         (adaptive ? 4 : 2) * buffer});
+                         (adaptive ? 2 : 1) * held});
     }
     try {
         rcx::check_memory(needs);
@@ -118,6 +120,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.adaptive = o.face_size <= 0; // auto: each cube's size follows its rays (raycache/gpu_adaptive.hpp)
     settings.adaptive_resolution.rays_per_texel = o.rays_per_texel;
     settings.adaptive_resolution.first_face_size = o.first_face_size;
+    settings.budget_bytes = std::uint64_t(o.budget_mib) << 20;
     settings.secant = o.secant;
     settings.max_reads = o.max_reads;
     settings.delta = o.delta;
@@ -147,9 +150,10 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     const bool caching = rcx::uses_caches(o.cache);
     if (caching && o.face_size > 0 && tracer->face_size() != o.face_size)
         std::fprintf(stderr, "%s: note: --face-size %d: the cubes do not fit in one storage buffer of this device "
-                             "(maxStorageBufferRange %llu bytes); using face size %d\n",
+                             "(maxStorageBufferRange %llu bytes) or within --budget-mib %d; using face size %d\n",
                      "raycache_vulkan_whitted", o.face_size,
-                     static_cast<unsigned long long>(context->properties().limits.maxStorageBufferRange), tracer->face_size());
+                     static_cast<unsigned long long>(context->properties().limits.maxStorageBufferRange), o.budget_mib,
+                     tracer->face_size());
     const int frames = scene.path.frames;
     if (!o.quiet) {
         std::printf("device %s (validation %s); scene %s: %zu spheres, %zu meshes, %d cached objects, BVH %zu nodes; "

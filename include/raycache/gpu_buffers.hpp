@@ -55,6 +55,20 @@ struct GpuBufferLayout {
     std::uint64_t doubtful_bytes = 0;
 };
 
+// A GPU byte budget for one technique's cubes: the most bytes its texel buffer may take so that the texel
+// buffer, its pending twin and the doubtful bits (GpuBufferLayout::doubtful_bytes) together stay within
+// `budget_bytes`. Give it (or the device's maxStorageBufferRange, if smaller) to fit_gpu_face_sizes and
+// next_gpu_face_sizes as their cap: when the cubes reach it, the largest are lowered until they fit
+// (coarser faces, largest first; no cube is dropped). The frame buffer comes on top.
+template <class Texel>
+constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes) noexcept {
+    // t texels take 8w t bytes and 4 ceil(t / 32) <= t / 8 + 4 bytes of bits: at most budget when
+    // t (64w + 1) / 8 <= budget - 4.
+    constexpr std::uint64_t w = gpu_words_per_texel<Texel>;
+    if (budget_bytes < 4) return 0;
+    return (budget_bytes - 4) * 8 / (64 * w + 1) * 4 * w;
+}
+
 // The word that empties a doubtful-bit buffer (no texel doubtful); clear it with the texel buffers.
 inline constexpr std::uint32_t gpu_doubtful_clear_word = 0u;
 

@@ -7,7 +7,7 @@
 // same searches), and two tracers fed the same frames give the same pixels (no dependence on the
 // driver's thread timing); with the confidence test on, the warm frames still match the Embree tracer's made
 // with the same threshold. Adaptive face sizes: the cold frame is still the uncached one, every cube shrinks
-// after it and keeps answering, two tracers agree. No validation error.
+// after it and keeps answering, two tracers agree; a byte budget holds them. No validation error.
 // Exit 77 (CTest: skipped) only when there is no Vulkan device.
 #include <algorithm>
 #include <cstdint>
@@ -15,6 +15,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -294,6 +295,41 @@ void run_warm_up_case(rcx::vk::Context& context, const char* scene_name, rcx::Ca
 
 } // namespace
 
+// A byte budget (TracerSettings::budget_bytes, raycache::gpu_texel_bytes_within): behind-8's 9 cubes in
+// 1 MiB with the CCT hold at most 129,055 texels (texels, pending and doubtful bits), so 256-texel first
+// faces are lowered to 48 (9 x 6 x 48^2 = 124,416 texels; 49 would take 129,654), and after every frame the
+// adaptive cubes stay within it; a budget too small for a texel a cube is refused.
+void run_budget_case(rcx::vk::Context& context) {
+    const int size = 96;
+    const rcx::Scene scene = rcx::make_scene("behind-8");
+    const std::string spirv = rcx::gpu::default_spirv_dir();
+    rcx::gpu::TracerSettings settings;
+    settings.mode = rcx::CacheMode::cct;
+    settings.adaptive = true;
+    settings.face_size = settings.adaptive_resolution.first_face_size;
+    settings.budget_bytes = 1u << 20;
+    rcx::gpu::Tracer a(context, scene, spirv, settings);
+    const std::vector<int> first = a.face_sizes();
+    check(first.size() == 9 && std::all_of(first.begin(), first.end(), [](int n) { return n == 48; }),
+          format("budget 1 MiB: behind-8's 9 cubes start at 48-texel faces (first %.0f)", first.empty() ? 0.0 : first[0]));
+    bool within = true;
+    for (int f = 0; f < 3; ++f) {
+        a.render(scene.camera_at(f), size, size);
+        std::uint64_t texels = 0;
+        for (int n : a.face_sizes()) texels += 6ull * n * n;
+        within = within && 2 * 4 * texels + 4 * ((texels + 31) / 32) <= settings.budget_bytes;
+    }
+    check(within, "budget 1 MiB: after each of 3 frames the cubes' texel, pending and doubtful bytes stay within it");
+    settings.budget_bytes = 100; // 9 cubes of one texel a face: 2 x 4 x 54 bytes and 2 words of bits, 440 bytes
+    bool refused = false;
+    try {
+        rcx::gpu::Tracer tiny(context, scene, spirv, settings);
+    } catch (const std::invalid_argument&) {
+        refused = true;
+    }
+    check(refused, "a budget of 100 bytes, below one texel a face for 9 cubes, is refused");
+}
+
 int main() {
     std::unique_ptr<rcx::vk::Context> context;
     try {
@@ -322,6 +358,7 @@ int main() {
     // CDCT (secant) hits >= 0.313, >= 38.49 dB.
     run_adaptive_case(*context, "behind-8", rcx::CacheMode::cct, 0.45, 28.0);
     run_adaptive_case(*context, "behind-8", rcx::CacheMode::cdct, 0.25, 33.0);
+    run_budget_case(*context);
     // A single image with a warm-up over every 4th pixel, measured on lavapipe (64 x 64, 16-texel faces): CCT
     // hits 0.122 at 30.68 dB, CDCT 0.028 at 38.59 dB; against the Embree tracer's image (origin test off: the
     // GPU keeps no origins) 89.03 dB for the CCT (one 8-bit value differs), inf for the CDCT. Few hits: the

@@ -154,6 +154,11 @@ CommandLine::CommandLine(const std::string& program)
                [&o](const std::string& text) {
                    o.first_face_size = static_cast<int>(parse_int_value("--first-face-size", text, 1, 4096));
                });
+    add_option("--budget-mib", "N",
+               "memory all cubes may take, 1..1048576 MiB; when they reach it, the\n"
+               "Embree tracer keeps no new tiles that frame, the Vulkan tracer lowers\n"
+               "the largest cubes' faces [" + std::to_string(d.budget_mib) + "]",
+               [&o](const std::string& text) { o.budget_mib = static_cast<int>(parse_int_value("--budget-mib", text, 1, 1l << 20)); });
     add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"

@@ -46,6 +46,8 @@ struct Options {
     int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
     float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
     int first_face_size = 256;        // auto face sizes: before a cube's first frame (AdaptiveResolution's default)
+    int budget_mib = 256;             // bytes all cubes may take, MiB (SceneCacheSettings::budget_bytes's default;
+                                      // Vulkan: raycache::gpu_texel_bytes_within)
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
     int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
