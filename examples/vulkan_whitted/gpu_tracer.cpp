@@ -71,6 +71,9 @@ struct Tracer::Impl {
     decltype(auto) with_texel(F&& f) const {
         return cdct ? f(raycache::CdctTexel{}) : f(raycache::CctTexel{});
     }
+    // Whether frames store into cubes, so end with RayCache's end-of-frame passes (a warm-up's resizing may
+    // change the cubes, so ask again after it).
+    bool ends_frames() const noexcept { return end_frame && texel_count > 0; }
 
     // The buffers RayCache's bindings get now (the technique's own, stand-ins for the other's); place_cubes
     // replaces them, so take them again after it.
@@ -196,8 +199,8 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.cube_room = range;
     if (cached > 0) {
         if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
-        const std::uint64_t within = t.cdct ? raycache::gpu_texel_bytes_within<raycache::CdctTexel>(settings.budget_bytes)
-                                            : raycache::gpu_texel_bytes_within<raycache::CctTexel>(settings.budget_bytes);
+        const std::uint64_t within =
+            t.with_texel([&](auto texel) { return raycache::gpu_texel_bytes_within<decltype(texel)>(settings.budget_bytes); });
         t.cube_room = std::min(range - counter_bytes, within);
         const int start = settings.adaptive ? settings.adaptive_resolution.first_face_size : t.settings.face_size;
         t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, t.cube_room)[0];
@@ -216,6 +219,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     if (rsh && !settings.hybrid) t.bvh_prims = std::make_unique<vk::Buffer>(vk::buffer_of(context, t.bvh.primitives, 16));
     t.objects = std::make_unique<vk::Buffer>(vk::buffer_of(context, objects, 16));
     t.params = std::make_unique<vk::Buffer>(context, sizeof(GpuParams));
+    t.timestamps = std::make_unique<vk::Timestamps>(context, 3); // a frame submission's passes (render)
     t.dummy = std::make_unique<vk::Buffer>(context, 16);
     t.dummy->fill(RAYCACHE_GPU_CLEAR_WORD);
     t.zeros = std::make_unique<vk::Buffer>(context, 32); // no doubtful texels; a cube table of none
@@ -344,14 +348,13 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     struct PassTimes {
         double trace_ms = 0.0, end_frame_ms = 0.0;
     };
-    if (!t.timestamps) t.timestamps = std::make_unique<vk::Timestamps>(t.context, 3);
     auto trace_pass = [&](int stride, bool raster) {
         p.relief_i[3] = stride;
         t.params->upload(&p, sizeof p);
         const std::uint64_t columns = (static_cast<std::uint64_t>(width) + stride - 1) / stride;
         const std::uint64_t rows = (static_cast<std::uint64_t>(height) + stride - 1) / stride;
         const Impl::CacheBuffers c = t.cache_buffers();
-        const bool caching = t.end_frame && t.texel_count > 0; // (a warm-up's resizing may change the cubes)
+        const bool caching = t.ends_frames();
         t.context.submit([&](vk::Commands& commands) {
             t.timestamps->reset(commands);
             t.timestamps->write(commands, 0);
@@ -408,7 +411,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     // pass reads what the warm-up stored, and its counters and cells are the full pass's alone.
     double warm_up_ms = 0.0;
     std::uint64_t warm_up_stored = 0;
-    const bool warm_up = warm_up_stride > 1 && t.end_frame && t.texel_count > 0;
+    const bool warm_up = warm_up_stride > 1 && t.ends_frames();
     if (warm_up) {
         const auto warm_up_start = std::chrono::steady_clock::now();
         trace_pass(warm_up_stride, t.raster != nullptr);

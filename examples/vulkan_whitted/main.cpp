@@ -94,6 +94,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // The cubes live in two host-visible buffers (texels and pending) of at most maxStorageBufferRange
     // each, within the budget with their doubtful bits (a larger --face-size is lowered to fit); the frame
     // images come on top.
+    const std::uint64_t budget_bytes = std::uint64_t(o.budget_mib) << 20;
     std::vector<rcx::MemoryNeed> needs{rcx::frame_images(o)};
     if (rcx::uses_caches(o.cache)) {
         // Adaptive cubes may grow to the largest face size, and while they are resized the old and the new
@@ -104,7 +105,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         const std::uint64_t cubes = static_cast<std::uint64_t>(scene.cached_object_count()) * 6 * n * n *
                                     (o.cache == rcx::CacheMode::cdct ? 8 : 4);
         const std::uint64_t buffer = std::min<std::uint64_t>(cubes, context->properties().limits.maxStorageBufferRange);
-        const std::uint64_t held = std::min<std::uint64_t>(2 * buffer, std::uint64_t(o.budget_mib) << 20);
+        const std::uint64_t held = std::min<std::uint64_t>(2 * buffer, budget_bytes);
         needs.push_back({adaptive ? "cube texel and pending buffers, old and new while resizing" : "cube texel and pending buffers",
                          (adaptive ? 2 : 1) * held});
     }
@@ -120,7 +121,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.adaptive = o.face_size <= 0; // auto: each cube's size follows its rays (raycache/gpu_adaptive.hpp)
     settings.adaptive_resolution.rays_per_texel = o.rays_per_texel;
     settings.adaptive_resolution.first_face_size = o.first_face_size;
-    settings.budget_bytes = std::uint64_t(o.budget_mib) << 20;
+    settings.budget_bytes = budget_bytes;
     settings.secant = o.secant;
     settings.max_reads = o.max_reads;
     settings.delta = o.delta;

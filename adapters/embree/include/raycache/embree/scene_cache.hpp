@@ -470,23 +470,20 @@ public:
     // depends on its own texels and the changes alone, so the result is scene_changed()'s.
     template <class ParallelFor>
     InvalidationStatistics scene_changed(const SceneChange& change, Invalidation policy, ParallelFor&& parallel_for) {
-        // Bad input is refused before anything moves (check_scene_changes for the spheres and lights).
-        for (const ObjectMove& m : change.moved) {
-            check_bounding_sphere(m.before, "scene_changed: a moved object's sphere before the move");
-            check_bounding_sphere(m.after, "scene_changed: a moved object's sphere after the move");
-            if (m.cube && !raycache::detail::is_usable(*m.cube))
-                throw std::invalid_argument("RayCache: scene_changed: a moved object's cube has empty or infinite bounds");
-        }
-        check_lights(change.lights);
         const auto started = std::chrono::steady_clock::now();
-        InvalidationStatistics stats;
-        for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
-        std::vector<char> changed(entries_.size(), 0);
         SceneChanges changes;
         changes.lights = change.lights;
         changes.light_moved = change.light_moved;
         for (const ObjectMove& m : change.moved) {
             changes.moved.push_back({path_key(m.id), m.before, m.after});
+            if (m.cube && !raycache::detail::is_usable(*m.cube))
+                throw std::invalid_argument("RayCache: scene_changed: a moved object's cube has empty or infinite bounds");
+        }
+        check_scene_changes(changes); // bad input is refused before anything moves
+        InvalidationStatistics stats;
+        for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
+        std::vector<char> changed(entries_.size(), 0);
+        for (const ObjectMove& m : change.moved) {
             for (std::size_t i = 0; i < entries_.size(); ++i) {
                 Entry& e = entries_[i];
                 if (path_key(e.id) != path_key(m.id)) continue;
