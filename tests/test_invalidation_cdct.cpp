@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -291,6 +292,32 @@ TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from 
     CHECK(after_move({0.1f, 0.1f, 12.0f}, 0.5f) == 0);
     // Between the box and the stored point, on the texel's axis: met.
     CHECK(after_move({0.0f, 0.0f, 3.0f}, 0.5f) == 1);
+}
+
+TEST_CASE("CDCT: rays known to leave from within 1 of the centre keep a texel that only segments from the box's corners would meet") {
+    // The texel of the case above (a point 10 along +z). Its segments start from the ball of origins: the
+    // box's, radius sqrt(3) = 1.73, or, when the cube answers only rays from within 1 of the centre (the
+    // unit sphere's own rays), radius 1. Its shell at 9.5 .. 10.5 lies within 0.95 of the z axis, so the
+    // hull of the two balls stays within max(1, 0.95) = 1 of the axis from z = 0 on (a tangent line between
+    // two balls lies within the larger radius), plus the test's 0.3% and 0.002 of margin; with the box's
+    // ball it reaches 1.73 - (1.73 - 0.95) x 2 / 10 = 1.57 at z = 2. A sphere of radius 0.15 at (1.35, 0,
+    // 2) spans 1.2 .. 1.5 from the axis: between the two.
+    auto dropped_with_radius = [&](float origin_radius) {
+        auto cube = std::make_unique<CdctCube>(32);
+        PathRecord path;
+        const glm::vec3 direction = glm::normalize(glm::vec3(0.01f, 0.01f, 1.0f));
+        path.hit(5, 10.0f * direction);
+        raycache::store_traced(*cube, box, glm::vec3(0.0f), direction, {glm::vec3(0.5f), 10.0f}, parameters, &path);
+        cube->begin_frame();
+        REQUIRE(cube->valid_texels() == 1);
+        raycache::SceneChanges changes;
+        changes.moved.push_back({77, {glm::vec3(0.0f, 40.0f, 0.0f), 0.15f}, {glm::vec3(1.35f, 0.0f, 2.0f), 0.15f}});
+        return raycache::invalidate_changes(*cube, raycache::CubeRays{box, -1.0f, origin_radius}, parameters, changes).dropped;
+    };
+    CHECK(dropped_with_radius(1.0f) == 0);
+    CHECK(dropped_with_radius(std::numeric_limits<float>::infinity()) == 1); // the box's ball, as before
+    CHECK(dropped_with_radius(5.0f) == 1);                                   // wider than the box: its ball
+    CHECK(dropped_with_radius(1.3f) == 1); // from 1.3 out, segments pass 1.3 - 0.035 x 2 = 1.23 > 1.2 off the axis
 }
 
 TEST_CASE("CDCT: every search answer that was right before a move is right after exact invalidation, or the search misses") {

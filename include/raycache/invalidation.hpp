@@ -96,6 +96,9 @@ inline void check_scene_changes(const SceneChanges& changes) {
 struct CubeRays {
     CubeBounds bounds;
     float origin_drift = -1.0f; // world units; < 0: no origin test (rays from anywhere in the box)
+    // The cube answers only rays leaving from within this distance of bounds.centre (SceneCache tracks how
+    // far its object's rays leave from); infinity: from anywhere in the box, whose ball bounds them.
+    float origin_radius = std::numeric_limits<float>::infinity();
 };
 
 // What one pass did to one cube.
@@ -121,7 +124,10 @@ struct OriginBall {
 inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm::vec3& lo, const glm::vec3& hi) {
     const glm::vec3 c = rays.bounds.centre;
     const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * rays.bounds.half_size);
-    OriginBall ball{c, 1.7320509f * rays.bounds.half_size * 1.001f + 1e-3f * scale};
+    // The box's ball, or the smaller ball the rays are known to leave from (nan counts as unknown).
+    const float radius = rays.origin_radius >= 0.0f ? std::min(1.7320509f * rays.bounds.half_size, rays.origin_radius)
+                                                    : 1.7320509f * rays.bounds.half_size;
+    OriginBall ball{c, radius * 1.001f + 1e-3f * scale};
     if (has_origins && rays.origin_drift >= 0.0f) {
         const float r = 0.5f * glm::length(hi - lo) + 1.7320509f * rays.origin_drift + 1e-4f * scale;
         if (r < ball.radius) ball = OriginBall{0.5f * (lo + hi), r};
@@ -375,9 +381,17 @@ InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& ra
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
+    return invalidate_changes(cube, CubeRays{bounds}, p, changes, parallel_for);
+}
+
+// The same for a CDCT cube that answers only rays leaving from within rays.origin_radius of its centre
+// (rays.origin_drift is not used: the CDCT has no origin test).
+template <class ParallelFor = detail::SerialFor>
+InvalidationCounts invalidate_changes(CdctCube& cube, const CubeRays& rays, const ReliefParameters& p, const SceneChanges& changes,
+                                      ParallelFor&& parallel_for = {}) {
     const float gap = std::max(p.max_gap, p.epsilon);
     return detail::invalidate(
-        cube, CubeRays{bounds, -1.0f}, changes,
+        cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes,
         [&](const TexelAddress& a) {
             const std::optional<DepthSample> texel = cube.load(a);
             detail::TexelReach reach;
@@ -393,7 +407,15 @@ InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, 
 // pyramid follows when texels were dropped. Between frames only.
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChanges& changes, ParallelFor&& parallel_for = {}) {
-    const InvalidationCounts counts = invalidate_changes(cache.cube(), cache.bounds(), cache.parameters(), changes, parallel_for);
+    return invalidate_changes(cache, std::numeric_limits<float>::infinity(), changes, parallel_for);
+}
+
+// The same for a cache that answers only rays leaving from within origin_radius of its centre.
+template <class ParallelFor = detail::SerialFor>
+InvalidationCounts invalidate_changes(CdctCache& cache, float origin_radius, const SceneChanges& changes,
+                                      ParallelFor&& parallel_for = {}) {
+    const InvalidationCounts counts =
+        invalidate_changes(cache.cube(), CubeRays{cache.bounds(), -1.0f, origin_radius}, cache.parameters(), changes, parallel_for);
     if (counts.dropped > 0) cache.rebuild_pyramid();
     return counts;
 }
