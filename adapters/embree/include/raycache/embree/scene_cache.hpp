@@ -211,6 +211,7 @@ struct SceneCacheStatistics {
     std::size_t pyramid_bytes = 0;   // CDCT depth pyramids
     std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
     std::size_t doubtful_texels = 0; // texels the confidence test does not answer (their rays are traced)
+    std::size_t emptied_for_origins = 0; // cubes emptied: rays left further out than an invalidation checked
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     double valid_fraction() const noexcept {
@@ -274,6 +275,50 @@ inline CubeBounds triangle_bounds(RTCScene scene, unsigned geom_id, unsigned fir
 // Threads: leaving_ray() from any number of threads at once; attach(), begin_frame() and clear()
 // between frames, on one thread.
 class SceneCache {
+    // How far from its cube's centre an object's leaving rays start. Exact invalidation tests the rays from
+    // the ball of radius seen (the furthest origin any ray was stored from or answered for) grown by 2%,
+    // for a round object about its own sphere where the box's ball is up to 1.73 times wider. From then on
+    // the cube answers only rays from within `limit` (that radius): a texel it kept is known unchanged for
+    // those alone. A ray from further out is traced and neither answered nor stored; at the next begin_frame()
+    // the cube is emptied and answers rays from anywhere again, its ball widened. A maximum, so the result
+    // is the same on any number of threads.
+    struct OriginReach {
+        std::atomic<float> seen{0.0f};
+        float limit = std::numeric_limits<float>::infinity(); // between frames only
+        float limit_squared = std::numeric_limits<float>::infinity();
+
+        // Whether this frame's lookups may answer, and stores keep, a ray leaving from `offset` (origin -
+        // centre); its distance widens `seen`. Thread-safe; a relaxed read unless the ray is the furthest.
+        bool admits(const glm::vec3& offset) noexcept {
+            const float squared = glm::dot(offset, offset);
+            if (!std::isfinite(squared)) return false; // a bad origin: traced alone
+            float most = seen.load(std::memory_order_relaxed);
+            if (squared > most * most) {
+                const float distance = std::sqrt(squared);
+                while (distance > most && !seen.compare_exchange_weak(most, distance, std::memory_order_relaxed)) {
+                }
+            }
+            return squared <= limit_squared;
+        }
+        // The ball exact invalidation tests, which the cube's answers are then limited to. Between frames.
+        float restrict_to_seen() noexcept {
+            const float furthest = seen.load(std::memory_order_relaxed);
+            if (!(furthest > 0.0f)) return limit; // no ray yet (a pre-filled cube): from anywhere in the box
+            // 2% of room: the rays of a camera that moves on leave from points of the surface not met yet,
+            // a little further out where the tracer's offset grows, and each wider one would empty the cube.
+            limit = std::min(limit, furthest * 1.02f);
+            limit_squared = limit * limit;
+            return limit;
+        }
+        // True (and the limit lifted) when a ray came from outside the limit: the cube must be emptied.
+        bool outgrown() noexcept {
+            if (!(seen.load(std::memory_order_relaxed) > limit)) return false;
+            lift();
+            return true;
+        }
+        void lift() noexcept { limit = limit_squared = std::numeric_limits<float>::infinity(); }
+    };
+
     // One attached object: where its cube sits, and the cube of the cache's technique.
     struct Entry {
         ObjectId id;
@@ -282,6 +327,7 @@ class SceneCache {
         std::unique_ptr<CdctCache> cdct;             // its cube, bounds, parameters and (depth_pyramid) pyramid
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
         bool sized = false; // adaptive: sized once from counted rays (later moves need the hysteresis)
+        std::unique_ptr<OriginReach> origins = std::make_unique<OriginReach>();
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -432,14 +478,23 @@ public:
             else return trace().color;
         }
         Entry& e = entries_[static_cast<std::size_t>(index)];
+        // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
+        const bool answerable = e.origins->admits(origin - e.bounds.centre);
         if (technique_ == Technique::cct) {
             // The recording form lets exact invalidation keep what a move cannot have changed.
             const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
             const std::optional<TexelAddress> texel = e.cct->texel_of(direction); // found once, for both
             if (e.coverage && texel) e.coverage->mark(*texel, e.cct->face_size());
-            return cct_cached_trace_at(*e.cct, texel, direction, origin, origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
+            return cct_cached_trace_at(*e.cct, answerable ? texel : std::nullopt, direction, origin,
+                                       origin_drift_ >= 0.0f ? &tolerance : nullptr, filtered_, trace);
         }
         if (e.coverage) e.coverage->mark(direction);
+        if (!answerable) {
+            e.cdct->cube().record_lookup(false);
+            PathRecord unused;
+            if constexpr (records) return trace(unused).color;
+            else return trace().color;
+        }
         int read = 0;
         const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read);
         texels_read_.add(0, static_cast<std::uint64_t>(read));
@@ -574,6 +629,9 @@ public:
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
+        // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
+        for (Entry& e : entries_)
+            if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
         total.resized_cubes = adapt(frames, parallel_for);
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
@@ -614,6 +672,15 @@ public:
     template <class F>
     void for_each_cdct_cache(F&& f) const {
         for (const Entry& e : entries_) f(e.id, static_cast<const CdctCache*>(e.cdct.get()));
+    }
+
+    // How far from its cube's centre a ray of object `id` may leave and still be answered: infinity (from
+    // anywhere in the box) until an exact scene_changed(), then the furthest origin met before it (see
+    // leaving_ray). std::nullopt when it has no cube. Between frames.
+    std::optional<float> answered_origin_radius(ObjectId id) const {
+        const int index = find(id);
+        if (index < 0) return std::nullopt;
+        return entries_[static_cast<std::size_t>(index)].origins->limit;
     }
 
     // Where object `id`'s cube sits; std::nullopt when it has none.
@@ -679,8 +746,10 @@ public:
     }
 
 private:
-    // Empties an entry's cube (and rebuilds its pyramid); the texels it held.
+    // Empties an entry's cube (and rebuilds its pyramid); the texels it held. Holding nothing that a move
+    // was checked for, it may answer rays from anywhere again.
     std::size_t empty_cube(Entry& e) {
+        e.origins->lift();
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         if (e.cct) e.cct->clear();
         else e.cdct->clear(); // and its pyramid
@@ -694,9 +763,10 @@ private:
     // One exact pass over an entry's cube, its tiles spread by parallel_for (invalidate_changes()).
     template <class ParallelFor>
     InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes, ParallelFor&& parallel_for) {
-        if (!e.cct) return invalidate_changes(*e.cdct, changes, parallel_for); // and its pyramid
+        const float reach = e.origins->restrict_to_seen(); // every origin stored from or answered so far
+        if (!e.cct) return invalidate_changes(*e.cdct, reach, changes, parallel_for); // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
-        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift}, changes, parallel_for);
+        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift, reach}, changes, parallel_for);
     }
 
     // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
@@ -749,7 +819,7 @@ private:
     int add_entry(ObjectId id, int face_size, const CubeBounds& bounds) {
         const bool adaptive = face_size == adaptive_face_size;
         if (adaptive) shrink_first_face_size(entries_.size() + 1);
-        Entry entry{id, bounds, nullptr, nullptr, nullptr};
+        Entry entry{id, bounds, nullptr, nullptr, nullptr, false, std::make_unique<OriginReach>()};
         make_cube(entry, adaptive ? first_face_size_ : face_size);
         if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         entries_.push_back(std::move(entry));
@@ -885,7 +955,7 @@ private:
     // empty. Between frames; entries may be resized on different threads at once.
     void resize_entry(Entry& e, int face_size) {
         const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-        Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), nullptr};
+        Entry old{e.id, e.bounds, std::move(e.cct), std::move(e.cdct), nullptr, false, nullptr};
         make_cube(e, face_size);
         if (face_size < current) {
             if (technique_ == Technique::cct) {
@@ -984,6 +1054,9 @@ private:
             else
                 e.cct = std::move(loaded[source_of[i]].cube);
             if (e.coverage) e.coverage->reset();
+            // The file keeps no origins: its texels may have answered rays from anywhere in the box.
+            e.origins->seen.store(std::numeric_limits<float>::infinity(), std::memory_order_relaxed);
+            e.origins->lift();
             // A cube that holds texels received rays, so its face size came from counting them: later
             // moves take the hysteresis, as in the cache that saved it (the file keeps no flag for that).
             e.sized = with_cube(e, [](const auto& cube) { return cube.valid_texels() > 0; });

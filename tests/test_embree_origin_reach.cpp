@@ -1,0 +1,207 @@
+// How far from a cube's centre SceneCache answers rays, on real Embree scenes: anywhere in the box until
+// exact invalidation, then only as far out as the object's rays left (2% more), which lets a move keep
+// texels that only rays from the box's corners could have seen changed.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include <raycache/embree/scene_cache.hpp>
+
+using raycache::PathRecord;
+using raycache::TracedRay;
+using raycache::embree::Invalidation;
+using raycache::embree::ObjectId;
+using raycache::embree::SceneCache;
+using raycache::embree::SceneCacheSettings;
+using raycache::embree::Technique;
+
+namespace {
+
+const float infinity = std::numeric_limits<float>::infinity();
+
+// A mirror sphere of radius 1 at the origin (its cube: centre 0, half-size 1) and a small ball that moves.
+struct World {
+    RTCDevice device = rtcNewDevice(nullptr);
+    RTCScene scene = rtcNewScene(device);
+    unsigned mirror = 0, ball = 0;
+
+    unsigned add_sphere(glm::vec3 c, float r) {
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+        v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = r;
+        rtcCommitGeometry(g);
+        const unsigned id = rtcAttachGeometry(scene, g);
+        rtcReleaseGeometry(g);
+        return id;
+    }
+    World() {
+        mirror = add_sphere({0, 0, 0}, 1.0f);
+        ball = add_sphere({-6, 0, 0}, 0.2f);
+        rtcCommitScene(scene);
+    }
+    ~World() {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+    }
+};
+
+// CCT caches keyed by direction alone (no origin test), so only the origin reach decides what answers.
+SceneCache direction_keyed_cct() {
+    SceneCacheSettings s;
+    s.origin_drift = -1.0f;
+    s.edge_threshold = -1.0f;
+    return SceneCache(Technique::cct, s);
+}
+
+// A move of the small ball that no stored ray comes near.
+raycache::embree::SceneChange far_move(const World& w) {
+    raycache::embree::SceneChange change;
+    change.moved.push_back({ObjectId{w.ball}, {glm::vec3(-6, 0, 0), 0.2f}, {glm::vec3(-6, 0, 1), 0.2f}, std::nullopt});
+    return change;
+}
+
+} // namespace
+
+TEST_CASE("a cube answers rays from anywhere in its box until an exact move, then only from as far out as its rays left") {
+    World w;
+    SceneCache caches = direction_keyed_cct();
+    caches.attach(w.scene, {w.mirror}, 64);
+    int traces = 0;
+    const glm::vec3 colour(0.25f, 0.5f, 0.75f);
+    // Straight up, escaping: the path hits nothing (a recording trace, so invalidation can keep the texel).
+    auto up_from = [&](glm::vec3 origin) {
+        return caches.leaving_ray({w.mirror}, origin, glm::vec3(0, 1, 0), [&](PathRecord&) {
+            ++traces;
+            return TracedRay{colour, infinity};
+        });
+    };
+    const glm::vec3 top(0.0f, 1.01f, 0.0f), corner(0.7f, 0.7f, 0.7f); // 1.01 and 1.21 from the centre
+    up_from(top);
+    caches.begin_frame();
+    CHECK(*caches.answered_origin_radius({w.mirror}) == infinity);
+    up_from(top);
+    CHECK(traces == 1); // answered
+    caches.begin_frame();
+
+    const auto moved = caches.scene_changed(far_move(w), Invalidation::exact);
+    CHECK(moved.dropped == 0);
+    CHECK(*caches.answered_origin_radius({w.mirror}) == doctest::Approx(1.01f * 1.02f));
+    CHECK_FALSE(caches.answered_origin_radius({w.ball}).has_value()); // no cube
+
+    CHECK(up_from(top) == colour); // answered from the cube (RGB9E5 holds these three exactly)
+    CHECK(traces == 1);
+    CHECK(up_from(corner) == colour); // from further out: traced, its value returned unchanged
+    CHECK(traces == 2);
+    const auto frame = caches.begin_frame();
+    CHECK(frame.lookups == 2);
+    CHECK(frame.hits == 1);
+    CHECK(frame.stores == 0); // a ray from outside the reach is not stored either
+    CHECK(frame.emptied_for_origins == 1); // so the cube starts afresh, answering rays from anywhere
+    CHECK(frame.valid_texels == 0);
+    CHECK(*caches.answered_origin_radius({w.mirror}) == infinity);
+
+    // Filled again, it answers the corner's ray; the next move limits it to the corner's distance.
+    up_from(corner);
+    caches.begin_frame();
+    up_from(corner);
+    CHECK(traces == 3);
+    caches.begin_frame();
+    caches.scene_changed(far_move(w), Invalidation::exact);
+    CHECK(*caches.answered_origin_radius({w.mirror}) == doctest::Approx(glm::length(corner) * 1.02f));
+}
+
+TEST_CASE("a move that only rays from the box's corners could see keeps the texel once the cube knows its rays leave its sphere") {
+    // The texel straight up from the mirror (column and row 32 of the +y face at 64 texels: directions
+    // within 0.025 rad of its axis, tilted 0.022 rad towards +x and +z). The ball moves to (1.6, 3, 0),
+    // radius 0.2, 0.474 rad off that axis. Rays from a ball of radius R around the centre meet it only if
+    // rays from the centre meet it grown by R: within asin((0.2 + R) / 3.4) of its direction. From the
+    // mirror's own rays (R = 1.01 x 1.02, + 0.1% + 0.002 of margin: 1.035) that is 0.372 rad, short of 0.474
+    // - 0.025; from the box's ball (R = 1.735) 0.605 rad, which holds the texel's axis.
+    World w;
+    SceneCache caches = direction_keyed_cct();
+    caches.attach(w.scene, {w.mirror}, 64);
+    auto up = [&] {
+        return caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                                  [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+    };
+    up();
+    caches.begin_frame();
+    REQUIRE(caches.statistics().valid_texels == 1);
+    raycache::embree::SceneChange change;
+    change.moved.push_back({ObjectId{w.ball}, {glm::vec3(-6, 0, 0), 0.2f}, {glm::vec3(1.6f, 3.0f, 0.0f), 0.2f}, std::nullopt});
+    const auto kept = caches.scene_changed(change, Invalidation::exact);
+    CHECK(kept.dropped == 0);
+    // Moved on to (0.6, 3, 0), 0.197 rad off the axis: met from the mirror's ball too (within 0.372).
+    raycache::embree::SceneChange closer;
+    closer.moved.push_back({ObjectId{w.ball}, {glm::vec3(1.6f, 3.0f, 0.0f), 0.2f}, {glm::vec3(0.6f, 3.0f, 0.0f), 0.2f}, std::nullopt});
+    const auto dropped = caches.scene_changed(closer, Invalidation::exact);
+    CHECK(dropped.dropped == 1);
+    CHECK(dropped.dropped_by_cone == 1);
+}
+
+TEST_CASE("the reach is the furthest origin of any thread's rays: the same on 4 threads as on one") {
+    World w;
+    auto reach_after = [&](int threads) {
+        SceneCache caches = direction_keyed_cct();
+        caches.attach(w.scene, {w.mirror}, 64);
+        std::vector<std::thread> pool;
+        for (int t = 0; t < threads; ++t)
+            pool.emplace_back([&, t] {
+                for (int k = t; k < 4000; k += threads) {
+                    // Origins 1.0 .. 1.3999 from the centre, in many directions; the furthest is k = 3999.
+                    const float distance = 1.0f + 0.0001f * static_cast<float>(k);
+                    const float a = 0.01f * static_cast<float>(k);
+                    const glm::vec3 origin = distance * glm::vec3(std::cos(a), 0.0f, std::sin(a));
+                    caches.leaving_ray({w.mirror}, origin, glm::normalize(origin),
+                                       [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+                }
+            });
+        for (std::thread& t : pool) t.join();
+        caches.begin_frame();
+        caches.scene_changed(far_move(w), Invalidation::exact);
+        return *caches.answered_origin_radius({w.mirror});
+    };
+    const float one = reach_after(1);
+    CHECK(one == doctest::Approx(1.3999f * 1.02f));
+    CHECK(reach_after(4) == one);
+}
+
+TEST_CASE("CDCT: a texel's segments start from the mirror's own rays once a move limits them, not from the box's corners") {
+    // The texel straight up holds a surface 4 above the mirror's top (5.01 from the centre). Its segments
+    // run from the ball of origins to the shell of its directions at 5.01 -+ 0.5 (the search's max_gap),
+    // within 0.52 of the y axis. At y = 2 the hull of the two balls lies within 1.035 - (1.035 - 0.52) x 2 /
+    // 5 = 0.83 of the axis for the mirror's own rays, within 1.735 - (1.735 - 0.52) x 2 / 5 = 1.25 for the
+    // box's ball. A ball of radius 0.12 at (1.1, 2, 0) spans 0.98 .. 1.22 from the axis: kept. One of
+    // radius 0.2 at (0.3, 2.5, 0), on the segment from the mirror's top to the surface: dropped.
+    World w;
+    const std::uint64_t surface = raycache::embree::path_key(ObjectId{w.ball}) + 1000; // what the stored ray hit
+    const std::uint64_t mover = raycache::embree::path_key(ObjectId{w.ball});
+    REQUIRE((raycache::object_bits(surface) & raycache::object_bits(mover)) != raycache::object_bits(mover)); // no Bloom alias
+    SceneCacheSettings s;
+    s.edge_threshold = -1.0f;
+    s.relief.max_gap = 0.5f;
+    SceneCache caches(Technique::cdct, s);
+    caches.attach(w.scene, {w.mirror}, 64);
+    auto up = [&] {
+        return caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                                  [&](PathRecord& path) {
+                                      path.hit(surface, glm::vec3(0.0f, 5.01f, 0.0f));
+                                      return TracedRay{glm::vec3(0.5f), 4.0f};
+                                  });
+    };
+    up();
+    caches.begin_frame();
+    REQUIRE(caches.statistics().valid_texels == 1);
+    auto move_to = [&](glm::vec3 from, glm::vec3 to, float radius) {
+        raycache::embree::SceneChange change;
+        change.moved.push_back({ObjectId{w.ball}, {from, radius}, {to, radius}, std::nullopt});
+        return caches.scene_changed(change, Invalidation::exact).dropped;
+    };
+    CHECK(move_to({-6, 0, 0}, {1.1f, 2.0f, 0.0f}, 0.12f) == 0);
+    CHECK(*caches.answered_origin_radius({w.mirror}) == doctest::Approx(1.01f * 1.02f));
+    CHECK(move_to({1.1f, 2.0f, 0.0f}, {0.3f, 2.5f, 0.0f}, 0.2f) == 1);
+}
