@@ -9,6 +9,8 @@
 
 #include <raycache/embree/scene_cache.hpp>
 
+#include "embree_spheres.hpp"
+
 using raycache::TracedRay;
 using raycache::embree::ObjectId;
 using raycache::embree::SceneCache;
@@ -23,15 +25,7 @@ struct World {
     RTCScene scene = rtcNewScene(device);
     unsigned mirror = 0, floor = 0, ball = 0;
 
-    unsigned add_sphere(RTCScene target, glm::vec3 c, float r) {
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-        v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = r;
-        rtcCommitGeometry(g);
-        const unsigned id = rtcAttachGeometry(target, g);
-        rtcReleaseGeometry(g);
-        return id;
-    }
+    unsigned add_sphere(RTCScene target, glm::vec3 c, float r) { return add_embree_sphere(device, target, c, r); }
     World() {
         mirror = add_sphere(scene, {1, 2, 3}, 0.5f);
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);

@@ -11,6 +11,8 @@
 
 #include <raycache/embree/scene_cache.hpp>
 
+#include "embree_spheres.hpp"
+
 using raycache::PathRecord;
 using raycache::TracedRay;
 using raycache::embree::Invalidation;
@@ -29,18 +31,9 @@ struct World {
     RTCScene scene = rtcNewScene(device);
     unsigned mirror = 0, ball = 0;
 
-    unsigned add_sphere(glm::vec3 c, float r) {
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-        v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = r;
-        rtcCommitGeometry(g);
-        const unsigned id = rtcAttachGeometry(scene, g);
-        rtcReleaseGeometry(g);
-        return id;
-    }
     World() {
-        mirror = add_sphere({0, 0, 0}, 1.0f);
-        ball = add_sphere({-6, 0, 0}, 0.2f);
+        mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
+        ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
         rtcCommitScene(scene);
     }
     ~World() {

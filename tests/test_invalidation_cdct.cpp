@@ -255,24 +255,29 @@ TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invali
     CHECK(answered_at_ball == 0);
 }
 
+namespace {
+// A cube of one texel, holding a point 10 along +z from the centre of the unit box, whose path hit one
+// object (key 5) there and nothing else: no light, no further bounce.
+std::unique_ptr<CdctCube> one_texel_ten_ahead() {
+    auto cube = std::make_unique<CdctCube>(32);
+    PathRecord path;
+    const glm::vec3 direction = glm::normalize(glm::vec3(0.01f, 0.01f, 1.0f));
+    path.hit(5, 10.0f * direction);
+    raycache::store_traced(*cube, box, glm::vec3(0.0f), direction, {glm::vec3(0.5f), 10.0f}, parameters, &path);
+    cube->begin_frame();
+    REQUIRE(cube->valid_texels() == 1);
+    return cube;
+}
+} // namespace
+
 TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from the box to it, keeps the texel; one on such a segment drops it") {
     // One texel, holding a point 10 along +z from the centre of the unit box (the segments it answers run
     // from the box's ball, radius sqrt(3), to the shell of its directions at 10 - 0.5 .. 10 + 0.5). Its
     // path hit one object (key 5) there, and nothing else: no light, no further bounce.
-    auto one_texel = [] {
-        auto cube = std::make_unique<CdctCube>(32);
-        PathRecord path;
-        const glm::vec3 direction = glm::normalize(glm::vec3(0.01f, 0.01f, 1.0f));
-        path.hit(5, 10.0f * direction);
-        raycache::store_traced(*cube, box, glm::vec3(0.0f), direction, {glm::vec3(0.5f), 10.0f}, parameters, &path);
-        cube->begin_frame();
-        REQUIRE(cube->valid_texels() == 1);
-        return cube;
-    };
     const std::uint64_t mover = 77;
     REQUIRE((raycache::object_bits(5) & raycache::object_bits(mover)) != raycache::object_bits(mover)); // no Bloom alias
     auto after_move = [&](glm::vec3 to, float radius) {
-        std::unique_ptr<CdctCube> cube = one_texel();
+        std::unique_ptr<CdctCube> cube = one_texel_ten_ahead();
         raycache::SceneChanges changes;
         changes.moved.push_back({mover, {glm::vec3(0.0f, 40.0f, 0.0f), radius}, {to, radius}}); // from far away
         const raycache::InvalidationCounts counts = raycache::invalidate_changes(*cube, box, parameters, changes);
@@ -295,7 +300,7 @@ TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from 
 }
 
 TEST_CASE("CDCT: rays known to leave from within 1 of the centre keep a texel that only segments from the box's corners would meet") {
-    // The texel of the case above (a point 10 along +z). Its segments start from the ball of origins: the
+    // The texel of one_texel_ten_ahead() (a point 10 along +z). Its segments start from the ball of origins: the
     // box's, radius sqrt(3) = 1.73, or, when the cube answers only rays from within 1 of the centre (the
     // unit sphere's own rays), radius 1. Its shell at 9.5 .. 10.5 lies within 0.95 of the z axis, so the
     // hull of the two balls stays within max(1, 0.95) = 1 of the axis from z = 0 on (a tangent line between
@@ -303,13 +308,7 @@ TEST_CASE("CDCT: rays known to leave from within 1 of the centre keep a texel th
     // ball it reaches 1.73 - (1.73 - 0.95) x 2 / 10 = 1.57 at z = 2. A sphere of radius 0.15 at (1.35, 0,
     // 2) spans 1.2 .. 1.5 from the axis: between the two.
     auto dropped_with_radius = [&](float origin_radius) {
-        auto cube = std::make_unique<CdctCube>(32);
-        PathRecord path;
-        const glm::vec3 direction = glm::normalize(glm::vec3(0.01f, 0.01f, 1.0f));
-        path.hit(5, 10.0f * direction);
-        raycache::store_traced(*cube, box, glm::vec3(0.0f), direction, {glm::vec3(0.5f), 10.0f}, parameters, &path);
-        cube->begin_frame();
-        REQUIRE(cube->valid_texels() == 1);
+        std::unique_ptr<CdctCube> cube = one_texel_ten_ahead();
         raycache::SceneChanges changes;
         changes.moved.push_back({77, {glm::vec3(0.0f, 40.0f, 0.0f), 0.15f}, {glm::vec3(1.35f, 0.0f, 2.0f), 0.15f}});
         return raycache::invalidate_changes(*cube, raycache::CubeRays{box, -1.0f, origin_radius}, parameters, changes).dropped;

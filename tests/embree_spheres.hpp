@@ -1,0 +1,16 @@
+// Test helper: an Embree sphere (RTC_GEOMETRY_TYPE_SPHERE_POINT, one point) attached to a scene.
+#pragma once
+
+#include <embree3/rtcore.h>
+#include <glm/glm.hpp>
+
+// Attaches a sphere of radius r around c to `scene` (not committed) and returns its geometry id.
+inline unsigned add_embree_sphere(RTCDevice device, RTCScene scene, glm::vec3 c, float r) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+    v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = r;
+    rtcCommitGeometry(g);
+    const unsigned id = rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    return id;
+}
