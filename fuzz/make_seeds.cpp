@@ -1,5 +1,6 @@
 // raycache_fuzz_make_seeds: writes the fuzz targets' seed corpora into fuzz/corpus/<target>/ (checked in;
-// run it again when the cache-file format or a target's input layout changes):
+// run it again when the cache-file format or a target's input layout changes: cache-file seeds are named
+// after their format version, so the seeds of older formats stay beside them, and the tests read them):
 //   raycache_fuzz_make_seeds <repository>/fuzz/corpus
 // Cache-file seeds are small valid files (CCT and CDCT, one to three cubes, partial edge tiles, a 4096-texel
 // cube with one tile, origin boxes and doubtful marks) behind a byte that asks for checksums to be fixed; the other targets' inputs are read
@@ -12,6 +13,7 @@
 #include <type_traits>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -59,7 +61,11 @@ std::vector<std::uint8_t> cache_seed(std::uint8_t mode, const std::vector<int>& 
         cubes.back()->begin_frame();
         bool marked = false;
         cubes.back()->for_each_valid_texel([&](const raycache::TexelAddress& t) { marked = marked || cubes.back()->set_doubtful(t); });
-        save.push_back({static_cast<std::uint64_t>(save.size()) * 3 + 1, raycache::CubeBounds{glm::vec3(1.0f, -2.0f, 0.5f), 0.25f}, cubes.back().get()});
+        // Every other cube as exact invalidation leaves one: its rays' reach known and its answers limited to it.
+        const float seen = 0.25f + 0.01f * static_cast<float>(save.size());
+        const bool limited = save.size() % 2 == 1;
+        save.push_back({static_cast<std::uint64_t>(save.size()) * 3 + 1, raycache::CubeBounds{glm::vec3(1.0f, -2.0f, 0.5f), 0.25f},
+                        cubes.back().get(), 0, seen, limited ? 1.02f * seen : std::numeric_limits<float>::infinity()});
     }
     std::vector<std::uint8_t> bytes{mode};
     const std::vector<std::uint8_t> file = raycache::encode_cache<Texel>(identity, save);
@@ -75,10 +81,12 @@ int main(int argc, char** argv) {
         return 2;
     }
     const std::filesystem::path root = argv[1];
-    write(root / "cache_file" / "cct-one-small-cube", cache_seed<raycache::CctTexel>(1, {3}, 1, 300));
-    write(root / "cache_file" / "cct-two-cubes-raw", cache_seed<raycache::CctTexel>(0, {1, 2}, 2, 150));
-    write(root / "cache_file" / "cdct-edge-tiles", cache_seed<raycache::CdctTexel>(1, {17}, 3, 4));
-    write(root / "cache_file" / "cdct-three-cubes", cache_seed<raycache::CdctTexel>(1, {1, 2, 1}, 4, 120));
+    const std::filesystem::path files = root / "cache_file";
+    const std::string format = "-format" + std::to_string(raycache::cache_file_version);
+    write(files / ("cct-one-small-cube" + format), cache_seed<raycache::CctTexel>(1, {3}, 1, 300));
+    write(files / ("cct-two-cubes-raw" + format), cache_seed<raycache::CctTexel>(0, {1, 2}, 2, 150));
+    write(files / ("cdct-edge-tiles" + format), cache_seed<raycache::CdctTexel>(1, {17}, 3, 4));
+    write(files / ("cdct-three-cubes" + format), cache_seed<raycache::CdctTexel>(1, {1, 2, 1}, 4, 120));
     {
         raycache::CdctCube big(4096);
         big.store(glm::vec3(0.2f, 1.0f, -0.3f), raycache::DepthSample{glm::vec3(1.0f, 0.5f, 0.25f), 3.0f});
@@ -86,7 +94,7 @@ int main(int argc, char** argv) {
         const auto file = raycache::encode_cache<raycache::CdctTexel>(raycache::SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"},
                                                                        {{7, raycache::CubeBounds{glm::vec3(0.0f), 1.0f}, &big}});
         bytes.insert(bytes.end(), file.begin(), file.end());
-        write(root / "cache_file" / "cdct-4096-one-tile", bytes);
+        write(files / ("cdct-4096-one-tile" + format), bytes);
     }
     const char* streams[] = {"cct_lookup_store", "cdct_search", "texel_encoding", "prefill"};
     for (const char* target : streams) {

@@ -3,6 +3,8 @@
 // truncation and every corruption tried; a save killed at any moment leaves the old file or the new one.
 #include <doctest/doctest.h>
 
+#include <cmath>
+
 #include <algorithm>
 #include <chrono>
 #include <csignal>
@@ -207,10 +209,12 @@ TEST_CASE("a file of a newer or unknown format version is refused, saying which"
         for (int i = 0; i < 4; ++i) b[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
         return b;
     };
-    CHECK(decode<CdctTexel>(with_version(2)).size() == 1u);
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(3)); }), "format version 3 is newer than this RayCache reads (2)"));
-    // A format-2 file relabelled as format 1 does not parse as one (its tiles are 4 bytes longer).
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(1)); }), "tiles need"));
+    CHECK(decode<CdctTexel>(with_version(3)).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(4)); }), "format version 4 is newer than this RayCache reads (3)"));
+    // A format-3 file relabelled as format 2 or 1 does not parse as one (its cubes carry 8 bytes more, read
+    // as the tile count and a tile; format 1's tiles are also 4 bytes shorter).
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(2)); }), "tiles"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(1)); }), "tiles"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(0)); }), "unknown format version 0"));
     std::vector<std::uint8_t> not_ours = bytes;
     not_ours[0] = 'X';
@@ -220,7 +224,7 @@ TEST_CASE("a file of a newer or unknown format version is refused, saying which"
 TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
     // Written by raycache_fuzz_make_seeds at format 1 and checked in as a fuzz seed: one byte choosing the
     // technique (1: CDCT), then a CDCT file whose tiles, in format 1, have no nearest distance.
-    const std::string path = std::string(RAYCACHE_SOURCE_DIR) + "/fuzz/corpus/cache_file/cdct-edge-tiles";
+    const std::string path = std::string(RAYCACHE_SOURCE_DIR) + "/fuzz/corpus/cache_file/cdct-edge-tiles-format1";
     std::FILE* f = std::fopen(path.c_str(), "rb");
     REQUIRE(f);
     std::vector<std::uint8_t> bytes;
@@ -239,6 +243,90 @@ TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) 
             CHECK(c.cube->nearest_hit(t) == std::numeric_limits<float>::infinity());
         });
     CHECK(texels > 0u);
+}
+
+namespace {
+// A checked-in fuzz seed (fuzz/corpus/cache_file/NAME): one byte choosing the technique, then a cache file.
+std::vector<std::uint8_t> seed_file(const std::string& name) {
+    const std::string path = std::string(RAYCACHE_SOURCE_DIR) + "/fuzz/corpus/cache_file/" + name;
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    REQUIRE(f);
+    std::vector<std::uint8_t> bytes;
+    for (int c; (c = std::fgetc(f)) != EOF;) bytes.push_back(static_cast<std::uint8_t>(c));
+    std::fclose(f);
+    REQUIRE(bytes.size() > 17);
+    bytes.erase(bytes.begin());
+    return bytes;
+}
+
+// `bytes` (one CUBE chunk after the HEAD chunk) with the CUBE payload's float at `offset` replaced and the
+// chunk's checksum made right again, so that only the value is wrong.
+std::vector<std::uint8_t> with_cube_float(std::vector<std::uint8_t> bytes, std::size_t offset, float value) {
+    auto u64_at = [&](std::size_t at) {
+        std::uint64_t v = 0;
+        for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
+        return v;
+    };
+    const std::size_t head = 16;                                     // after the prelude
+    const std::size_t cube = head + 4 + 8 + u64_at(head + 4) + 8;    // after the HEAD chunk
+    const std::size_t payload = cube + 12, size = u64_at(cube + 4);
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, 4);
+    for (int i = 0; i < 4; ++i) bytes[payload + offset + i] = static_cast<std::uint8_t>(bits >> (8 * i));
+    const std::uint64_t check = raycache::fnv1a64(bytes.data() + cube, 12 + size);
+    for (int i = 0; i < 8; ++i) bytes[payload + size + i] = static_cast<std::uint8_t>(check >> (8 * i));
+    return bytes;
+}
+} // namespace
+
+TEST_CASE("a cube's origin reach survives a save: format 3 keeps how far out its rays left and how far out it answers") {
+    CdctCube cube(20);
+    Lcg rng{11};
+    fill_randomly(cube, rng, 15);
+    CubeToSave<CdctTexel> limited{7, bounds, &cube, 0, 0.8125f, 0.828125f};
+    CubeToSave<CdctTexel> open{8, bounds, &cube, 0, 0.5f, std::numeric_limits<float>::infinity()};
+    const std::vector<std::uint8_t> bytes = raycache::encode_cache<CdctTexel>(scene, {limited, open});
+    const auto cubes = decode<CdctTexel>(bytes);
+    REQUIRE(cubes.size() == 2u);
+    CHECK(cubes[0].origins_seen == 0.8125f);
+    CHECK(cubes[0].origins_limit == 0.828125f);
+    CHECK(cubes[1].origins_seen == 0.5f);
+    CHECK(cubes[1].origins_limit == std::numeric_limits<float>::infinity());
+    // A limit that is not > 0 is not written as none (that would let the texels answer rays no move was
+    // checked for); a reach not known (NaN) is written as infinity.
+    CHECK_THROWS_AS(raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{7, bounds, &cube, 0, 0.5f, 0.0f}}),
+                    std::invalid_argument);
+    CHECK_THROWS_AS(raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{7, bounds, &cube, 0, 0.5f, std::nanf("")}}),
+                    std::invalid_argument);
+    const auto unknown = decode<CdctTexel>(raycache::encode_cache<CdctTexel>(scene, {CubeToSave<CdctTexel>{7, bounds, &cube, 0, std::nanf("")}}));
+    CHECK(unknown[0].origins_seen == std::numeric_limits<float>::infinity());
+    // Read back: a limit not > 0 or a reach below 0 (or NaN) is refused by name. The two floats follow the
+    // object, part, face size and placement: payload bytes 36 and 40.
+    const std::vector<std::uint8_t> one = encode_one(cube);
+    REQUIRE(decode<CdctTexel>(with_cube_float(one, 36, 0.5f)).size() == 1u); // the patching itself is sound
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, 40, 0.0f)); }), "how far out the cube answers rays is not > 0"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, 40, std::nanf(""))); }), "answers rays is not > 0"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, 36, -1.0f)); }), "how far out the cube's rays left is not >= 0"));
+}
+
+TEST_CASE("a format-2 file (saved before cubes kept their origin reach) still loads, with no limit on its rays") {
+    std::vector<std::uint8_t> bytes = seed_file("cdct-three-cubes-format2");
+    CHECK(bytes[8] == 2); // the format version, little-endian
+    const auto cubes = decode<CdctTexel>(bytes, SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"});
+    REQUIRE(cubes.size() == 3u);
+    std::size_t texels = 0;
+    for (const auto& c : cubes) {
+        CHECK(c.origins_seen == std::numeric_limits<float>::infinity());
+        CHECK(c.origins_limit == std::numeric_limits<float>::infinity());
+        texels += c.cube->valid_texels();
+    }
+    CHECK(texels > 0u);
+    // The format-3 seed of the same cubes says how far out every other one answers.
+    const auto three = decode<CdctTexel>(seed_file("cdct-three-cubes-format3"), SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"});
+    REQUIRE(three.size() == 3u);
+    CHECK(three[0].origins_limit == std::numeric_limits<float>::infinity());
+    CHECK(three[1].origins_limit == doctest::Approx(1.02f * 0.26f));
+    CHECK(three[1].origins_seen == doctest::Approx(0.26f));
 }
 
 TEST_CASE("every truncation of a small cache file is refused") {

@@ -249,3 +249,36 @@ TEST_CASE("scene_changed refuses a sphere, light or cube that is not finite, bef
         }
     }
 }
+
+TEST_CASE("how far out a cube's rays left is the furthest origin of any thread's rays: the same on 4 threads as on one") {
+    // SceneCache keeps it per cube as an atomic maximum of the rays' distances from the centre; after an
+    // exact move the cube answers rays from within it (2% more) alone.
+    auto reach_after = [&](int threads) {
+        raycache::embree::SceneCacheSettings settings;
+        settings.origin_drift = -1.0f;
+        SceneCache caches(Technique::cct, settings);
+        caches.attach(ObjectId{0}, 64, raycache::CubeBounds{glm::vec3(0.0f), 1.5f});
+        std::vector<std::thread> pool;
+        for (int t = 0; t < threads; ++t)
+            pool.emplace_back([&, t] {
+                for (int k = t; k < 4000; k += threads) {
+                    // Origins 1.0 .. 1.3999 from the centre, in many directions; the furthest is k = 3999.
+                    const float distance = 1.0f + 0.0001f * static_cast<float>(k);
+                    const float a = 0.01f * static_cast<float>(k);
+                    const glm::vec3 origin = distance * glm::vec3(std::cos(a), 0.0f, std::sin(a));
+                    caches.leaving_ray(ObjectId{0}, origin, glm::normalize(origin), [&](PathRecord&) {
+                        return raycache::TracedRay{glm::vec3(0.5f), std::numeric_limits<float>::infinity()};
+                    });
+                }
+            });
+        for (std::thread& t : pool) t.join();
+        caches.begin_frame();
+        raycache::embree::SceneChange far;
+        far.moved.push_back({ObjectId{9}, {glm::vec3(-30, 0, 0), 0.5f}, {glm::vec3(-30, 0, 1), 0.5f}, std::nullopt});
+        caches.scene_changed(far, Invalidation::exact);
+        return *caches.answered_origin_radius(ObjectId{0});
+    };
+    const float one = reach_after(1);
+    CHECK(one == doctest::Approx(1.3999f * 1.02f));
+    CHECK(reach_after(4) == one);
+}

@@ -1,7 +1,7 @@
 // raycache/cache_file.hpp: saving warm caching cubes to a file and loading them back, so that a walkthrough
 // starts warm (as engines bake their light probes) instead of losing its caches at exit.
 //
-// The file, format version 2 (version 1 is read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
+// The file, format version 3 (versions 1 and 2 are read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
 // below, no library needed), so a truncated or corrupted file is refused, never half loaded.
 //
 //   prelude  "RAYCACHE" (8 bytes), u32 format version, u32 low half of fnv1a64 of those 12 bytes
@@ -11,7 +11,9 @@
 //            u64 scene hash, u32 name bytes (at most 4096) and the name, u32 cube count (at most 65536)
 //   "CUBE"   one per cube: u64 object id and u64 part (the caller's key of what the cube caches, unique in
 //            the file), u32 face size N (1..4096), f32 x 3 centre, f32 half-size,
-//            u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
+//            f32 how far from the centre the cube's rays were stored from or answered for (>= 0; infinity:
+//            not known) and f32 how far out the cube answers rays (> 0; infinity: from anywhere in its box;
+//            see CubeToSave; not in formats 1 and 2, whose cubes load with both infinite), u32 tile count, then per tile a u32 tile index, (face * T + tile row) * T + tile column with
 //            T = ceil(N / 16), strictly increasing; u32 1 and f32 x 6 (low and high corner) for the box of
 //            the origins its texels were stored from (CacheCube::origin_box), or u32 0 and six zeros;
 //            f32 the nearest hit distance of its stores (CacheCube::nearest_hit; infinity: none; not in
@@ -81,7 +83,7 @@ struct SceneIdentity {
     std::string name;
 };
 
-inline constexpr std::uint32_t cache_file_version = 2;
+inline constexpr std::uint32_t cache_file_version = 3;
 
 inline constexpr std::uint64_t fnv1a64_basis = 14695981039346656037ull;
 
@@ -107,13 +109,19 @@ struct CacheFileTexel<CdctTexel> {
 };
 
 // One cube to save: the caller's key of what it caches, (object, part), unique in the file (part: for callers
-// whose objects have parts, e.g. primitive ranges of one geometry; 0 otherwise), where it sits, the cube.
+// whose objects have parts, e.g. primitive ranges of one geometry; 0 otherwise), where it sits, the cube,
+// and where its rays leave from: the furthest from the centre any ray was stored from or answered for
+// (origins_seen; infinity: not known) and how far out the cube answers rays (origins_limit; infinity:
+// from anywhere in its box). A cube whose texels exact invalidation checked for rays from within a
+// distance only must keep that limit, or a load would let them answer rays they were never checked for.
 template <class Texel>
 struct CubeToSave {
     std::uint64_t object = 0;
     CubeBounds bounds;
     const CacheCube<Texel>* cube = nullptr;
     std::uint64_t part = 0;
+    float origins_seen = std::numeric_limits<float>::infinity();
+    float origins_limit = std::numeric_limits<float>::infinity();
 };
 
 // One cube read back, with its tiles' origin boxes and doubtful marks. Its texels are held as the current
@@ -124,6 +132,8 @@ struct LoadedCube {
     CubeBounds bounds;
     std::unique_ptr<CacheCube<Texel>> cube;
     std::uint64_t part = 0;
+    float origins_seen = std::numeric_limits<float>::infinity();  // as CubeToSave (formats 1, 2: infinity)
+    float origins_limit = std::numeric_limits<float>::infinity();
 };
 
 // True when two placements are the same, float for float.
@@ -306,6 +316,7 @@ struct CubeRecord {
     std::uint64_t object = 0, part = 0;
     int face_size = 0;
     CubeBounds bounds;
+    float origins_seen = std::numeric_limits<float>::infinity(), origins_limit = std::numeric_limits<float>::infinity();
     std::uint32_t tiles = 0;
     const std::uint8_t* tile_data = nullptr; // `tiles` times a tile_header_bytes(version) header and 256 words
     std::uint32_t version = cache_file_version;
@@ -385,6 +396,12 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     c.bounds.centre.z = r.f32("the centre");
     c.bounds.half_size = r.f32("the half-size");
     if (!is_usable(c.bounds)) r.fail("the placement (" + describe(c.bounds) + ") is not a finite centre with a half-size > 0");
+    if (version >= 3) {
+        c.origins_seen = r.f32("how far out the cube's rays left");
+        c.origins_limit = r.f32("how far out the cube answers rays");
+        if (!(c.origins_seen >= 0.0f)) r.fail("how far out the cube's rays left is not >= 0 (infinity: not known)");
+        if (!(c.origins_limit > 0.0f)) r.fail("how far out the cube answers rays is not > 0 (infinity: anywhere in its box)");
+    }
     c.tiles = r.u32("the tile count");
     const std::uint32_t per_edge = file_tiles_per_edge(c.face_size);
     const std::uint64_t tile_count = std::uint64_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
@@ -453,7 +470,8 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
 
 // The bytes of a cache file holding `cubes` (CCT or CDCT) for `scene`: every tile of each cube that holds
 // a value (visible or written this frame). Object ids must be unique; every cube non-null.
-// Throws std::invalid_argument otherwise, or for a scene name longer than 4096 bytes or more than 65536 cubes.
+// Throws std::invalid_argument otherwise, or for a scene name longer than 4096 bytes, more than 65536 cubes, or
+// an origins_limit not > 0.
 template <class Texel>
 std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::vector<CubeToSave<Texel>>& cubes) {
     using Word = typename Texel::Word;
@@ -467,6 +485,9 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
         if (!c.cube) throw std::invalid_argument("RayCache: encode_cache: a null cube");
         if (!keys.insert({c.object, c.part}).second)
             throw std::invalid_argument("RayCache: encode_cache: " + detail::key_text(c.object, c.part) + " appears twice");
+        if (!(c.origins_limit > 0.0f)) // lifting a limit would be unsafe, so a bad one is not written as none
+            throw std::invalid_argument("RayCache: encode_cache: " + detail::key_text(c.object, c.part) +
+                                        "'s origins_limit must be > 0 (infinity: none)");
     }
     detail::ByteWriter w;
     w.text(std::string(detail::cache_file_magic, 8));
@@ -495,6 +516,8 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
         w.f32(c.bounds.centre.y);
         w.f32(c.bounds.centre.z);
         w.f32(c.bounds.half_size);
+        w.f32(c.origins_seen >= 0.0f ? c.origins_seen : std::numeric_limits<float>::infinity()); // NaN, < 0: not known
+        w.f32(c.origins_limit);
         w.u32(static_cast<std::uint32_t>(tiles.size()));
         for (std::uint32_t index : tiles) {
             w.u32(index);
@@ -590,7 +613,8 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     std::vector<LoadedCube<Texel>> cubes;
     cubes.reserve(records.size());
     for (const detail::CubeRecord& c : records)
-        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r), c.part});
+        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r), c.part, c.origins_seen,
+                                          c.origins_limit});
     return cubes;
 }
 

@@ -121,19 +121,36 @@ struct OriginBall {
     glm::vec3 centre;
     float radius;
 };
+// The margin a ball of origins is grown by: the tracer's surface offsets, and rounding.
+inline float origin_ball_radius(const CubeBounds& bounds, float radius) {
+    const glm::vec3 c = bounds.centre;
+    const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * bounds.half_size);
+    return radius * 1.001f + 1e-3f * scale;
+}
 inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm::vec3& lo, const glm::vec3& hi) {
     const glm::vec3 c = rays.bounds.centre;
     const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * rays.bounds.half_size);
     // The box's ball, or the smaller ball the rays are known to leave from (nan counts as unknown).
     const float radius = rays.origin_radius >= 0.0f ? std::min(1.7320509f * rays.bounds.half_size, rays.origin_radius)
                                                     : 1.7320509f * rays.bounds.half_size;
-    OriginBall ball{c, radius * 1.001f + 1e-3f * scale};
+    OriginBall ball{c, origin_ball_radius(rays.bounds, radius)};
     if (has_origins && rays.origin_drift >= 0.0f) {
         const float r = 0.5f * glm::length(hi - lo) + 1.7320509f * rays.origin_drift + 1e-4f * scale;
         if (r < ball.radius) ball = OriginBall{0.5f * (lo + hi), r};
     }
     return ball;
 }
+
+} // namespace detail
+
+// The widest ball of origins exact invalidation tests a cube's rays from: the ball around its box, with a
+// margin for the tracer's surface offsets. Rays from further out are never checked; a cache that answers
+// them must not rely on invalidation.
+inline float box_origin_radius(const CubeBounds& bounds) {
+    return detail::origin_ball_radius(bounds, 1.7320509f * bounds.half_size);
+}
+
+namespace detail {
 
 // Whether meets(sphere) holds for the sphere of a moved object before or after its move.
 template <class Meets>

@@ -300,13 +300,14 @@ class SceneCache {
             }
             return squared <= limit_squared;
         }
-        // The ball exact invalidation tests, which the cube's answers are then limited to. Between frames.
-        float restrict_to_seen() noexcept {
+        // The ball exact invalidation tests, which the cube's answers are then limited to; never wider than
+        // the ball around the box (box_radius: box_origin_radius()), the widest it tests. Between frames.
+        float restrict_to_seen(float box_radius) noexcept {
             const float furthest = seen.load(std::memory_order_relaxed);
             if (!(furthest > 0.0f)) return limit; // no ray yet (a pre-filled cube): from anywhere in the box
             // 2% of room: the rays of a camera that moves on leave from points of the surface not met yet,
             // a little further out where the tracer's offset grows, and each wider one would empty the cube.
-            limit = std::min(limit, furthest * 1.02f);
+            limit = std::min(limit, std::min(furthest * 1.02f, box_radius));
             limit_squared = limit * limit;
             return limit;
         }
@@ -317,6 +318,17 @@ class SceneCache {
             return true;
         }
         void lift() noexcept { limit = limit_squared = std::numeric_limits<float>::infinity(); }
+        // An emptied cube: nothing it holds was stored from anywhere. Between frames.
+        void forget() noexcept {
+            lift();
+            seen.store(0.0f, std::memory_order_relaxed);
+        }
+        // As a cache file recorded them (load): `limit` infinity for none.
+        void restore(float seen_radius, float limit_radius) noexcept {
+            seen.store(seen_radius, std::memory_order_relaxed);
+            limit = limit_radius;
+            limit_squared = limit_radius * limit_radius;
+        }
     };
 
     // One attached object: where its cube sits, and the cube of the cache's technique.
@@ -697,7 +709,8 @@ public:
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
 
-    // Writes every cube (its texels, face size and placement, keyed by its object id) and `scene`, the
+    // Writes every cube (its texels, face size and placement, keyed by its object id, and how far out its
+    // rays left and it answers, answered_origin_radius()) and `scene`, the
     // caller's identity of the scene, to `path` (raycache/cache_file.hpp): atomically, so a process killed
     // during the save leaves the old file or the new one. Between frames. Throws CacheFileError naming the
     // file and the system's reason when it cannot be written.
@@ -749,7 +762,7 @@ private:
     // Empties an entry's cube (and rebuilds its pyramid); the texels it held. Holding nothing that a move
     // was checked for, it may answer rays from anywhere again.
     std::size_t empty_cube(Entry& e) {
-        e.origins->lift();
+        e.origins->forget();
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         if (e.cct) e.cct->clear();
         else e.cdct->clear(); // and its pyramid
@@ -763,7 +776,8 @@ private:
     // One exact pass over an entry's cube, its tiles spread by parallel_for (invalidate_changes()).
     template <class ParallelFor>
     InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes, ParallelFor&& parallel_for) {
-        const float reach = e.origins->restrict_to_seen(); // every origin stored from or answered so far
+        // Every origin stored from or answered so far, within the box's ball (tested at most).
+        const float reach = e.origins->restrict_to_seen(box_origin_radius(e.bounds));
         if (!e.cct) return invalidate_changes(*e.cdct, reach, changes, parallel_for); // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
         return invalidate_changes(*e.cct, CubeRays{e.bounds, drift, reach}, changes, parallel_for);
@@ -1003,7 +1017,8 @@ private:
         std::vector<CubeToSave<Texel>> cubes;
         for (const Entry& e : entries_) {
             const FileKey key = file_key(e);
-            cubes.push_back(CubeToSave<Texel>{key.first, e.bounds, cube_of(e, Texel{}), key.second});
+            cubes.push_back(CubeToSave<Texel>{key.first, e.bounds, cube_of(e, Texel{}), key.second,
+                                              e.origins->seen.load(std::memory_order_relaxed), e.origins->limit});
         }
         return cubes;
     }
@@ -1054,9 +1069,11 @@ private:
             else
                 e.cct = std::move(loaded[source_of[i]].cube);
             if (e.coverage) e.coverage->reset();
-            // The file keeps no origins: its texels may have answered rays from anywhere in the box.
-            e.origins->seen.store(std::numeric_limits<float>::infinity(), std::memory_order_relaxed);
-            e.origins->lift();
+            // Where the saved cube's rays left from, and how far out it answered: its texels were checked by
+            // exact invalidation for rays from within that limit alone (files before format 3: no limit, and
+            // the rays' origins not known, so the next move tests from the box's ball).
+            const LoadedCube<Texel>& c = loaded[source_of[i]];
+            e.origins->restore(c.origins_seen, c.origins_limit);
             // A cube that holds texels received rays, so its face size came from counting them: later
             // moves take the hysteresis, as in the cache that saved it (the file keeps no flag for that).
             e.sized = with_cube(e, [](const auto& cube) { return cube.valid_texels() > 0; });
