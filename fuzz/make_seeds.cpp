@@ -53,11 +53,20 @@ std::vector<std::uint8_t> cache_seed(std::uint8_t mode, const std::vector<int>& 
                     else
                         cubes.back()->store_word_at({face, column, row}, std::uint64_t{rng.next() % 0x7F800000u} << 32 | rng.next());
                 }
-        // A store with the origin it left from (its tile gets an origin box) and a doubtful texel.
-        if constexpr (std::is_same_v<Texel, raycache::CctTexel>)
+        // A store with the origin it left from (its tile gets an origin box), one with what its path saw (its
+        // block gets a path record) and a doubtful texel.
+        raycache::PathRecord path;
+        path.hit(5, glm::vec3(2.0f, 1.0f, -1.0f));
+        path.hit(9, glm::vec3(3.0f, 4.0f, 0.5f));
+        path.lit = path.chained = true;
+        path.escaped(glm::vec3(0.0f, 1.0f, 1.0f));
+        if constexpr (std::is_same_v<Texel, raycache::CctTexel>) {
             cubes.back()->store(glm::vec3(1.0f, 0.2f, 0.1f), glm::vec3(0.5f), glm::vec3(0.3f, 1.0f, 2.0f));
-        else
+            cubes.back()->store(glm::vec3(-0.3f, 1.0f, 0.2f), glm::vec3(0.25f), path);
+        } else {
             cubes.back()->store(glm::vec3(1.0f, 0.2f, 0.1f), raycache::DepthSample{glm::vec3(0.5f), 2.0f}, glm::vec3(0.3f, 1.0f, 2.0f));
+            cubes.back()->store(glm::vec3(-0.3f, 1.0f, 0.2f), raycache::DepthSample{glm::vec3(0.25f), 3.0f}, path);
+        }
         cubes.back()->begin_frame();
         bool marked = false;
         cubes.back()->for_each_valid_texel([&](const raycache::TexelAddress& t) { marked = marked || cubes.back()->set_doubtful(t); });

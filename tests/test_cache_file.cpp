@@ -3,10 +3,9 @@
 // truncation and every corruption tried; a save killed at any moment leaves the old file or the new one.
 #include <doctest/doctest.h>
 
-#include <cmath>
-
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -130,7 +129,7 @@ TEST_CASE("a cache file is sparse: a 4096-texel cube holding one texel takes one
     CdctCube cube(4096);
     CHECK(cube.store(glm::vec3(0.3f, -1.0f, 0.2f), raycache::DepthSample{glm::vec3(0.5f), 2.0f}));
     const std::vector<std::uint8_t> bytes = encode_one(cube);
-    CHECK(bytes.size() < 16 * 16 * 8 + 300);
+    CHECK(bytes.size() < 16 * 16 * 8 + 16 * 64 + 300); // its words and its blocks' path records
     std::vector<raycache::LoadedCube<CdctTexel>> back = decode<CdctTexel>(bytes);
     REQUIRE(back.size() == 1u);
     CHECK(back[0].cube->face_size() == 4096);
@@ -259,9 +258,9 @@ std::vector<std::uint8_t> seed_file(const std::string& name) {
     return bytes;
 }
 
-// `bytes` (one CUBE chunk after the HEAD chunk) with the CUBE payload's float at `offset` replaced and the
-// chunk's checksum made right again, so that only the value is wrong.
-std::vector<std::uint8_t> with_cube_float(std::vector<std::uint8_t> bytes, std::size_t offset, float value) {
+// `bytes` (one CUBE chunk after the HEAD chunk) with the CUBE payload's 32 bits at `offset` replaced and
+// the chunk's checksum made right again, so that only the value is wrong.
+std::vector<std::uint8_t> with_cube_bits(std::vector<std::uint8_t> bytes, std::size_t offset, std::uint32_t bits) {
     auto u64_at = [&](std::size_t at) {
         std::uint64_t v = 0;
         for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
@@ -270,13 +269,20 @@ std::vector<std::uint8_t> with_cube_float(std::vector<std::uint8_t> bytes, std::
     const std::size_t head = 16;                                     // after the prelude
     const std::size_t cube = head + 4 + 8 + u64_at(head + 4) + 8;    // after the HEAD chunk
     const std::size_t payload = cube + 12, size = u64_at(cube + 4);
-    std::uint32_t bits;
-    std::memcpy(&bits, &value, 4);
     for (int i = 0; i < 4; ++i) bytes[payload + offset + i] = static_cast<std::uint8_t>(bits >> (8 * i));
     const std::uint64_t check = raycache::fnv1a64(bytes.data() + cube, 12 + size);
     for (int i = 0; i < 8; ++i) bytes[payload + size + i] = static_cast<std::uint8_t>(check >> (8 * i));
     return bytes;
 }
+std::vector<std::uint8_t> with_cube_float(const std::vector<std::uint8_t>& bytes, std::size_t offset, float value) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, 4);
+    return with_cube_bits(bytes, offset, bits);
+}
+// Payload offsets of a CUBE chunk (format 3): its first tile's first record block's flag, path flags and
+// boxes (after object, part, face size, placement, reach, tile count; the tile's index, origin flag and
+// box, nearest distance and doubtful marks).
+constexpr std::size_t first_block_flag = 116, first_block_path_flags = 120, first_block_boxes = 132;
 } // namespace
 
 TEST_CASE("a cube's origin reach survives a save: format 3 keeps how far out its rays left and how far out it answers") {
@@ -327,6 +333,87 @@ TEST_CASE("a format-2 file (saved before cubes kept their origin reach) still lo
     CHECK(three[0].origins_limit == std::numeric_limits<float>::infinity());
     CHECK(three[1].origins_limit == doctest::Approx(1.02f * 0.26f));
     CHECK(three[1].origins_seen == doctest::Approx(0.26f));
+}
+
+TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded path met keeps their texels") {
+    // Three texels in three blocks of a 16-texel CCT cube: +x, whose path hit object 5 at (3, 0, 0) and
+    // cast a shadow ray; +y, whose path hit object 6 at (0, 3, 0), bounced on to (0, 3, 4) and escaped
+    // along +z; -z, stored without a record. Object 6 then moves far off every texel's cone (from
+    // (40, -40, 40) to (40, -40, 41), radius 0.5, with no light moving): the +y texel's record names it,
+    // so it goes; the -z texel's store brought no record, so it goes; the +x texel stays. Before format 3
+    // a loaded cube had no records, and lost all three.
+    const std::uint64_t five = 5, six = 6;
+    REQUIRE((raycache::object_bits(five) & raycache::object_bits(six)) != raycache::object_bits(six)); // no Bloom alias
+    CctCube cube(16);
+    raycache::PathRecord a, b;
+    a.hit(five, glm::vec3(3.0f, 0.0f, 0.0f));
+    a.lit = true;
+    b.hit(six, glm::vec3(0.0f, 3.0f, 0.0f));
+    b.hit(six, glm::vec3(0.0f, 3.0f, 4.0f));
+    b.chained = true;
+    b.escaped(glm::vec3(0.0f, 0.0f, 1.0f));
+    REQUIRE(cube.store(glm::vec3(1, 0, 0), glm::vec3(0.5f), a));
+    REQUIRE(cube.store(glm::vec3(0, 1, 0), glm::vec3(0.25f), b));
+    REQUIRE(cube.store(glm::vec3(0, 0, -1), glm::vec3(0.75f)));
+    cube.begin_frame();
+    const CubeBounds unit{glm::vec3(0.0f), 1.0f};
+    const auto loaded = decode<CctTexel>(raycache::encode_cache<CctTexel>(scene, {CubeToSave<CctTexel>{7, unit, &cube}}));
+    REQUIRE(loaded.size() == 1u);
+    CctCube& back = *loaded[0].cube;
+    back.begin_frame();
+    // The blocks' records come back as they were saved, field by field.
+    std::vector<raycache::CacheCube<CctTexel>::BlockState> saved, read;
+    cube.for_each_block_state([&](const auto& s) { saved.push_back(s); });
+    back.for_each_block_state([&](const auto& s) { read.push_back(s); });
+    REQUIRE(saved.size() == read.size());
+    int recorded = 0;
+    for (std::size_t i = 0; i < saved.size(); ++i) {
+        CAPTURE(i);
+        CHECK(saved[i].objects == read[i].objects);
+        CHECK(saved[i].path_flags == read[i].path_flags);
+        CHECK(saved[i].unrecorded_texels == read[i].unrecorded_texels);
+        if (saved[i].objects) {
+            ++recorded;
+            CHECK(saved[i].vertex_lo == read[i].vertex_lo);
+            CHECK(saved[i].vertex_hi == read[i].vertex_hi);
+            CHECK(saved[i].escape_lo == read[i].escape_lo);
+            CHECK(saved[i].escape_hi == read[i].escape_hi);
+        }
+    }
+    CHECK(recorded == 2);
+    raycache::SceneChanges changes;
+    changes.moved.push_back({six, {glm::vec3(40.0f, -40.0f, 40.0f), 0.5f}, {glm::vec3(40.0f, -40.0f, 41.0f), 0.5f}});
+    changes.lights = {glm::vec3(0.0f, 100.0f, 0.0f)};
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(back, raycache::CubeRays{unit}, changes);
+    CHECK(counts.dropped == 2);
+    CHECK(counts.dropped_unrecorded == 1);
+    CHECK(back.load(*back.texel_of(glm::vec3(1, 0, 0))).has_value());
+    CHECK_FALSE(back.load(*back.texel_of(glm::vec3(0, 1, 0))).has_value());
+    CHECK_FALSE(back.load(*back.texel_of(glm::vec3(0, 0, -1))).has_value());
+}
+
+TEST_CASE("a block record that is not one is refused by name") {
+    CdctCube cube(20);
+    Lcg rng{5};
+    fill_randomly(cube, rng, 1000); // every texel stored without a record: each block's record is written as none, all zero
+    const std::vector<std::uint8_t> none = encode_one(cube);
+    REQUIRE(decode<CdctTexel>(with_cube_bits(none, first_block_flag, 0u)).size() == 1u); // the patching itself is sound
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(none, first_block_flag, 2u)); }), "record flag 2 (0 or 1)"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(none, first_block_path_flags, 1u)); }),
+                   "holds no record but is not all zero"));
+    // A block with a record (the tile's texels stored with one, up the +x face's first tile).
+    CdctCube recorded(20);
+    raycache::PathRecord path;
+    path.hit(3, glm::vec3(2.0f, 0.0f, 0.0f));
+    REQUIRE(recorded.store_at(TexelAddress{0, 1, 1}, raycache::DepthSample{glm::vec3(0.5f), 2.0f}, path));
+    recorded.begin_frame();
+    const std::vector<std::uint8_t> one = encode_one(recorded);
+    REQUIRE(decode<CdctTexel>(one).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, first_block_path_flags, 8u)); }), "has path flags 8"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, std::nanf(""))); }),
+                   "boxes are neither empty"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, 5.0f)); }), // low > high
+                   "boxes are neither empty"));
 }
 
 TEST_CASE("every truncation of a small cache file is refused") {

@@ -19,7 +19,13 @@
 //            f32 the nearest hit distance of its stores (CacheCube::nearest_hit; infinity: none; not in
 //            format 1, whose tiles load without one and answer within the drift alone of an
 //            OriginTolerance until a store gives them a distance); u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
-//            doubtful (CacheCube::is_doubtful; only texels holding a value); and its 16 x 16 words row by
+//            doubtful (CacheCube::is_doubtful; only texels holding a value); in format 3, the path records
+//            of its sixteen 4 x 4 record blocks (block = (row / 4) * 4 + column / 4), 64 bytes each: u32 1
+//            when every texel of the block holding a value was stored with the record (else 0, and the
+//            rest zero: such texels count as having seen everything), u32 flags (1 lit, 2 chained, 4
+//            unbounded), u64 the objects' Bloom mask, f32 x 6 the box of the paths' hit points and f32 x 6
+//            the box of their escaped directions (low and high corners; empty: +infinity x 3 then
+//            -infinity x 3; else finite, low <= high); and its 16 x 16 words row by
 //            row (texels past the face's edge, and empty texels, hold the technique's empty word; any other
 //            word must be valid)
 //   "END "   u32 cube count; nothing may follow
@@ -322,17 +328,66 @@ struct CubeRecord {
     std::uint32_t version = cache_file_version;
 };
 
-// A tile's index, origin box and doubtful marks, as the file stores them before its words.
+inline constexpr int file_record_blocks = 16;       // 4 x 4 blocks of 4 x 4 texels a tile
+inline constexpr std::size_t file_record_bytes = 64; // one block's path record
+
+// One record block's path record as the file stores it (format 3 on).
+struct BlockRecord {
+    bool recorded = false; // every texel of the block holding a value carries `record`
+    PathRecord record;
+};
+
+// A tile's index, origin box, doubtful marks and path records, as the file stores them before its words.
 struct TileHeader {
     std::uint32_t index = 0;
     bool has_box = false;
     glm::vec3 lo{0.0f}, hi{0.0f};
     float nearest = std::numeric_limits<float>::infinity(); // format 2 on; format 1 has none
     std::uint64_t doubtful[4] = {0, 0, 0, 0};
+    BlockRecord blocks[file_record_blocks];                  // format 3 on; before, none recorded
     bool is_doubtful(int slot) const noexcept { return (doubtful[slot / 64] >> (slot % 64)) & 1u; }
 };
-// Format 1 has no nearest hit distance (4 bytes) after the box.
-inline std::size_t tile_header_bytes(std::uint32_t version) noexcept { return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8; }
+// Format 1 has no nearest hit distance (4 bytes) after the box; formats 1 and 2 no path records.
+inline std::size_t tile_header_bytes(std::uint32_t version) noexcept {
+    return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8 + (version >= 3 ? file_record_blocks * file_record_bytes : 0);
+}
+
+// A box of the file's path records: empty (+infinity x 3, -infinity x 3) or finite with low <= high.
+inline bool is_file_box(const glm::vec3& lo, const glm::vec3& hi) noexcept {
+    const float inf = std::numeric_limits<float>::infinity();
+    if (lo == glm::vec3(inf) && hi == glm::vec3(-inf)) return true;
+    return shared::raycache_is_finite3(lo) && shared::raycache_is_finite3(hi) && glm::all(glm::lessThanEqual(lo, hi));
+}
+
+// Reads one block's record (format 3).
+inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int block) {
+    BlockRecord b;
+    const std::uint32_t recorded = r.u32("a block's record flag");
+    const std::uint32_t flags = r.u32("a block's path flags");
+    const std::uint64_t objects = r.u64("a block's object mask");
+    glm::vec3 box[4];
+    for (glm::vec3& corner : box)
+        for (int k = 0; k < 3; ++k) corner[k] = r.f32("a block's boxes");
+    const std::string where = "block " + std::to_string(block) + " of tile " + std::to_string(tile);
+    if (recorded > 1) r.fail(where + " has record flag " + std::to_string(recorded) + " (0 or 1)");
+    if (recorded == 0) {
+        bool zero = flags == 0 && objects == 0;
+        for (const glm::vec3& corner : box) zero = zero && glm::floatBitsToUint(corner) == glm::uvec3(0u);
+        if (!zero) r.fail(where + " holds no record but is not all zero");
+        return b;
+    }
+    if (flags > 7) r.fail(where + " has path flags " + std::to_string(flags) + " (1 lit, 2 chained, 4 unbounded)");
+    if (!is_file_box(box[0], box[1]) || !is_file_box(box[2], box[3]))
+        r.fail(where + "'s boxes are neither empty (+inf, -inf) nor finite with low <= high");
+    b.recorded = true;
+    b.record.objects = objects;
+    b.record.vertex_lo = box[0], b.record.vertex_hi = box[1];
+    b.record.escape_lo = box[2], b.record.escape_hi = box[3];
+    b.record.lit = (flags & 1u) != 0;
+    b.record.chained = (flags & 2u) != 0;
+    b.record.unbounded = (flags & 4u) != 0;
+    return b;
+}
 
 inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
     TileHeader h;
@@ -352,6 +407,8 @@ inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
             r.fail("tile " + std::to_string(h.index) + "'s nearest hit distance is not >= 0 (infinity: none)");
     }
     for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
+    if (version >= 3)
+        for (int b = 0; b < file_record_blocks; ++b) h.blocks[b] = read_block_record(r, h.index, b);
     return h;
 }
 
@@ -462,6 +519,10 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
             if (h.is_doubtful(slot)) cube->set_doubtful(t);
         }
         if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi, h.nearest); // slot 0 is on the face
+        // The paths its blocks' texels saw, so exact invalidation can keep them (the tile index is the cube's).
+        cube->for_each_block_state_of_tile(h.index, [&](const typename CacheCube<Texel>::BlockState& b) {
+            if (h.blocks[b.block].recorded) cube->record_texels_of_block(b, h.blocks[b.block].record);
+        });
     }
     return cube;
 }
@@ -532,6 +593,19 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
                 if (c.cube->contains(t) && c.cube->is_doubtful(t)) doubtful[slot / 64] |= std::uint64_t{1} << (slot % 64);
             }
             for (std::uint64_t bits : doubtful) w.u64(bits);
+            // Each block's record when every texel of it holding a value carries it (else none: those
+            // texels count as having seen everything, as unrecorded texels do).
+            detail::BlockRecord blocks[detail::file_record_blocks];
+            c.cube->for_each_block_state_of_tile(index, [&](const typename CacheCube<Texel>::BlockState& b) {
+                if (b.unrecorded_texels == 0) blocks[b.block] = detail::BlockRecord{true, b.record()};
+            });
+            for (const detail::BlockRecord& b : blocks) {
+                w.u32(b.recorded ? 1 : 0);
+                w.u32(b.recorded ? (b.record.lit ? 1u : 0u) | (b.record.chained ? 2u : 0u) | (b.record.unbounded ? 4u : 0u) : 0u);
+                w.u64(b.recorded ? b.record.objects : 0);
+                for (const glm::vec3& corner : {b.record.vertex_lo, b.record.vertex_hi, b.record.escape_lo, b.record.escape_hi})
+                    for (int k = 0; k < 3; ++k) w.f32(b.recorded ? corner[k] + 0.0f : 0.0f);
+            }
             for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
                 const TexelAddress t = detail::tile_texel(index, slot, n);
                 w.word(c.cube->contains(t) ? c.cube->load_word(t) : Texel::invalid);
