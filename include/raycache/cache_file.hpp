@@ -365,7 +365,7 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
     const std::uint32_t recorded = r.u32("a block's record flag");
     const std::uint32_t flags = r.u32("a block's path flags");
     const std::uint64_t objects = r.u64("a block's object mask");
-    glm::vec3 box[4];
+    glm::vec3 box[4] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
     for (glm::vec3& corner : box)
         for (int k = 0; k < 3; ++k) corner[k] = r.f32("a block's boxes");
     const std::string where = "block " + std::to_string(block) + " of tile " + std::to_string(tile);

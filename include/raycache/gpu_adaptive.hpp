@@ -97,11 +97,6 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
     return next;
 }
 
-namespace detail {
-inline void set_gpu_doubtful(std::uint32_t* words, std::uint32_t element) noexcept {
-    words[shared::raycache_doubtful_word(element)] |= shared::raycache_doubtful_bit(element);
-}
-} // namespace detail
 
 // Moves cube k of layout `from` into cube k of layout `to` for every k (the same cubes, in the same order,
 // other face sizes): `words` and `doubtful` hold the old texel buffer's and doubtful-bit buffer's contents
@@ -131,7 +126,7 @@ std::size_t move_gpu_cubes(const GpuBufferLayout& from, const std::uint32_t* wor
                 for (std::size_t w = 0; w < per_texel; ++w) new_words[b + w] = words[a + w];
                 if (new_words[b] != gpu_clear_word) ++written;
                 if (doubtful && new_doubtful && gpu_doubtful(doubtful, from.doubtful_words, old_cube.first_texel + i))
-                    detail::set_gpu_doubtful(new_doubtful, new_cube.first_texel + i);
+                    set_gpu_doubtful(new_doubtful, new_cube.first_texel + i);
             }
             continue;
         }
@@ -146,7 +141,7 @@ std::size_t move_gpu_cubes(const GpuBufferLayout& from, const std::uint32_t* wor
         if (new_doubtful)
             coarse.for_each_valid_texel([&](const TexelAddress& t) {
                 if (coarse.is_doubtful(t))
-                    detail::set_gpu_doubtful(new_doubtful, new_cube.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, new_cube.face_size)));
+                    set_gpu_doubtful(new_doubtful, new_cube.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, new_cube.face_size)));
             });
     }
     return written;

@@ -165,6 +165,11 @@ std::size_t read_gpu_words(CacheCube<Texel>& cube, const shared::raycache_gpu_cu
     return valid;
 }
 
+// Sets `element`'s bit in a doubtful-bit buffer's contents (`words`, which must hold it): that texel is doubtful.
+inline void set_gpu_doubtful(std::uint32_t* words, std::uint32_t element) noexcept {
+    words[shared::raycache_doubtful_word(element)] |= shared::raycache_doubtful_bit(element);
+}
+
 // Whether `element`'s bit is set in a doubtful-bit buffer's contents (`words`, `word_count` of them, as
 // read back): whether that texel is doubtful. False past the buffer's end.
 inline bool gpu_doubtful(const std::uint32_t* words, std::size_t word_count, std::uint32_t element) noexcept {

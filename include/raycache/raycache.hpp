@@ -26,3 +26,4 @@
 #include "raycache/gpu_buffers.hpp"
 #include "raycache/gpu_frame.hpp"
 #include "raycache/gpu_adaptive.hpp"
+#include "raycache/gpu_cache_file.hpp"
