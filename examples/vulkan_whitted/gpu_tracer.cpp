@@ -15,6 +15,7 @@
 #include <raycache/shared/edge_rule.h>
 #include <raycache/gpu_adaptive.hpp>
 #include <raycache/gpu_buffers.hpp>
+#include <raycache/gpu_cache_file.hpp>
 #include <raycache/shared/gpu_layout.h>
 
 #include "gpu_scene.hpp"
@@ -91,6 +92,18 @@ struct Tracer::Impl {
     // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes)
     // and the frame buffer sized for the new texel count.
     void place_cubes(const std::vector<int>& sizes);
+
+    // The cubes' keys in a cache file, in layout order: the cached object's index in the scene, its placement.
+    std::vector<raycache::GpuCubeKey> cube_keys() const {
+        std::vector<raycache::GpuCubeKey> keys(shapes.size());
+        for (std::size_t i = 0; i < shape_of.size(); ++i)
+            if (shape_of[i] >= 0) keys[static_cast<std::size_t>(shape_of[i])] = {i, 0, shapes[static_cast<std::size_t>(shape_of[i])].bounds};
+        return keys;
+    }
+    void require_cubes(const char* what) const {
+        if (!texels || !doubtful || !texels->as<std::uint32_t>() || !doubtful->as<std::uint32_t>())
+            throw std::logic_error(std::string("Vulkan tracer: ") + what + " needs caching cubes in host-visible memory (--cache cct or cdct)");
+    }
 };
 
 void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
@@ -231,6 +244,34 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
 }
 
 Tracer::~Tracer() = default;
+
+void Tracer::save_caches(const std::string& path, const raycache::SceneIdentity& identity) const {
+    const Impl& t = *impl_;
+    t.require_cubes("saving caches");
+    const std::vector<std::uint8_t> bytes = t.with_texel([&](auto texel) {
+        return raycache::encode_gpu_cache<decltype(texel)>(identity, t.layout, t.cube_keys(), t.texels->as<std::uint32_t>(),
+                                                           static_cast<std::size_t>(t.layout.words), t.doubtful->as<std::uint32_t>());
+    });
+    raycache::write_file_atomically(path, bytes);
+}
+
+void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity& identity) {
+    Impl& t = *impl_;
+    t.require_cubes("loading caches");
+    // Fixed faces must match; adaptive cubes take the file's sizes (and count as sized when they hold texels).
+    std::vector<int> fixed;
+    for (const auto& cube : t.layout.cubes) fixed.push_back(t.settings.adaptive ? 0 : cube.face_size);
+    t.with_texel([&](auto texel) {
+        using Texel = decltype(texel);
+        const auto cubes = raycache::load_gpu_cache_file<Texel>(path, identity, t.cube_keys(), fixed); // checked whole first
+        t.place_cubes(raycache::loaded_face_sizes(cubes));
+        t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
+        t.doubtful->fill(raycache::gpu_doubtful_clear_word);
+        raycache::write_gpu_cubes(cubes, t.layout, t.texels->as<std::uint32_t>(), static_cast<std::size_t>(t.layout.words),
+                                  t.doubtful->as<std::uint32_t>());
+        for (std::size_t k = 0; k < cubes.size(); ++k) t.sized[k] = cubes[k].cube->valid_texels() > 0;
+    });
+}
 
 const char* to_string(Secondary secondary) { return secondary == Secondary::rsh ? "rsh" : "bvh"; }
 

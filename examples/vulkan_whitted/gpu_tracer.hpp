@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <raycache/adaptive_resolution.hpp>
+#include <raycache/cache_file.hpp>
 #include <rcx/vulkan.hpp>
 
 #include "bvh_builder.hpp"
@@ -99,6 +100,14 @@ public:
     // resized to the warm-up's rays before the full pass (as the Embree adapter's begin_frame() does after it),
     // so the full pass's rays share their texels, and again after the full pass, to its rays.
     Image render(const Camera& camera, int width, int height, FrameStats* stats = nullptr, int warm_up_stride = 0);
+
+    // cct, cdct: writes the cubes to `path` as a RayCache cache file (raycache/gpu_cache_file.hpp; the cached
+    // objects keyed by their index in the scene), or loads them from one before the next frame: the file must
+    // be for `identity`, hold a cube for each cached object at its placement and (fixed face sizes) of its
+    // face size; adaptive cubes take the file's sizes. Between frames. Throws raycache::CacheFileError saying
+    // what is wrong (a load then leaves the cubes as they were), std::logic_error without cubes.
+    void save_caches(const std::string& path, const raycache::SceneIdentity& identity) const;
+    void load_caches(const std::string& path, const raycache::SceneIdentity& identity);
 
     std::size_t bvh_nodes() const noexcept;
     int face_size() const noexcept;          // of the cubes (adaptive: the largest now), after fitting them into one buffer

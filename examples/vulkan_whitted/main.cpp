@@ -33,6 +33,7 @@
 #include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
+#include "rcx/scene_hash.hpp"
 #include "rcx/tracer_main.hpp"
 
 namespace {
@@ -63,9 +64,6 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (o.origin_parallax != defaults.origin_parallax)
         throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
-    if (!o.load_cache.empty() || !o.save_cache.empty())
-        throw InputError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") +
-                         " is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (!o.pyramid)
         throw InputError("--no-pyramid is not supported by the Vulkan tracer: its relief walk never uses a depth pyramid");
     if (o.invalidate != defaults.invalidate)
@@ -149,6 +147,15 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     }
 
     const bool caching = rcx::uses_caches(o.cache);
+    const raycache::SceneIdentity identity{rcx::scene_hash(scene), scene.name};
+    if (!o.load_cache.empty()) {
+        try {
+            tracer->load_caches(o.load_cache, identity);
+        } catch (const raycache::CacheFileError& e) {
+            throw InputError(e.what());
+        }
+        if (!o.quiet) std::printf("loaded cache %s\n", o.load_cache.c_str());
+    }
     if (caching && o.face_size > 0 && tracer->face_size() != o.face_size)
         std::fprintf(stderr, "%s: note: --face-size %d: the cubes do not fit in one storage buffer of this device "
                              "(maxStorageBufferRange %llu bytes) or within --budget-mib %d; using face size %d\n",
@@ -248,6 +255,12 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
             std::printf("\n");
             std::fflush(stdout);
         }
+    }
+    if (!o.save_cache.empty()) {
+        tracer->save_caches(o.save_cache, identity);
+        if (!o.quiet)
+            std::printf("saved cache %s: %.1f MiB\n", o.save_cache.c_str(),
+                        static_cast<double>(std::filesystem::file_size(o.save_cache)) / (1024.0 * 1024.0));
     }
     const double n = frames;
     const double warm = frames > 1 ? n - 1 : 1;

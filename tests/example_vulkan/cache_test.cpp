@@ -7,7 +7,8 @@
 // same searches), and two tracers fed the same frames give the same pixels (no dependence on the
 // driver's thread timing); with the confidence test on, the warm frames still match the Embree tracer's made
 // with the same threshold. Adaptive face sizes: the cold frame is still the uncached one, every cube shrinks
-// after it and keeps answering, two tracers agree; a byte budget holds them. No validation error.
+// after it and keeps answering, two tracers agree; a byte budget holds them. Cubes saved to a cache file and
+// loaded into a fresh tracer make the saving tracer's next frame. No validation error.
 // Exit 77 (CTest: skipped) only when there is no Vulkan device.
 #include <algorithm>
 #include <cstdint>
@@ -330,6 +331,58 @@ void run_budget_case(rcx::vk::Context& context) {
     check(refused, "a budget of 100 bytes, below one texel a face for 9 cubes, is refused");
 }
 
+// Warm start: cubes saved after three orbit frames and loaded into a fresh tracer make the same next frame,
+// pixel for pixel and hit for hit, as the tracer that saved them, adaptive (the file's face sizes taken) and
+// fixed; a fixed face size the file does not have, or another scene, is refused and leaves the cubes.
+void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
+    const int size = 96;
+    const rcx::Scene scene = rcx::make_scene("behind-8");
+    const std::string spirv = rcx::gpu::default_spirv_dir();
+    const std::string name = std::string("cache file, ") + rcx::to_string(mode);
+    const std::string path = "/tmp/raycache-vulkan-cache-test-" + std::string(rcx::to_string(mode)) + ".rcc";
+    const raycache::SceneIdentity identity{0xbe8, "behind-8"};
+    for (const bool adaptive : {true, false}) {
+        rcx::gpu::TracerSettings settings;
+        settings.mode = mode;
+        settings.adaptive = adaptive;
+        settings.face_size = adaptive ? settings.adaptive_resolution.first_face_size : 48;
+        rcx::gpu::Tracer saved(context, scene, spirv, settings);
+        for (int f = 0; f < 3; ++f) saved.render(scene.camera_at(f), size, size);
+        saved.save_caches(path, identity);
+        rcx::gpu::Tracer loaded(context, scene, spirv, settings);
+        loaded.load_caches(path, identity);
+        const std::string variant = name + (adaptive ? ", adaptive" : ", fixed faces");
+        check(loaded.face_sizes() == saved.face_sizes(), variant + ": the loaded cubes have the saved cubes' face sizes");
+        rcx::gpu::FrameStats a, b;
+        const rcx::Image warm = saved.render(scene.camera_at(3), size, size, &a);
+        const rcx::Image from_file = loaded.render(scene.camera_at(3), size, size, &b);
+        check(a.hits > 0 && rcx::bit_identical(warm, from_file) && a.hits == b.hits && a.lookups == b.lookups,
+              variant + format(": the loaded tracer's next frame equals the saving tracer's (hits %.0f and %.0f)", double(a.hits),
+                               double(b.hits)));
+        if (adaptive) continue;
+        rcx::gpu::TracerSettings other = settings;
+        other.face_size = 32;
+        rcx::gpu::Tracer smaller(context, scene, spirv, other);
+        bool refused = false;
+        try {
+            smaller.load_caches(path, identity);
+        } catch (const raycache::CacheFileError& e) {
+            refused = std::string(e.what()).find("48") != std::string::npos;
+        }
+        check(refused, variant + ": a tracer of 32-texel faces refuses the file's 48-texel cubes, naming the size");
+        refused = false;
+        try {
+            loaded.load_caches(path, raycache::SceneIdentity{1, "another scene"});
+        } catch (const raycache::CacheFileError&) {
+            refused = true;
+        }
+        rcx::gpu::FrameStats c;
+        loaded.render(scene.camera_at(3), size, size, &c);
+        check(refused && c.hits >= b.hits, variant + ": a file for another scene is refused and the cubes stay as they were");
+    }
+    std::remove(path.c_str());
+}
+
 int main() {
     std::unique_ptr<rcx::vk::Context> context;
     try {
@@ -359,6 +412,8 @@ int main() {
     run_adaptive_case(*context, "behind-8", rcx::CacheMode::cct, 0.45, 28.0);
     run_adaptive_case(*context, "behind-8", rcx::CacheMode::cdct, 0.25, 33.0);
     run_budget_case(*context);
+    run_cache_file_case(*context, rcx::CacheMode::cct);
+    run_cache_file_case(*context, rcx::CacheMode::cdct);
     // A single image with a warm-up over every 4th pixel, measured on lavapipe (64 x 64, 16-texel faces): CCT
     // hits 0.122 at 30.68 dB, CDCT 0.028 at 38.59 dB; against the Embree tracer's image (origin test off: the
     // GPU keeps no origins) 89.03 dB for the CCT (one 8-bit value differs), inf for the CDCT. Few hits: the

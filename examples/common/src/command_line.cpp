@@ -208,9 +208,9 @@ CommandLine::CommandLine(const std::string& program)
     add_flag("--prefill", o.prefill, "trace every cube texel once before the first frame");
     add_option("--load-cache", "FILE",
                "start warm: load the cubes saved in FILE before the first frame (the\n"
-               "scene, objects and technique must match; Embree tracer)",
+               "scene, objects and technique must match)",
                file("--load-cache", o.load_cache, "file"));
-    add_option("--save-cache", "FILE", "save the cubes to FILE after the last frame (Embree tracer)",
+    add_option("--save-cache", "FILE", "save the cubes to FILE after the last frame",
                file("--save-cache", o.save_cache, "file"));
     add_option("--warm-up", "S",
                "first frame: a pass over every S-th pixel in x and y first, whose\n"
