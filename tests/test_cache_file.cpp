@@ -220,30 +220,6 @@ TEST_CASE("a file of a newer or unknown format version is refused, saying which"
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(not_ours); }), "not a RayCache cache file"));
 }
 
-TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
-    // Written by raycache_fuzz_make_seeds at format 1 and checked in as a fuzz seed: one byte choosing the
-    // technique (1: CDCT), then a CDCT file whose tiles, in format 1, have no nearest distance.
-    const std::string path = std::string(RAYCACHE_SOURCE_DIR) + "/fuzz/corpus/cache_file/cdct-edge-tiles-format1";
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    REQUIRE(f);
-    std::vector<std::uint8_t> bytes;
-    for (int c; (c = std::fgetc(f)) != EOF;) bytes.push_back(static_cast<std::uint8_t>(c));
-    std::fclose(f);
-    REQUIRE(bytes.size() > 17);
-    CHECK(bytes[0] == 1);
-    bytes.erase(bytes.begin());
-    CHECK(bytes[8] == 1); // the format version, little-endian
-    const std::vector<raycache::LoadedCube<CdctTexel>> cubes = decode<CdctTexel>(bytes, SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"});
-    REQUIRE_FALSE(cubes.empty());
-    std::size_t texels = 0;
-    for (const auto& c : cubes)
-        c.cube->for_each_valid_texel([&](const TexelAddress& t) {
-            ++texels;
-            CHECK(c.cube->nearest_hit(t) == std::numeric_limits<float>::infinity());
-        });
-    CHECK(texels > 0u);
-}
-
 namespace {
 // A checked-in fuzz seed (fuzz/corpus/cache_file/NAME): one byte choosing the technique, then a cache file.
 std::vector<std::uint8_t> seed_file(const std::string& name) {
@@ -284,6 +260,23 @@ std::vector<std::uint8_t> with_cube_float(const std::vector<std::uint8_t>& bytes
 // box, nearest distance and doubtful marks).
 constexpr std::size_t first_block_flag = 116, first_block_path_flags = 120, first_block_boxes = 132;
 } // namespace
+
+TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
+    // Written by raycache_fuzz_make_seeds at format 1 and checked in as a fuzz seed: a CDCT file whose
+    // tiles, in format 1, have no nearest distance.
+    std::vector<std::uint8_t> bytes = seed_file("cdct-edge-tiles-format1");
+    CHECK(bytes[8] == 1); // the format version, little-endian
+    const std::vector<raycache::LoadedCube<CdctTexel>> cubes = decode<CdctTexel>(bytes, SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"});
+    REQUIRE_FALSE(cubes.empty());
+    std::size_t texels = 0;
+    for (const auto& c : cubes)
+        c.cube->for_each_valid_texel([&](const TexelAddress& t) {
+            ++texels;
+            CHECK(c.cube->nearest_hit(t) == std::numeric_limits<float>::infinity());
+        });
+    CHECK(texels > 0u);
+}
+
 
 TEST_CASE("a cube's origin reach survives a save: format 3 keeps how far out its rays left and how far out it answers") {
     CdctCube cube(20);

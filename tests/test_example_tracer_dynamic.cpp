@@ -30,18 +30,30 @@ struct Run {
 
 // Renders `frames` frames of `scene` (fixed camera, objects moving) with CCT or CDCT caches on 32-texel
 // faces, invalidating with `policy` after each move, and runs the oracle after each move.
+// Caches as the Embree tracer makes them: crossings over 0.5 behind a surface miss (so a CDCT texel's rays
+// end there, and farther moves keep it).
+SceneCache tracer_caches(raycache::embree::Technique technique) {
+    raycache::ReliefParameters search;
+    search.max_gap = 0.5f;
+    return SceneCache(technique, search);
+}
+
+// 96 x 96 frames on two threads through `caches`.
+rcx::embree::RenderSettings settings_for(SceneCache& caches) {
+    rcx::embree::RenderSettings s;
+    s.width = s.height = 96;
+    s.mode = caches.technique() == raycache::embree::Technique::cdct ? rcx::CacheMode::cdct : rcx::CacheMode::cct;
+    s.caches = &caches;
+    s.threads = 2;
+    return s;
+}
+
 Run run(const rcx::Scene& scene, Invalidation policy, int frames, raycache::embree::Technique technique = raycache::embree::Technique::cct) {
     const bool cdct = technique == raycache::embree::Technique::cdct;
     rcx::embree::Tracer tracer(scene);
-    raycache::ReliefParameters search; // the Embree tracer's: crossings over 0.5 behind a surface miss
-    search.max_gap = 0.5f;             // (so a CDCT texel's rays end there, and farther moves keep it)
-    SceneCache caches(technique, search);
+    SceneCache caches = tracer_caches(technique);
     tracer.attach_caches(caches, 32);
-    rcx::embree::RenderSettings s;
-    s.width = s.height = 96;
-    s.mode = cdct ? rcx::CacheMode::cdct : rcx::CacheMode::cct;
-    s.caches = &caches;
-    s.threads = 2;
+    const rcx::embree::RenderSettings s = settings_for(caches);
     Run r;
     double kept_sum = 0.0;
     for (int f = 0; f < frames; ++f) {
@@ -127,15 +139,9 @@ TEST_CASE("dynamic-N: caches saved after some moves and loaded back lose exactly
         const bool cdct = technique == raycache::embree::Technique::cdct;
         CAPTURE(cdct);
         rcx::embree::Tracer tracer(scene);
-        raycache::ReliefParameters search;
-        search.max_gap = 0.5f;
-        SceneCache caches(technique, search);
+        SceneCache caches = tracer_caches(technique);
         tracer.attach_caches(caches, 32);
-        rcx::embree::RenderSettings s;
-        s.width = s.height = 96;
-        s.mode = cdct ? rcx::CacheMode::cdct : rcx::CacheMode::cct;
-        s.caches = &caches;
-        s.threads = 2;
+        const rcx::embree::RenderSettings s = settings_for(caches);
         for (int f = 0; f < 3; ++f) {
             if (f > 0) caches.scene_changed(tracer.move_to(scene.at_frame(f)), Invalidation::exact);
             tracer.render(scene.camera_at(0), s);
@@ -144,7 +150,7 @@ TEST_CASE("dynamic-N: caches saved after some moves and loaded back lose exactly
         const std::string path = (std::filesystem::temp_directory_path() / ("raycache-dynamic-" + std::to_string(cdct) + ".rcc")).string();
         const raycache::SceneIdentity identity{8, "dynamic-8"};
         caches.save(path, identity);
-        SceneCache loaded(technique, search);
+        SceneCache loaded = tracer_caches(technique);
         // Where the saved cubes sit now (moved cubes follow their objects by the spheres' offsets, which
         // bounds_of() of the moved geometry can round otherwise): a load needs the same placements.
         for (const raycache::embree::ObjectId id : caches.objects()) loaded.attach(id, 32, *caches.object_bounds(id));

@@ -120,14 +120,6 @@ int run(const rcx::Options& o) {
             throw InputError(e.what());
         }
         settings.caches = caches.get();
-        if (!o.save_cache.empty()) { // a folder that cannot take the file fails now, not after the last frame
-            try {
-                const std::filesystem::path folder = std::filesystem::path(o.save_cache).parent_path();
-                rcx::ensure_writable_directory(folder.empty() ? "." : folder.string());
-            } catch (const std::exception& e) {
-                throw InputError(std::string("--save-cache: ") + e.what());
-            }
-        }
         if (!o.load_cache.empty()) {
             const auto started = std::chrono::steady_clock::now();
             try {

@@ -2,6 +2,9 @@
 // camera path the options ask for. Parsing the command line is rcx/command_line.hpp's job.
 #include "rcx/options.hpp"
 
+#include <stdexcept>
+#include <string>
+
 namespace rcx {
 
 const char* to_string(CacheMode mode) {
@@ -55,6 +58,14 @@ Scene scene_from_options(const Options& options) {
     Scene scene = make_scene(options.scene, scene_params(options));
     apply_options(scene, options);
     ensure_writable_directory(options.out);
+    // A --save-cache folder that cannot take the file fails now, not after the last frame.
+    if (!options.save_cache.empty()) {
+        try {
+            ensure_writable_folder_of(options.save_cache);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string("--save-cache: ") + e.what());
+        }
+    }
     return scene;
 }
 

@@ -63,18 +63,18 @@ std::filesystem::path nearest_existing(std::filesystem::path path) {
 
 } // namespace
 
-void ensure_writable_directory(const std::string& path) {
+void ensure_writable_directory(const std::string& path, const std::string& option) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::exists(path, ec) && !fs::is_directory(path, ec))
-        throw std::runtime_error("output folder '" + path + "' is a file, not a folder; choose another --out");
+        throw std::runtime_error("output folder '" + path + "' is a file, not a folder; choose another " + option);
     fs::create_directories(path, ec);
     if (ec) {
         const fs::path parent = nearest_existing(path);
         throw std::runtime_error("cannot create output folder '" + path + "': " +
                                  (fs::is_directory(parent) ? why_nothing_can_be_created(parent.string(), ec.value())
                                                            : ec.message()) +
-                                 "; choose another --out");
+                                 "; choose another " + option);
     }
     // Probe with a real file: permissions alone do not tell (read-only mounts, ACLs, root, virtual file systems).
     const fs::path probe = fs::path(path) / (".rcx-write-test-" + std::to_string(
@@ -82,14 +82,19 @@ void ensure_writable_directory(const std::string& path) {
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0)
         throw std::runtime_error("cannot write into output folder '" + path + "': " + why_nothing_can_be_created(path, errno) +
-                                 "; choose another --out");
+                                 "; choose another " + option);
     const bool written = ::write(fd, "x", 1) == 1;
     const int write_error = errno;
     ::close(fd);
     fs::remove(probe, ec);
     if (!written)
         throw std::runtime_error("cannot write into output folder '" + path + "': " +
-                                 why_nothing_can_be_created(path, write_error) + "; choose another --out");
+                                 why_nothing_can_be_created(path, write_error) + "; choose another " + option);
+}
+
+void ensure_writable_folder_of(const std::string& path) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    ensure_writable_directory(folder.empty() ? "." : folder.string(), "--save-cache");
 }
 
 } // namespace rcx

@@ -92,7 +92,8 @@ SceneParams scene_params(const Options& options);
 void apply_options(Scene& scene, const Options& options);
 
 // What every example tracer does first: builds the scene the options name (make_scene, scene_params),
-// applies the options to it, then checks the output folder (ensure_writable_directory(options.out)).
+// applies the options to it, then checks the output folder (ensure_writable_directory(options.out)) and
+// the folder of a --save-cache file.
 // Throws what those throw: each message names the bad input.
 Scene scene_from_options(const Options& options);
 
