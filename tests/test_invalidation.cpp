@@ -281,6 +281,36 @@ TEST_CASE("texels stored without a path record are dropped by any move; recorded
     CHECK(!cube.peek(down).has_value());
 }
 
+TEST_CASE("a texel a store without a record reached in the same frame counts as unrecorded, whichever store's value it keeps") {
+    // Same-frame rivals: the smaller RGB9E5 word wins (a dimmer colour here). With a recording store and a
+    // plain one into one texel in one frame, in either order and with either winning, the texel's value may
+    // be the plain store's, whose path nobody knows: it must count as having seen everything.
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    const glm::vec3 dim(0.1f), bright(0.9f);
+    REQUIRE(raycache::CctTexel::encode(dim) < raycache::CctTexel::encode(bright));
+    raycache::SceneChanges far;
+    far.moved.push_back({99, {glm::vec3(20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(20.0f, 0.5f, 0.0f), 0.5f}});
+    auto dropped_after = [&](auto&& stores) {
+        CctCube cube(16);
+        stores(cube);
+        cube.begin_frame();
+        const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, far);
+        CHECK(counts.valid_before == 1u);
+        return counts.dropped_unrecorded;
+    };
+    CHECK(dropped_after([&](CctCube& c) { c.store(up, dim, PathRecord{}); }) == 0u); // recorded alone: kept
+    CHECK(dropped_after([&](CctCube& c) { c.store(up, bright); c.store(up, dim, PathRecord{}); }) == 1u);   // recorded wins
+    CHECK(dropped_after([&](CctCube& c) { c.store(up, dim); c.store(up, bright, PathRecord{}); }) == 1u);   // plain wins, first
+    CHECK(dropped_after([&](CctCube& c) { c.store(up, bright, PathRecord{}); c.store(up, dim); }) == 1u);   // plain wins, second
+    // A later frame's recording store into an empty neighbour does not bring the rivalry back.
+    CctCube cube(16);
+    cube.store(up, dim, PathRecord{});
+    cube.begin_frame();
+    cube.store(glm::vec3(0.0f, 1.0f, 0.3f), dim, PathRecord{});
+    cube.begin_frame();
+    CHECK(raycache::invalidate_changes(cube, {box, -1.0f}, far).dropped == 0u);
+}
+
 TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the light over the paths' hit points catches its shadow") {
     // The cube stores only rays within 11 degrees of horizontal, so no texel's cone reaches the caster high
     // above ball 0; only its shadow on ball 0 changes when it moves.

@@ -23,7 +23,7 @@ using raycache::TexelAddress;
 const glm::vec3 grey(0.5f);
 
 // On cache lines of 64 bytes, grouped by who writes them during a frame: 16 x 16 words; the four 64-bit
-// written masks (stores) on a line of their own; the four 64-bit doubtful masks, the visible origin box (6
+// written masks and the four unrecorded masks (stores) on a line of their own; the four 64-bit doubtful masks, the visible origin box (6
 // four-byte values), nearest hit distance (4 bytes) and has-box flag (1 byte), which lookups read, on the
 // next (61 bytes, padded to 64); then what stores write: the pending origin box (6 four-byte values), the
 // pending nearest distance, the stale mark and the valid-texel count (4 bytes each), padded to 8; the path
@@ -31,7 +31,7 @@ const glm::vec3 grey(0.5f);
 // blocks a 64-bit Bloom mask of objects, the hit-point box and the escape-direction box (6 + 6 four-byte
 // values) and the path flags (4 bytes), padded to 64; the whole padded to a multiple of 64.
 constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
-constexpr std::size_t written_line = 64;
+constexpr std::size_t written_line = round_up(4 * 8 + 4 * 8, 64);
 constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
 constexpr std::size_t store_part = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
 constexpr std::size_t cct_tile = round_up(16 * 16 * 4 + written_line + lookup_line + store_part, 64);

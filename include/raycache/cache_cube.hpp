@@ -436,15 +436,18 @@ public:
     }
 
     // Marks every valid texel of block `b` (from for_each_block_state()) as recorded and adds `path` to the
-    // block's record: for texels copied from another cube whose records are known (carry_path_records).
+    // block's record: for texels copied from another cube whose records are known (carry_path_records, a
+    // cache file's records), also when they were copied in this frame by stores without a record.
     // Between frames.
     void record_texels_of_block(const BlockState& b, const PathRecord& path) noexcept {
         assert_between_frames();
         Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile) return;
         for_each_texel_of_block(b, [&](const TexelAddress&, int slot) {
-            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)))
-                tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+            if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return;
+            const std::uint64_t bit = std::uint64_t{1} << (slot % 64);
+            tile->recorded_bits[slot / 64].fetch_or(bit, std::memory_order_relaxed);
+            tile->unrecorded_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed); // copied in without one: known now
         });
         merge_path(tile->records[b.block], path);
     }
@@ -725,6 +728,7 @@ private:
                 pending_max[k].store(0u, std::memory_order_relaxed);
             }
             for (auto& w : recorded_bits) w.store(0, std::memory_order_relaxed);
+            for (auto& w : unrecorded_bits) w.store(0, std::memory_order_relaxed);
             pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
         }
         // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
@@ -772,6 +776,10 @@ private:
         // One bit per texel: written during the current frame (so not visible yet). Written by stores, read
         // by lookups of a texel holding a value.
         alignas(64) std::atomic<std::uint64_t> written_bits[bit_words];
+        // On the same line, also written by stores: texels a store without a record reached this frame
+        // (winning or not); begin_frame() takes their recorded bits away, whichever store's value they kept,
+        // since the threads' order decided that.
+        std::atomic<std::uint64_t> unrecorded_bits[bit_words];
         // Read by lookups, written between frames only:
         // one bit per texel: its value is kept but not answered (set_doubtful());
         alignas(64) std::atomic<std::uint64_t> doubtful_bits[bit_words];
@@ -1026,8 +1034,13 @@ private:
         for (std::size_t i = 0; i < tile_count(); ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
-            if (any_written)
+            if (any_written) {
                 for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
+                for (int w = 0; w < bit_words; ++w) { // a same-frame rival without a record: unrecorded
+                    const std::uint64_t rivals = tile->unrecorded_bits[w].exchange(0, std::memory_order_relaxed);
+                    if (rivals) tile->recorded_bits[w].fetch_and(~rivals, std::memory_order_relaxed);
+                }
+            }
             if (tile->stale.load(std::memory_order_relaxed)) {
                 drop_tile(i);
                 state_->dropped_tiles.fetch_add(1, std::memory_order_relaxed);
@@ -1168,6 +1181,7 @@ private:
         if (!state_->written_this_frame.load(std::memory_order_relaxed))
             state_->written_this_frame.store(true, std::memory_order_relaxed);
         if (path) record_path(tile, t, *path);
+        else tile->unrecorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         for (;;) {
             if (Texel::is_valid(old) && !(word < old)) return refuse(); // same frame: the smaller word wins
             if (texel.compare_exchange_weak(old, word, std::memory_order_acq_rel, std::memory_order_acquire)) {
