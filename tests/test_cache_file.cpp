@@ -407,6 +407,26 @@ TEST_CASE("a block record that is not one is refused by name") {
                    "boxes are neither empty"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, 5.0f)); }), // low > high
                    "boxes are neither empty"));
+    // Hit points beyond 1e18 (invalidation's distances would overflow) and an escape box of no unit
+    // direction (all zero) are refused too.
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, -1e20f)); }),
+                   "boxes are neither empty"));
+    std::vector<std::uint8_t> zero_escapes = one;
+    for (std::size_t k = 0; k < 6; ++k) zero_escapes = with_cube_float(zero_escapes, first_block_boxes + 24 + 4 * k, 0.0f);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(zero_escapes); }), "reaching the unit sphere"));
+}
+
+TEST_CASE("a record a file cannot hold (hit points not finite) is saved as none, so its texels count as having seen anything") {
+    CctCube cube(16);
+    raycache::PathRecord far;
+    far.hit(3, glm::vec3(std::numeric_limits<float>::infinity(), 0.0f, 0.0f));
+    REQUIRE(cube.store(glm::vec3(1, 0, 0), glm::vec3(0.5f), far));
+    cube.begin_frame();
+    const auto loaded = decode<CctTexel>(encode_one(cube)); // loads: the record was left out, not the file refused
+    REQUIRE(loaded.size() == 1u);
+    int unrecorded = 0;
+    loaded[0].cube->for_each_block_state([&](const auto& b) { unrecorded += b.unrecorded_texels; });
+    CHECK(unrecorded == 1);
 }
 
 TEST_CASE("every truncation of a small cache file is refused") {

@@ -311,6 +311,27 @@ TEST_CASE("a texel a store without a record reached in the same frame counts as 
     CHECK(raycache::invalidate_changes(cube, {box, -1.0f}, far).dropped == 0u);
 }
 
+TEST_CASE("paths whose hit points lie so far out that their bounds overflow are taken to meet any move") {
+    // A texel looking down whose path hit (1e20, 2, 0) and (1e20, 3, 0), lit by a light at (0, 50, 0). Their
+    // shadow rays pass within 1e-16 of (1000, 50, 0) on their way to the light, so a ball of radius 1
+    // moving there changes them. The hit points' distance from the light squares past float's range, so
+    // the cone from the light over them cannot be made: the block must go rather than be judged by NaNs
+    // (which said "no meeting" and kept it).
+    CctCube cube(16);
+    PathRecord path;
+    path.hit(3, glm::vec3(1e20f, 2.0f, 0.0f));
+    path.hit(4, glm::vec3(1e20f, 3.0f, 0.0f));
+    path.lit = true;
+    cube.store(glm::vec3(0.0f, -1.0f, 0.0f), glm::vec3(0.5f), path);
+    cube.begin_frame();
+    raycache::SceneChanges across;
+    across.moved.push_back({99, {glm::vec3(-1000.0f, -1000.0f, 0.0f), 1.0f}, {glm::vec3(1000.0f, 50.0f, 0.0f), 1.0f}});
+    across.lights = {glm::vec3(0.0f, 50.0f, 0.0f)};
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, across);
+    CHECK(counts.dropped_by_cone == 0u); // not the texel's own rays (they look down)
+    CHECK(counts.dropped_by_path == 1u);
+}
+
 TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the light over the paths' hit points catches its shadow") {
     // The cube stores only rays within 11 degrees of horizontal, so no texel's cone reaches the caster high
     // above ball 0; only its shadow on ball 0 changes when it moves.

@@ -330,6 +330,8 @@ struct CubeRecord {
 
 inline constexpr int file_record_blocks = 16;       // 4 x 4 blocks of 4 x 4 texels a tile
 inline constexpr std::size_t file_record_bytes = 64; // one block's path record
+static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks,
+              "cache files keep tiles and record blocks as CacheCube does: change the format with them");
 
 // One record block's path record as the file stores it (format 3 on).
 struct BlockRecord {
@@ -352,11 +354,27 @@ inline std::size_t tile_header_bytes(std::uint32_t version) noexcept {
     return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8 + (version >= 3 ? file_record_blocks * file_record_bytes : 0);
 }
 
-// A box of the file's path records: empty (+infinity x 3, -infinity x 3) or finite with low <= high.
-inline bool is_file_box(const glm::vec3& lo, const glm::vec3& hi) noexcept {
+// Hit points a file's records may hold: within 1e18 of the origin on every axis, so that the distances and
+// cones invalidation derives from them stay finite (a box nearer infinity would overflow them).
+inline constexpr float max_file_coordinate = 1e18f;
+
+// A box of the file's path records: empty (+infinity x 3, -infinity x 3), or low <= high within
+// max_file_coordinate; for escaped directions (`directions`) also within [-1, 1] and reaching the unit
+// sphere (the box of unit vectors holds one).
+inline bool is_file_box(const glm::vec3& lo, const glm::vec3& hi, bool directions) noexcept {
     const float inf = std::numeric_limits<float>::infinity();
     if (lo == glm::vec3(inf) && hi == glm::vec3(-inf)) return true;
-    return shared::raycache_is_finite3(lo) && shared::raycache_is_finite3(hi) && glm::all(glm::lessThanEqual(lo, hi));
+    const float bound = directions ? 1.0f : max_file_coordinate;
+    for (int k = 0; k < 3; ++k)
+        if (!(lo[k] >= -bound && lo[k] <= hi[k] && hi[k] <= bound)) return false; // NaN fails too
+    if (!directions) return true;
+    const glm::vec3 farthest = glm::max(glm::abs(lo), glm::abs(hi));
+    return glm::dot(farthest, farthest) >= 0.999f;
+}
+// Whether a record can be written as it is (a record of hit points far out or not finite cannot: its
+// block is written as holding none, which is sound, since its texels then count as having seen anything).
+inline bool is_file_record(const PathRecord& r) noexcept {
+    return is_file_box(r.vertex_lo, r.vertex_hi, false) && is_file_box(r.escape_lo, r.escape_hi, true);
 }
 
 // Reads one block's record (format 3).
@@ -377,8 +395,9 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
         return b;
     }
     if (flags > 7) r.fail(where + " has path flags " + std::to_string(flags) + " (1 lit, 2 chained, 4 unbounded)");
-    if (!is_file_box(box[0], box[1]) || !is_file_box(box[2], box[3]))
-        r.fail(where + "'s boxes are neither empty (+inf, -inf) nor finite with low <= high");
+    if (!is_file_box(box[0], box[1], false) || !is_file_box(box[2], box[3], true))
+        r.fail(where + "'s boxes are neither empty (+inf, -inf) nor low <= high within bounds (hit points within 1e18, "
+                       "escape directions within [-1, 1] and reaching the unit sphere)");
     b.recorded = true;
     b.record.objects = objects;
     b.record.vertex_lo = box[0], b.record.vertex_hi = box[1];
@@ -597,7 +616,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             // texels count as having seen everything, as unrecorded texels do).
             detail::BlockRecord blocks[detail::file_record_blocks];
             c.cube->for_each_block_state_of_tile(index, [&](const typename CacheCube<Texel>::BlockState& b) {
-                if (b.unrecorded_texels == 0) blocks[b.block] = detail::BlockRecord{true, b.record()};
+                if (b.unrecorded_texels == 0 && detail::is_file_record(b.record())) blocks[b.block] = detail::BlockRecord{true, b.record()};
             });
             for (const detail::BlockRecord& b : blocks) {
                 w.u32(b.recorded ? 1 : 0);
