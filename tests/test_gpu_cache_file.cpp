@@ -127,6 +127,11 @@ TEST_CASE("a file that does not match the GPU cubes is refused by name, and a la
     const GpuBufferLayout other = raycache::gpu_buffer_layout<CctTexel>(shapes_of({8, 9, 8}));
     std::vector<std::uint32_t> words = raycache::cleared_gpu_words(other);
     CHECK_THROWS_AS(raycache::write_gpu_cubes(cubes, other, words.data(), words.size(), nullptr), std::invalid_argument);
+    CHECK(words == raycache::cleared_gpu_words(other)); // nothing written, not even the first cube that fits
+    std::vector<GpuCubeKey> twice = keys;
+    twice[2].part = 0; // object 5 part 0 twice
+    CHECK_THROWS_AS(raycache::encode_gpu_cache<CctTexel>(scene, gpu.layout, twice, gpu.words.data(), gpu.words.size(), nullptr),
+                    std::invalid_argument);
     CHECK_THROWS_AS(raycache::encode_gpu_cache<CctTexel>(scene, gpu.layout, fewer, gpu.words.data(), gpu.words.size(), nullptr),
                     std::invalid_argument);
 }

@@ -89,9 +89,9 @@ struct Tracer::Impl {
     }
 
     // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
-    // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes)
-    // and the frame buffer sized for the new texel count.
-    void place_cubes(const std::vector<int>& sizes);
+    // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes,
+    // unless `move_old` is false) and the frame buffer sized for the new texel count.
+    void place_cubes(const std::vector<int>& sizes, bool move_old = true);
 
     // The cubes' keys in a cache file, in layout order: the cached object's index in the scene, its placement.
     std::vector<raycache::GpuCubeKey> cube_keys() const {
@@ -106,7 +106,7 @@ struct Tracer::Impl {
     }
 };
 
-void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
+void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
     std::vector<raycache::GpuCubeShape> placed = shapes;
     for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = sizes[k];
     raycache::GpuBufferLayout next = with_texel([&](auto texel) { return raycache::gpu_buffer_layout<decltype(texel)>(placed); });
@@ -137,7 +137,7 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes) {
         new_doubtful = std::make_unique<vk::Buffer>(context, next.doubtful_bytes);
         new_doubtful->fill(raycache::gpu_doubtful_clear_word);
         new_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, next.cubes)); // by first_texel, as placed
-        if (texels) { // moving: the device is idle (render() waited for the frame and its end-of-frame passes)
+        if (texels && move_old) { // moving: the device is idle (render() waited for the frame and its end-of-frame passes)
             with_texel([&](auto texel) {
                 return raycache::move_gpu_cubes<decltype(texel)>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
                                                                  new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
@@ -264,7 +264,16 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
     t.with_texel([&](auto texel) {
         using Texel = decltype(texel);
         const auto cubes = raycache::load_gpu_cache_file<Texel>(path, identity, t.cube_keys(), fixed); // checked whole first
-        t.place_cubes(raycache::loaded_face_sizes(cubes));
+        // The file's sizes must fit the device's buffer and the budget, as the tracer's own do, before
+        // anything is replaced (adaptive cubes of another run may be larger than this one allows).
+        std::vector<raycache::GpuCubeShape> placed = t.shapes;
+        for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = cubes[k].cube->face_size();
+        const std::uint64_t need = raycache::gpu_buffer_layout<Texel>(placed).bytes;
+        if (need > t.cube_room)
+            throw raycache::CacheFileError("RayCache: cache file '" + path + "': its cubes need " + std::to_string(need) +
+                                           " bytes of texels, more than this tracer's cubes may take (" + std::to_string(t.cube_room) +
+                                           ": the device's storage buffer and --budget-mib); nothing was loaded");
+        t.place_cubes(raycache::loaded_face_sizes(cubes), false); // the old cubes are replaced, not moved in
         t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
         t.doubtful->fill(raycache::gpu_doubtful_clear_word);
         raycache::write_gpu_cubes(cubes, t.layout, t.texels->as<std::uint32_t>(), static_cast<std::size_t>(t.layout.words),

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -40,11 +41,15 @@ struct GpuCubeKey {
 };
 
 namespace detail {
-// Throws std::invalid_argument unless `keys` names every cube of `layout` once.
+// Throws std::invalid_argument unless `keys` names every cube of `layout` once, each key its own.
 inline void check_gpu_keys(const GpuBufferLayout& layout, const std::vector<GpuCubeKey>& keys) {
     if (keys.size() != layout.cubes.size())
         throw std::invalid_argument("RayCache: " + std::to_string(keys.size()) + " keys for " + std::to_string(layout.cubes.size()) +
                                     " GPU cubes");
+    std::set<std::pair<std::uint64_t, std::uint64_t>> seen;
+    for (const GpuCubeKey& k : keys)
+        if (!seen.insert({k.object, k.part}).second)
+            throw std::invalid_argument("RayCache: two GPU cubes have the key " + key_text(k.object, k.part));
 }
 } // namespace detail
 
@@ -130,19 +135,20 @@ std::vector<int> loaded_face_sizes(const std::vector<LoadedCube<Texel>>& cubes) 
 
 // Writes loaded cubes into a cleared texel buffer's contents (`words`, `word_count` words) and doubtful bits
 // (`doubtful`, layout.doubtful_words words, cleared; null: marks dropped) where `layout` places them, cube k
-// at layout.cubes[k]. Returns the texels written. Throws std::invalid_argument when the layout has another
-// number of cubes or other face sizes, or a cube does not fit.
+// at layout.cubes[k]. Returns the texels written. Throws std::invalid_argument, before writing anything,
+// when the layout has another number of cubes or other face sizes, or a cube does not fit.
 template <class Texel>
 std::size_t write_gpu_cubes(const std::vector<LoadedCube<Texel>>& cubes, const GpuBufferLayout& layout, std::uint32_t* words,
                             std::size_t word_count, std::uint32_t* doubtful) {
     if (cubes.size() != layout.cubes.size())
         throw std::invalid_argument("RayCache: write_gpu_cubes: " + std::to_string(cubes.size()) + " cubes for a layout of " +
                                     std::to_string(layout.cubes.size()));
+    for (std::size_t k = 0; k < cubes.size(); ++k) detail::check_gpu_cube(*cubes[k].cube, layout.cubes[k], word_count); // all, first
     std::size_t written = 0;
     for (std::size_t k = 0; k < cubes.size(); ++k) {
         const CacheCube<Texel>& cube = *cubes[k].cube;
         const shared::raycache_gpu_cube& at = layout.cubes[k];
-        write_gpu_words(cube, at, words, word_count); // throws for another face size or no room
+        write_gpu_words(cube, at, words, word_count);
         cube.for_each_valid_texel([&](const TexelAddress& t) {
             ++written;
             if (doubtful && cube.is_doubtful(t))

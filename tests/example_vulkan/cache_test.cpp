@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <raycache/embree/scene_cache.hpp>
 #include <rcx/vulkan.hpp>
 
@@ -339,7 +341,7 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
     const rcx::Scene scene = rcx::make_scene("behind-8");
     const std::string spirv = rcx::gpu::default_spirv_dir();
     const std::string name = std::string("cache file, ") + rcx::to_string(mode);
-    const std::string path = "/tmp/raycache-vulkan-cache-test-" + std::string(rcx::to_string(mode)) + ".rcc";
+    const std::string path = "/tmp/raycache-vulkan-cache-test-" + std::to_string(::getpid()) + "-" + rcx::to_string(mode) + ".rcc";
     const raycache::SceneIdentity identity{0xbe8, "behind-8"};
     for (const bool adaptive : {true, false}) {
         rcx::gpu::TracerSettings settings;
@@ -359,7 +361,23 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
         check(a.hits > 0 && rcx::bit_identical(warm, from_file) && a.hits == b.hits && a.lookups == b.lookups,
               variant + format(": the loaded tracer's next frame equals the saving tracer's (hits %.0f and %.0f)", double(a.hits),
                                double(b.hits)));
-        if (adaptive) continue;
+        if (adaptive) {
+            // A tracer whose budget holds less than the file's cubes refuses it, naming the budget, and keeps
+            // its own cubes (cold here: its next frame still renders, and hits nothing).
+            rcx::gpu::TracerSettings tight = settings;
+            tight.budget_bytes = 64u << 10;
+            rcx::gpu::Tracer small(context, scene, spirv, tight);
+            bool refused = false;
+            try {
+                small.load_caches(path, identity);
+            } catch (const raycache::CacheFileError& e) {
+                refused = std::string(e.what()).find("--budget-mib") != std::string::npos;
+            }
+            rcx::gpu::FrameStats cold;
+            small.render(scene.camera_at(3), size, size, &cold);
+            check(refused && cold.hits == 0, variant + ": a tracer with a 64 KiB budget refuses the file's larger cubes and stays cold");
+            continue;
+        }
         rcx::gpu::TracerSettings other = settings;
         other.face_size = 32;
         rcx::gpu::Tracer smaller(context, scene, spirv, other);
