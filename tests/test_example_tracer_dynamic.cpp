@@ -11,6 +11,8 @@
 #include <memory>
 #include <string>
 
+#include <unistd.h>
+
 #include "rcx/image.hpp"
 #include "rcx/scene.hpp"
 #include "stale_oracle.hpp"
@@ -147,7 +149,8 @@ TEST_CASE("dynamic-N: caches saved after some moves and loaded back lose exactly
             tracer.render(scene.camera_at(0), s);
             caches.begin_frame();
         }
-        const std::string path = (std::filesystem::temp_directory_path() / ("raycache-dynamic-" + std::to_string(cdct) + ".rcc")).string();
+        const std::string path = (std::filesystem::temp_directory_path() /
+                                  ("raycache-dynamic-" + std::to_string(::getpid()) + "-" + std::to_string(cdct) + ".rcc")).string();
         const raycache::SceneIdentity identity{8, "dynamic-8"};
         caches.save(path, identity);
         SceneCache loaded = tracer_caches(technique);
