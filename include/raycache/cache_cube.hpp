@@ -314,6 +314,16 @@ public:
 
     // Bits of BlockState::path_flags: what a block's recorded paths did (raycache/path_record.hpp).
     static constexpr std::uint32_t path_lit = 1u, path_chained = 2u, path_unbounded = 4u;
+    static constexpr std::uint32_t all_path_flags = path_lit | path_chained | path_unbounded;
+    // A record's lit, chained and unbounded as path flags, and back.
+    static std::uint32_t path_flags_of(const PathRecord& r) noexcept {
+        return (r.lit ? path_lit : 0u) | (r.chained ? path_chained : 0u) | (r.unbounded ? path_unbounded : 0u);
+    }
+    static void set_path_flags(PathRecord& r, std::uint32_t flags) noexcept {
+        r.lit = (flags & path_lit) != 0;
+        r.chained = (flags & path_chained) != 0;
+        r.unbounded = (flags & path_unbounded) != 0;
+    }
 
     // One record block (record_edge x record_edge texels) of an allocated tile, for invalidation
     // (raycache/invalidation.hpp): its texels, the union of the path records stored into them, and the box
@@ -339,9 +349,7 @@ public:
             r.objects = objects;
             if (vertex_lo.x <= vertex_hi.x) r.vertex_lo = vertex_lo, r.vertex_hi = vertex_hi;
             if (escape_lo.x <= escape_hi.x) r.escape_lo = escape_lo, r.escape_hi = escape_hi;
-            r.lit = lit();
-            r.chained = chained();
-            r.unbounded = unbounded();
+            set_path_flags(r, path_flags);
             return r;
         }
     };
@@ -1119,8 +1127,7 @@ private:
     static void merge_path(PathUnion& r, const PathRecord& path) noexcept {
         if ((r.objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
             r.objects.fetch_or(path.objects, std::memory_order_relaxed);
-        const std::uint32_t flags = (path.lit ? path_lit : 0u) | (path.chained ? path_chained : 0u) |
-                                    (path.unbounded ? path_unbounded : 0u);
+        const std::uint32_t flags = path_flags_of(path);
         if ((r.flags.load(std::memory_order_relaxed) & flags) != flags) r.flags.fetch_or(flags, std::memory_order_relaxed);
         if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
         if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);

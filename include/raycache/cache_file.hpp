@@ -330,8 +330,10 @@ struct CubeRecord {
 
 inline constexpr int file_record_blocks = 16;       // 4 x 4 blocks of 4 x 4 texels a tile
 inline constexpr std::size_t file_record_bytes = 64; // one block's path record
-static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks,
-              "cache files keep tiles and record blocks as CacheCube does: change the format with them");
+static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks &&
+                  CacheCube<CctTexel>::path_lit == 1u && CacheCube<CctTexel>::path_chained == 2u &&
+                  CacheCube<CctTexel>::path_unbounded == 4u,
+              "cache files keep tiles, record blocks and path flags as CacheCube does: change the format with them");
 
 // One record block's path record as the file stores it (format 3 on).
 struct BlockRecord {
@@ -394,7 +396,8 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
         if (!zero) r.fail(where + " holds no record but is not all zero");
         return b;
     }
-    if (flags > 7) r.fail(where + " has path flags " + std::to_string(flags) + " (1 lit, 2 chained, 4 unbounded)");
+    if (flags & ~CacheCube<CctTexel>::all_path_flags)
+        r.fail(where + " has path flags " + std::to_string(flags) + " (1 lit, 2 chained, 4 unbounded)");
     if (!is_file_box(box[0], box[1], false) || !is_file_box(box[2], box[3], true))
         r.fail(where + "'s boxes are neither empty (+inf, -inf) nor low <= high within bounds (hit points within 1e18, "
                        "escape directions within [-1, 1] and reaching the unit sphere)");
@@ -402,9 +405,7 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
     b.record.objects = objects;
     b.record.vertex_lo = box[0], b.record.vertex_hi = box[1];
     b.record.escape_lo = box[2], b.record.escape_hi = box[3];
-    b.record.lit = (flags & 1u) != 0;
-    b.record.chained = (flags & 2u) != 0;
-    b.record.unbounded = (flags & 4u) != 0;
+    CacheCube<CctTexel>::set_path_flags(b.record, flags);
     return b;
 }
 
@@ -620,7 +621,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             });
             for (const detail::BlockRecord& b : blocks) {
                 w.u32(b.recorded ? 1 : 0);
-                w.u32(b.recorded ? (b.record.lit ? 1u : 0u) | (b.record.chained ? 2u : 0u) | (b.record.unbounded ? 4u : 0u) : 0u);
+                w.u32(b.recorded ? CacheCube<Texel>::path_flags_of(b.record) : 0u);
                 w.u64(b.recorded ? b.record.objects : 0);
                 for (const glm::vec3& corner : {b.record.vertex_lo, b.record.vertex_hi, b.record.escape_lo, b.record.escape_hi})
                     for (int k = 0; k < 3; ++k) w.f32(b.recorded ? corner[k] + 0.0f : 0.0f);

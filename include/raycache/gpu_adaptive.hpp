@@ -141,7 +141,7 @@ std::size_t move_gpu_cubes(const GpuBufferLayout& from, const std::uint32_t* wor
         if (new_doubtful)
             coarse.for_each_valid_texel([&](const TexelAddress& t) {
                 if (coarse.is_doubtful(t))
-                    set_gpu_doubtful(new_doubtful, new_cube.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, new_cube.face_size)));
+                    set_gpu_doubtful(new_doubtful, gpu_element(new_cube, t));
             });
     }
     return written;

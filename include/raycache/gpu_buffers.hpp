@@ -165,6 +165,11 @@ std::size_t read_gpu_words(CacheCube<Texel>& cube, const shared::raycache_gpu_cu
     return valid;
 }
 
+// The element of texel `t` of the cube descriptor `at` places: its index in the texel and doubtful-bit buffers.
+inline std::uint32_t gpu_element(const shared::raycache_gpu_cube& at, const TexelAddress& t) noexcept {
+    return at.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, at.face_size));
+}
+
 // Sets `element`'s bit in a doubtful-bit buffer's contents (`words`, which must hold it): that texel is doubtful.
 inline void set_gpu_doubtful(std::uint32_t* words, std::uint32_t element) noexcept {
     words[shared::raycache_doubtful_word(element)] |= shared::raycache_doubtful_bit(element);

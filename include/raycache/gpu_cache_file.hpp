@@ -70,8 +70,7 @@ std::vector<std::uint8_t> encode_gpu_cache(const SceneIdentity& scene, const Gpu
         cube->begin_frame(); // the read texels become the cube's (doubtful marks need visible ones)
         if (doubtful)
             cube->for_each_valid_texel([&](const TexelAddress& t) {
-                const auto element = at.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, at.face_size));
-                if (gpu_doubtful(doubtful, static_cast<std::size_t>(layout.doubtful_words), element)) cube->set_doubtful(t);
+                if (gpu_doubtful(doubtful, static_cast<std::size_t>(layout.doubtful_words), gpu_element(at, t))) cube->set_doubtful(t);
             });
         save.push_back(CubeToSave<Texel>{keys[k].object, keys[k].bounds, cube.get(), keys[k].part});
         cubes.push_back(std::move(cube));
@@ -152,7 +151,7 @@ std::size_t write_gpu_cubes(const std::vector<LoadedCube<Texel>>& cubes, const G
         cube.for_each_valid_texel([&](const TexelAddress& t) {
             ++written;
             if (doubtful && cube.is_doubtful(t))
-                set_gpu_doubtful(doubtful, at.first_texel + static_cast<std::uint32_t>(texel_linear_index(t, at.face_size)));
+                set_gpu_doubtful(doubtful, gpu_element(at, t));
         });
     }
     return written;

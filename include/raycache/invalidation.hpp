@@ -70,15 +70,14 @@ struct SceneChanges {
 // Throws std::invalid_argument naming `what` unless the sphere's centre and radius are finite and the
 // radius is not negative: every test below would take a NaN for "does not meet" and keep what it changed.
 inline void check_bounding_sphere(const BoundingSphere& s, const char* what) {
-    if (!std::isfinite(s.centre.x) || !std::isfinite(s.centre.y) || !std::isfinite(s.centre.z) || !std::isfinite(s.radius) ||
-        !(s.radius >= 0.0f))
+    if (!shared::raycache_is_finite3(s.centre) || !std::isfinite(s.radius) || !(s.radius >= 0.0f))
         throw std::invalid_argument(std::string("RayCache: ") + what + " needs a finite centre and a finite radius >= 0");
 }
 
 // Throws std::invalid_argument unless every light position is finite.
 inline void check_lights(const std::vector<glm::vec3>& lights) {
     for (const glm::vec3& light : lights)
-        if (!std::isfinite(light.x) || !std::isfinite(light.y) || !std::isfinite(light.z))
+        if (!shared::raycache_is_finite3(light))
             throw std::invalid_argument("RayCache: a light of the scene's changes is not finite");
 }
 
@@ -121,15 +120,16 @@ struct OriginBall {
     glm::vec3 centre;
     float radius;
 };
-// The margin a ball of origins is grown by: the tracer's surface offsets, and rounding.
-inline float origin_ball_radius(const CubeBounds& bounds, float radius) {
+// The size the margins for the tracer's surface offsets and rounding scale with: the cube's coordinates.
+inline float origin_scale(const CubeBounds& bounds) {
     const glm::vec3 c = bounds.centre;
-    const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * bounds.half_size);
-    return radius * 1.001f + 1e-3f * scale;
+    return std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * bounds.half_size);
 }
+// A ball of origins of `radius` grown by that margin.
+inline float origin_ball_radius(const CubeBounds& bounds, float radius) { return radius * 1.001f + 1e-3f * origin_scale(bounds); }
 inline OriginBall origin_ball(const CubeRays& rays, bool has_origins, const glm::vec3& lo, const glm::vec3& hi) {
     const glm::vec3 c = rays.bounds.centre;
-    const float scale = std::max(1.0f, std::max(std::abs(c.x), std::max(std::abs(c.y), std::abs(c.z))) + 2.0f * rays.bounds.half_size);
+    const float scale = origin_scale(rays.bounds);
     // The box's ball, or the smaller ball the rays are known to leave from (nan counts as unknown).
     const float radius = rays.origin_radius >= 0.0f ? std::min(1.7320509f * rays.bounds.half_size, rays.origin_radius)
                                                     : 1.7320509f * rays.bounds.half_size;

@@ -483,12 +483,13 @@ public:
         static_assert(std::is_invocable_r_v<TracedRay, Trace&> || records,
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
-        const int index = find(id);
-        if (index < 0) {
+        auto trace_alone = [&] { // no cube to look in or store into
             PathRecord unused;
             if constexpr (records) return trace(unused).color;
             else return trace().color;
-        }
+        };
+        const int index = find(id);
+        if (index < 0) return trace_alone();
         Entry& e = entries_[static_cast<std::size_t>(index)];
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
@@ -503,9 +504,7 @@ public:
         if (e.coverage) e.coverage->mark(direction);
         if (!answerable) {
             e.cdct->cube().record_lookup(false);
-            PathRecord unused;
-            if constexpr (records) return trace(unused).color;
-            else return trace().color;
+            return trace_alone();
         }
         int read = 0;
         const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read);
