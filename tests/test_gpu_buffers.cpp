@@ -42,7 +42,13 @@ TEST_CASE("gpu_buffer_layout places cubes one after another, 6 N^2 texels each, 
     // The box travels into the descriptor (the CDCT's searches read it); padding is zero.
     CHECK(cct.cubes[0].centre == glm::vec3(1.0f, 2.0f, 3.0f));
     CHECK(cct.cubes[0].half_size == 0.5f);
-    CHECK(cct.cubes[0].reserved1 == 0u);
+    // Origin records (the CCT's origin test): one per tile of 16 x 16 texels, 6 t^2 a cube, t = ceil(N / 16).
+    CHECK(cct.cubes[0].first_tile == 0u);
+    CHECK(cct.cubes[1].first_tile == 6u);
+    CHECK(cct.cubes[2].first_tile == 12u);
+    CHECK(cct.origin_tiles == 18u);
+    CHECK(cct.origin_words == 18u * 16u);
+    CHECK(cct.origin_bytes == 18u * 64u);
     // Counters: cube k is number k, or first_index + k.
     CHECK(cct.cubes[0].index == 0u);
     CHECK(cct.cubes[2].index == 2u);
@@ -75,18 +81,19 @@ TEST_CASE("the confidence test's doubtful-bit buffer holds a bit per texel, and 
     CHECK(gpu_bindings.cdct_cubes == 8u);
 }
 
-TEST_CASE("gpu_buffer_layout refuses face sizes outside 1..4096 and more texels than a uint addresses") {
+TEST_CASE("gpu_buffer_layout refuses face sizes outside 1..4096 and more texels than a store-list entry addresses") {
     CHECK_THROWS_WITH_AS(gpu_buffer_layout<CctTexel>({{4, {}}, {0, {}}}), doctest::Contains("GPU cube 1 has face size 0"),
                          std::invalid_argument);
     CHECK_THROWS_AS(gpu_buffer_layout<CctTexel>({{4097, {}}}), std::invalid_argument);
-    // 6 * 4096^2 = 100,663,296 texels a cube: 42 cubes hold 4,227,858,432 < 2^32 = 4,294,967,296; 43 do not.
-    const std::vector<GpuCubeShape> largest(42, GpuCubeShape{4096, {}});
+    // 6 * 4096^2 = 100,663,296 texels a cube: 10 cubes hold 1,006,632,960 < 2^30 = 1,073,741,824; 11 do not.
+    const std::vector<GpuCubeShape> largest(10, GpuCubeShape{4096, {}});
     const GpuBufferLayout fits = gpu_buffer_layout<CctTexel>(largest);
-    CHECK(fits.texels == 4227858432u);
-    CHECK(fits.cubes.back().first_texel == 4127195136u);
+    CHECK(fits.texels == 1006632960u);
+    CHECK(fits.cubes.back().first_texel == 905969664u);
+    CHECK(fits.cubes.back().first_tile == 9u * 6u * 256u * 256u);
     std::vector<GpuCubeShape> too_many = largest;
     too_many.push_back({4096, {}});
-    CHECK_THROWS_WITH_AS(gpu_buffer_layout<CctTexel>(too_many), doctest::Contains("2^32"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(gpu_buffer_layout<CctTexel>(too_many), doctest::Contains("2^30"), std::invalid_argument);
 }
 
 TEST_CASE("the fill word reads as an empty texel in both techniques, and zeros read as valid black texels") {
@@ -177,4 +184,48 @@ TEST_CASE("write_gpu_words and read_gpu_words refuse a descriptor of another fac
     CHECK_THROWS_WITH_AS(write_gpu_words(cube, layout.cubes[1], words.data(), 29), doctest::Contains("does not fit"),
                          std::invalid_argument);
     CHECK_NOTHROW(write_gpu_words(cube, layout.cubes[1], words.data(), 30));
+}
+
+// Origin records by hand: a cube of N = 20 has t = 2 tiles a face edge; texels (face 1, column 17, row 3) and
+// (1, 18, 4) lie in tile (1 x 2 + 0) x 2 + 1 = 5, so with a cube of N = 1 (6 tiles) before it, record 11,
+// words 176..191. Ordered keys set the sign bit of a positive float and complement a negative one:
+// 1.0 = 0x3F800000 -> 0xBF800000, -2.0 = 0xC0000000 -> 0x3FFFFFFF, 0.5 -> 0xBF000000, 4.0 -> 0xC0800000;
+// upper corners are stored complemented: 1.5 -> ~0xBFC00000 = 0x403FFFFF, -1.0 -> ~0x407FFFFF = 0xBF800000,
+// 0.5 -> ~0xBF000000 = 0x40FFFFFF.
+TEST_CASE("write_gpu_origins writes a tile's origin box and nearest hit as ordered keys, and read_gpu_origins reads them back") {
+    const GpuBufferLayout layout = gpu_buffer_layout<CctTexel>({{1, CubeBounds{}}, {20, CubeBounds{}}});
+    REQUIRE(layout.cubes[1].first_tile == 6u);
+    REQUIRE(layout.origin_words == (6u + 6u * 4u) * 16u);
+    CctCube cube(20);
+    REQUIRE(cube.store(texel_direction(TexelAddress{1, 17, 3}, 20), glm::vec3(0.5f), glm::vec3(1.0f, -2.0f, 0.5f), 4.0f));
+    REQUIRE(cube.store(texel_direction(TexelAddress{1, 18, 4}, 20), glm::vec3(0.5f), glm::vec3(1.5f, -1.0f, 0.5f), 6.0f));
+    cube.begin_frame();
+    std::vector<std::uint32_t> records(static_cast<std::size_t>(layout.origin_words), sentinel);
+    write_gpu_origins(cube, layout.cubes[1], records.data(), records.size());
+    const std::uint32_t expected[16] = {0xBF800000u, 0x3FFFFFFFu, 0xBF000000u, 0x403FFFFFu, 0xBF800000u, 0x40FFFFFFu,
+                                        0xC0800000u, gpu_clear_word, gpu_clear_word, gpu_clear_word, gpu_clear_word,
+                                        gpu_clear_word, gpu_clear_word, gpu_clear_word, gpu_clear_word, gpu_clear_word};
+    for (std::size_t w = 0; w < 16; ++w) {
+        CAPTURE(w);
+        CHECK(records[176 + w] == expected[w]);
+    }
+    for (std::size_t w = 96; w < records.size(); ++w)
+        if (w < 176 || w >= 192) CHECK(records[w] == gpu_clear_word); // the cube's other tiles: no box
+    for (std::size_t w = 0; w < 96; ++w) CHECK(records[w] == sentinel); // cube 0's records are left alone
+
+    CctCube back(20);
+    std::vector<std::uint32_t> words(static_cast<std::size_t>(layout.words), gpu_clear_word);
+    write_gpu_words(cube, layout.cubes[1], words.data(), words.size());
+    read_gpu_words(back, layout.cubes[1], words.data(), words.size());
+    read_gpu_origins(back, layout.cubes[1], records.data(), records.size());
+    back.begin_frame();
+    const auto box = back.origin_box(TexelAddress{1, 17, 3});
+    REQUIRE(box);
+    CHECK(box->first == glm::vec3(1.0f, -2.0f, 0.5f));
+    CHECK(box->second == glm::vec3(1.5f, -1.0f, 0.5f));
+    CHECK(back.nearest_hit(TexelAddress{1, 17, 3}) == 4.0f);
+    CHECK_FALSE(back.origin_box(TexelAddress{1, 0, 0}));
+    CHECK_THROWS_AS(write_gpu_origins(cube, layout.cubes[0], records.data(), records.size()), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(write_gpu_origins(cube, layout.cubes[1], records.data(), 191), doctest::Contains("do not fit"),
+                         std::invalid_argument);
 }

@@ -23,6 +23,16 @@
  *   layout(push_constant) uniform Edge { float threshold; };
  *   void main() { raycache_end_frame_mark_pass(threshold); }
  *
+ * The origin test (RAYCACHE_ORIGINS, CCT; raycache/shared/origin_rule.h) lists tiles in the same list: the
+ * publish pass makes their stores' origins visible, and a third pass, the drop pass, empties the tiles that
+ * a lookup met from too far, with the CCT's cube table and origin records bound: after the mark pass (or
+ * after the publish pass without the confidence test) record a barrier and dispatch
+ *
+ *   void main() { raycache_end_frame_drop_pass(); }
+ *
+ * the same way. Its sweep: raycache_cct_end_frame_tile for every tile with the publish sweep, and
+ * raycache_cct_drop_tile for every tile after the mark sweep.
+ *
  * After a list overflow, the sweep (every element through raycache_cct_end_frame / raycache_cdct_end_frame),
  * a barrier, and raycache_mark_edges for every element of both techniques: that compares every filled texel
  * with its neighbours, not only this frame's, which marks what the listed pass and C++ mark as long as the
@@ -36,13 +46,14 @@
 #ifdef RAYCACHE_CDCT
 #include "raycache/cdct.glsl"
 #endif
-#if defined(RAYCACHE_CONFIDENCE) && defined(RAYCACHE_END_FRAME)
+#if defined(RAYCACHE_END_FRAME) && (defined(RAYCACHE_CONFIDENCE) || defined(RAYCACHE_ORIGINS))
 #include "raycache/shared/edge_rule.h"
-/* The cube tables (raycache/shared/gpu_layout.h): each technique's cubes by increasing first_texel. */
+/* The cube tables (raycache/shared/gpu_layout.h): each technique's cubes by increasing first_texel (and so
+ * by increasing first_tile). */
 layout(std430, set = RAYCACHE_CCT_SET, binding = RAYCACHE_CCT_CUBES_BINDING) readonly buffer raycache_cct_cube_table {
     raycache_gpu_cube raycache_cct_cubes[];
 };
-#ifdef RAYCACHE_CDCT
+#if defined(RAYCACHE_CDCT) && defined(RAYCACHE_CONFIDENCE)
 layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_CUBES_BINDING) readonly buffer raycache_cdct_cube_table {
     raycache_gpu_cube raycache_cdct_cubes[];
 };
@@ -50,11 +61,15 @@ layout(std430, set = RAYCACHE_CDCT_SET, binding = RAYCACHE_CDCT_CUBES_BINDING) r
 #endif
 
 #ifdef RAYCACHE_END_FRAME
-/* Publishes one store-list entry (a CDCT entry is ignored unless RAYCACHE_CDCT is defined). */
+/* Publishes one store-list entry (a CDCT entry is ignored unless RAYCACHE_CDCT is defined, a tile entry
+ * unless RAYCACHE_ORIGINS is). */
 void raycache_end_frame_entry(uint entry) {
     uint element = entry & ~RAYCACHE_FRAME_CDCT_ENTRY;
     if ((entry & RAYCACHE_FRAME_CDCT_ENTRY) == 0u) {
-        raycache_cct_end_frame(element);
+        if ((entry & RAYCACHE_FRAME_TILE_ENTRY) == 0u) raycache_cct_end_frame(element);
+#ifdef RAYCACHE_ORIGINS
+        else raycache_cct_end_frame_tile(entry & ~RAYCACHE_FRAME_TILE_ENTRY);
+#endif
     } else {
 #ifdef RAYCACHE_CDCT
         raycache_cdct_end_frame(element);
@@ -80,6 +95,64 @@ bool raycache_end_frame_listed_entry(out uint entry) {
 void raycache_end_frame_pass() {
     uint entry;
     if (raycache_end_frame_listed_entry(entry)) raycache_end_frame_entry(entry);
+}
+
+#ifdef RAYCACHE_ORIGINS
+/* The CCT cube whose tiles hold origin record `tile` (false when none): a binary search of the cube table
+ * for the last cube whose first_tile is at or before it. */
+bool raycache_cct_cube_holding_tile(uint tile, out raycache_gpu_cube cube) {
+    uint lo = 0u, hi = uint(raycache_cct_cubes.length());
+    cube = raycache_make_gpu_cube(vec3(0.0), 0.0, 0u, 0);
+    if (hi == 0u) return false;
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (raycache_cct_cubes[mid].first_tile <= tile) lo = mid;
+        else hi = mid;
+    }
+    cube = raycache_cct_cubes[lo];
+    return raycache_cube_has_texels(cube) && tile >= cube.first_tile &&
+           tile - cube.first_tile < raycache_origin_tile_count(cube.face_size);
+}
+
+/* The drop pass for one tile: when a lookup marked it stale this frame, its texels are emptied (their
+ * doubtful bits too) and its record cleared, as C++ drops a stale tile in begin_frame(). Runs after the
+ * publish pass and the mark pass (which still compare the tile's texels, as C++'s confidence test does
+ * before begin_frame()). Calling it for every tile is the sweep's drop pass. */
+void raycache_cct_drop_tile(uint tile) {
+    uint r = tile * RAYCACHE_ORIGIN_RECORD_WORDS;
+    if (tile >= RAYCACHE_FRAME_TILE_ENTRY || r + RAYCACHE_ORIGIN_RECORD_WORDS > uint(raycache_cct_origins.length()) ||
+        raycache_cct_origins[r + RAYCACHE_ORIGIN_STALE] != 0u)
+        return;
+    raycache_gpu_cube cube;
+    if (raycache_cct_cube_holding_tile(tile, cube)) {
+        uint n = uint(cube.face_size), t = raycache_origin_tiles_per_edge(cube.face_size), local = tile - cube.first_tile;
+        uint face = local / (t * t);
+        uint row0 = (local / t) % t * RAYCACHE_ORIGIN_TILE_EDGE, column0 = local % t * RAYCACHE_ORIGIN_TILE_EDGE;
+        for (uint row = row0; row < min(row0 + RAYCACHE_ORIGIN_TILE_EDGE, n); ++row)
+            for (uint column = column0; column < min(column0 + RAYCACHE_ORIGIN_TILE_EDGE, n); ++column) {
+                uint e = cube.first_texel + (face * n + row) * n + column;
+                if (e < uint(raycache_cct_texels.length())) raycache_cct_texels[e] = RAYCACHE_GPU_CLEAR_WORD;
+#ifdef RAYCACHE_CONFIDENCE
+                uint w = raycache_doubtful_word(e), bit = raycache_doubtful_bit(e);
+                if (w < uint(raycache_cct_doubtful.length()) && (raycache_cct_doubtful[w] & bit) != 0u)
+                    atomicAnd(raycache_cct_doubtful[w], ~bit); // other tiles' bits share the word
+#endif
+            }
+    }
+    for (uint w = 0u; w < RAYCACHE_ORIGIN_RECORD_WORDS; ++w) raycache_cct_origins[r + w] = RAYCACHE_GPU_CLEAR_WORD;
+}
+#endif
+
+/* The drop pass's body (RAYCACHE_ORIGINS), dispatched as raycache_end_frame_pass after the publish pass and
+ * the mark pass (barriers between): invocation k drops the tile of entry k if a lookup marked it stale.
+ * Does nothing without RAYCACHE_ORIGINS. */
+void raycache_end_frame_drop_pass() {
+#ifdef RAYCACHE_ORIGINS
+    uint entry;
+    if (raycache_end_frame_listed_entry(entry) &&
+        (entry & (RAYCACHE_FRAME_CDCT_ENTRY | RAYCACHE_FRAME_TILE_ENTRY)) == RAYCACHE_FRAME_TILE_ENTRY)
+        raycache_cct_drop_tile(entry & ~RAYCACHE_FRAME_TILE_ENTRY);
+#endif
 }
 
 #ifdef RAYCACHE_CONFIDENCE
@@ -179,7 +252,8 @@ void raycache_mark_edges(bool cdct, uint element, float threshold) {
  * the confidence test for entry k. threshold < 0 or NaN: nothing is marked. */
 void raycache_end_frame_mark_pass(float threshold) {
     uint entry;
-    if (raycache_edge_test_enabled(threshold) && raycache_end_frame_listed_entry(entry))
+    if (raycache_edge_test_enabled(threshold) && raycache_end_frame_listed_entry(entry) &&
+        (entry & (RAYCACHE_FRAME_CDCT_ENTRY | RAYCACHE_FRAME_TILE_ENTRY)) != RAYCACHE_FRAME_TILE_ENTRY)
         raycache_mark_edges((entry & RAYCACHE_FRAME_CDCT_ENTRY) != 0u, entry & ~RAYCACHE_FRAME_CDCT_ENTRY, threshold);
 }
 #endif

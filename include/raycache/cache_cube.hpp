@@ -64,6 +64,7 @@
 #include "raycache/cube_face.hpp"
 #include "raycache/memory_budget.hpp"
 #include "raycache/path_record.hpp"
+#include "raycache/shared/origin_rule.h"
 #include "raycache/shared/ray_box.h"
 #include "raycache/statistics.hpp"
 #include "raycache/texel.hpp"
@@ -87,7 +88,7 @@ public:
     using Value = typename Traits::Value;
 
     // Texels along a tile's edge (faces smaller than this have one tile each).
-    static constexpr int tile_edge = 16;
+    static constexpr int tile_edge = static_cast<int>(RAYCACHE_ORIGIN_TILE_EDGE);
     // Path records (raycache/invalidation.hpp) are kept per block of record_edge x record_edge texels of a
     // tile: a path that hit a moved object then costs the texels of its block, not the whole tile's. Blocks
     // of 4 x 4 keep about ten points more of a CDCT's texels per move than 8 x 8 blocks (the unions of fewer,
@@ -698,13 +699,8 @@ private:
     static constexpr int bit_words = tile_texels / 64;
 
     // A float's bits mapped so that unsigned order is the float's order (for atomic min and max).
-    static std::uint32_t ordered(float f) noexcept {
-        const std::uint32_t bits = glm::floatBitsToUint(f);
-        return (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
-    }
-    static float unordered(std::uint32_t key) noexcept {
-        return glm::uintBitsToFloat((key & 0x80000000u) ? key & 0x7FFFFFFFu : ~key);
-    }
+    static std::uint32_t ordered(float f) noexcept { return shared::raycache_ordered_key(f); }
+    static float unordered(std::uint32_t key) noexcept { return shared::raycache_key_float(key); }
 
     // The union of the path records stored into one record block of a tile.
     struct PathUnion {
@@ -757,25 +753,20 @@ private:
         }
         // Whether `o` lies within `drift` of the visible origin box (true when no box is known: stores made
         // without an origin give none).
+        // (The rules: raycache/shared/origin_rule.h, which the GPU's tiles follow too.)
         bool origins_cover(const glm::vec3& o, float drift) const noexcept {
-            if (!has_box) return true;
-            for (int k = 0; k < 3; ++k)
-                if (!(o[k] >= box_min[k] - drift && o[k] <= box_max[k] + drift)) return false;
-            return true;
+            return !has_box || shared::raycache_origin_covered(o, glm::vec3(box_min[0], box_min[1], box_min[2]),
+                                                               glm::vec3(box_max[0], box_max[1], box_max[2]), drift);
         }
         // Whether the visible box grown by `o` stays within `drift` wide on every axis (true without a box).
         bool box_stays_within(const glm::vec3& o, float drift) const noexcept {
-            if (!has_box) return true;
-            for (int k = 0; k < 3; ++k)
-                if (!(std::max(box_max[k], o[k]) - std::min(box_min[k], o[k]) <= drift)) return false;
-            return true;
+            return !has_box || shared::raycache_origin_box_stays_within(glm::vec3(box_min[0], box_min[1], box_min[2]),
+                                                                        glm::vec3(box_max[0], box_max[1], box_max[2]), o, drift);
         }
         // The drift a tolerance allows a tile whose nearest hit lies at `nearest`: min(drift, parallax x
         // nearest); drift alone when either factor of the product is infinite.
         static float allowed_drift(const OriginTolerance& t, float nearest) noexcept {
-            if (!(t.parallax < std::numeric_limits<float>::infinity()) || !(nearest < std::numeric_limits<float>::infinity()))
-                return t.drift;
-            return std::min(t.drift, t.parallax * nearest);
+            return shared::raycache_allowed_drift(t.drift, t.parallax, nearest);
         }
         // The members are grouped by cache line according to who writes them during a frame, so that a
         // store does not evict the line of doubtful bits and visible origin box that every lookup of the

@@ -104,12 +104,15 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
 // `new_doubtful` the new ones (to.words and to.doubtful_words words, already cleared: gpu_clear_word, 0;
 // new_doubtful may be null). A cube of the same size is copied with its doubtful bits; a smaller one is
 // resampled from the old texels and its texels tested for edges (`edge_threshold`, as the mark pass: < 0
-// off); a larger one is left empty. Returns the texels written. Throws std::invalid_argument when the
-// layouts do not hold the same number of cubes.
+// off); a larger one is left empty. With `origins` and `new_origins` (the CCT's origin records,
+// from.origin_words and to.origin_words words, the new ones cleared), a cube of the same size keeps its
+// tiles' visible origin boxes, a smaller one's tiles get the union of the boxes its texels came from
+// (raycache::resample_into), a larger one none. Returns the texels written. Throws std::invalid_argument
+// when the layouts do not hold the same number of cubes.
 template <class Texel>
 std::size_t move_gpu_cubes(const GpuBufferLayout& from, const std::uint32_t* words, const std::uint32_t* doubtful,
                            const GpuBufferLayout& to, std::uint32_t* new_words, std::uint32_t* new_doubtful,
-                           float edge_threshold) {
+                           float edge_threshold, const std::uint32_t* origins = nullptr, std::uint32_t* new_origins = nullptr) {
     if (from.cubes.size() != to.cubes.size())
         throw std::invalid_argument("RayCache: move_gpu_cubes needs the same cubes in both layouts (" +
                                     std::to_string(from.cubes.size()) + " and " + std::to_string(to.cubes.size()) + ")");
@@ -128,16 +131,25 @@ std::size_t move_gpu_cubes(const GpuBufferLayout& from, const std::uint32_t* wor
                 if (doubtful && new_doubtful && gpu_doubtful(doubtful, from.doubtful_words, old_cube.first_texel + i))
                     set_gpu_doubtful(new_doubtful, new_cube.first_texel + i);
             }
+            if (origins && new_origins) { // the visible words of each record; the rest stay clear
+                const std::size_t a = detail::first_origin_word(old_cube, static_cast<std::size_t>(from.origin_words));
+                const std::size_t b = detail::first_origin_word(new_cube, static_cast<std::size_t>(to.origin_words));
+                for (std::uint32_t t = 0; t < shared::raycache_origin_tile_count(new_cube.face_size); ++t)
+                    for (std::uint32_t w = 0; w < RAYCACHE_ORIGIN_PENDING; ++w)
+                        new_origins[b + t * RAYCACHE_ORIGIN_RECORD_WORDS + w] = origins[a + t * RAYCACHE_ORIGIN_RECORD_WORDS + w];
+            }
             continue;
         }
         if (new_cube.face_size > old_cube.face_size) continue; // grows: starts empty
         CacheCube<Texel> fine(old_cube.face_size), coarse(new_cube.face_size);
         read_gpu_words(fine, old_cube, words, static_cast<std::size_t>(from.words));
+        if (origins) read_gpu_origins(fine, old_cube, origins, static_cast<std::size_t>(from.origin_words));
         fine.begin_frame();
         written += resample_into(fine, coarse);
         mark_doubtful_edges(coarse, edge_threshold); // over the resampled texels, which are this frame's stores
         coarse.begin_frame();
         write_gpu_words(coarse, new_cube, new_words, static_cast<std::size_t>(to.words));
+        if (origins && new_origins) write_gpu_origins(coarse, new_cube, new_origins, static_cast<std::size_t>(to.origin_words));
         if (new_doubtful)
             coarse.for_each_valid_texel([&](const TexelAddress& t) {
                 if (coarse.is_doubtful(t))

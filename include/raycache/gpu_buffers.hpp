@@ -18,14 +18,18 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "raycache/cache_cube.hpp"
 #include "raycache/cdct.hpp"
 #include "raycache/gpu_frame.hpp"
 #include "raycache/shared/gpu_layout.h"
+#include "raycache/shared/origin_rule.h"
 
 namespace raycache {
 
@@ -53,6 +57,13 @@ struct GpuBufferLayout {
     // `cubes` as it stands (cubes.size() * sizeof(raycache_gpu_cube) bytes).
     std::uint64_t doubtful_words = 0;
     std::uint64_t doubtful_bytes = 0;
+    // The CCT's origin test (RAYCACHE_ORIGINS): a record of RAYCACHE_ORIGIN_RECORD_WORDS words per tile of 16 x
+    // 16 texels (raycache/shared/origin_rule.h), cube k's from cubes[k].first_tile on; create the buffer
+    // origin_bytes long (at least 4) and fill it with gpu_clear_word whenever the texel buffers are filled.
+    // Its tiles also enter the store list: size the list for texels + origin_tiles entries.
+    std::uint64_t origin_tiles = 0;
+    std::uint64_t origin_words = 0;
+    std::uint64_t origin_bytes = 0;
 };
 
 // A GPU byte budget for one technique's cubes: the most bytes its texel buffer may take so that the texel
@@ -73,8 +84,10 @@ constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes) noexc
 inline constexpr std::uint32_t gpu_doubtful_clear_word = 0u;
 
 // Places the cubes: cube k's texels start at element sum_{j<k} 6 N_j^2, and its counters in the frame buffer
-// are number first_index + k (give the other technique's cubes other numbers). Throws std::invalid_argument
-// for a face size outside 1..4096 or more than 2^32 texels in all (a descriptor's first_texel is a uint).
+// are number first_index + k (give the other technique's cubes other numbers), its origin records start at
+// record sum_{j<k} 6 ceil(N_j / 16)^2. Throws std::invalid_argument for a face size outside 1..4096 or more
+// than 2^30 texels in all (store-list entries keep two flag bits beside an element; a storage buffer of
+// 4-byte texels holds no more anyway where maxStorageBufferRange is below 4 GiB).
 template <class Texel>
 GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes, std::uint32_t first_index = 0) {
     GpuBufferLayout layout;
@@ -84,18 +97,22 @@ GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes, std::
             throw std::invalid_argument("RayCache: GPU cube " + std::to_string(k) + " has face size " +
                                         std::to_string(s.face_size) + "; it must be 1 to 4096");
         const std::uint64_t count = shared::raycache_gpu_cube_texel_count(s.face_size);
-        if (layout.texels + count > (std::uint64_t{1} << 32))
+        if (layout.texels + count > std::uint64_t{RAYCACHE_FRAME_TILE_ENTRY})
             throw std::invalid_argument("RayCache: GPU cubes 0 to " + std::to_string(k) +
-                                        " hold more than 2^32 texels, past what a descriptor's first_texel addresses");
+                                        " hold more than 2^30 texels, past what a store-list entry addresses");
         layout.cubes.push_back(shared::raycache_make_gpu_cube(s.bounds.centre, s.bounds.half_size,
                                                               static_cast<std::uint32_t>(layout.texels), s.face_size));
         layout.cubes.back().index = first_index + static_cast<std::uint32_t>(k);
+        layout.cubes.back().first_tile = static_cast<std::uint32_t>(layout.origin_tiles);
         layout.texels += count;
+        layout.origin_tiles += shared::raycache_origin_tile_count(s.face_size);
     }
     layout.words = layout.texels * gpu_words_per_texel<Texel>;
     layout.bytes = layout.words * sizeof(std::uint32_t);
     layout.doubtful_words = std::max<std::uint64_t>((layout.texels + 31) / 32, 1);
     layout.doubtful_bytes = layout.doubtful_words * sizeof(std::uint32_t);
+    layout.origin_words = std::max<std::uint64_t>(layout.origin_tiles * RAYCACHE_ORIGIN_RECORD_WORDS, 1);
+    layout.origin_bytes = layout.origin_words * sizeof(std::uint32_t);
     return layout;
 }
 
@@ -180,6 +197,78 @@ inline void set_gpu_doubtful(std::uint32_t* words, std::uint32_t element) noexce
 inline bool gpu_doubtful(const std::uint32_t* words, std::size_t word_count, std::uint32_t element) noexcept {
     const std::uint32_t w = shared::raycache_doubtful_word(element);
     return w < word_count && (words[w] & shared::raycache_doubtful_bit(element)) != 0u;
+}
+
+namespace detail {
+// Throws unless the origin records of a cube placed by `at` fit in `word_count` words.
+inline std::size_t first_origin_word(const shared::raycache_gpu_cube& at, std::size_t word_count) {
+    const std::uint64_t first = std::uint64_t{at.first_tile} * RAYCACHE_ORIGIN_RECORD_WORDS;
+    const std::uint64_t end = first + std::uint64_t{shared::raycache_origin_tile_count(at.face_size)} * RAYCACHE_ORIGIN_RECORD_WORDS;
+    if (end > word_count)
+        throw std::invalid_argument("RayCache: origin records ending at word " + std::to_string(end) + " do not fit in " +
+                                    std::to_string(word_count) + " words");
+    return static_cast<std::size_t>(first);
+}
+// Calls f(first texel of the tile, record's first word) for each tile of a cube of face size n.
+template <class F>
+void for_each_gpu_tile(int n, std::size_t first_word, F&& f) {
+    constexpr int edge = static_cast<int>(RAYCACHE_ORIGIN_TILE_EDGE);
+    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+        for (int row = 0; row < n; row += edge)
+            for (int column = 0; column < n; column += edge) {
+                const TexelAddress first{face, column, row};
+                f(first, first_word + std::size_t{shared::raycache_origin_tile_index({face, column, row}, n)} *
+                                          RAYCACHE_ORIGIN_RECORD_WORDS);
+            }
+}
+} // namespace detail
+
+// Writes the visible origin boxes and nearest distances of `cube`'s tiles (CacheCube::origin_box,
+// nearest_hit) into the origin records `words` (word_count 32-bit words) where descriptor `at` places them,
+// as the GPU keeps them between frames; a tile without a box gets clear words. Throws std::invalid_argument
+// when `at` has another face size or the records do not fit.
+template <class Texel>
+void write_gpu_origins(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::uint32_t* words,
+                       std::size_t word_count) {
+    if (at.face_size != cube.face_size())
+        throw std::invalid_argument("RayCache: GPU origin records of face size " + std::to_string(at.face_size) +
+                                    " cannot hold a cube of face size " + std::to_string(cube.face_size()));
+    detail::for_each_gpu_tile(cube.face_size(), detail::first_origin_word(at, word_count), [&](const TexelAddress& first, std::size_t w) {
+        for (std::uint32_t i = 0; i < RAYCACHE_ORIGIN_RECORD_WORDS; ++i) words[w + i] = gpu_clear_word;
+        const auto box = cube.origin_box(first);
+        if (!box) return;
+        for (int k = 0; k < 3; ++k) {
+            words[w + RAYCACHE_ORIGIN_LO + k] = shared::raycache_ordered_key(box->first[k] + 0.0f);
+            words[w + RAYCACHE_ORIGIN_HI + k] = ~shared::raycache_ordered_key(box->second[k] + 0.0f);
+        }
+        const float nearest = cube.nearest_hit(first);
+        if (nearest < std::numeric_limits<float>::infinity()) words[w + RAYCACHE_ORIGIN_NEAREST] = shared::raycache_ordered_key(nearest);
+    });
+}
+
+// The visible origin box of a GPU record (its first word at `record`); std::nullopt when it has none.
+inline std::optional<std::pair<glm::vec3, glm::vec3>> gpu_origin_box(const std::uint32_t* record) noexcept {
+    if (record[RAYCACHE_ORIGIN_LO] == gpu_clear_word) return std::nullopt;
+    glm::vec3 lo, hi;
+    for (int k = 0; k < 3; ++k)
+        lo[k] = shared::raycache_key_float(record[RAYCACHE_ORIGIN_LO + k]),
+        hi[k] = shared::raycache_key_float(~record[RAYCACHE_ORIGIN_HI + k]);
+    return std::make_pair(lo, hi);
+}
+
+// Sets the origin box and nearest distance of each tile of `cube` that holds a texel from the visible part
+// of the records `words` where `at` places them (tiles with no box are left as they are). For reading a
+// GPU cube back after read_gpu_words. Throws as write_gpu_origins. Between frames.
+template <class Texel>
+void read_gpu_origins(CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, const std::uint32_t* words,
+                      std::size_t word_count) {
+    if (at.face_size != cube.face_size())
+        throw std::invalid_argument("RayCache: GPU origin records of face size " + std::to_string(at.face_size) +
+                                    " cannot be read into a cube of face size " + std::to_string(cube.face_size()));
+    detail::for_each_gpu_tile(cube.face_size(), detail::first_origin_word(at, word_count), [&](const TexelAddress& first, std::size_t w) {
+        if (const auto box = gpu_origin_box(words + w))
+            cube.set_origin_box(first, box->first, box->second, shared::raycache_origin_nearest(words[w + RAYCACHE_ORIGIN_NEAREST]));
+    });
 }
 
 } // namespace raycache

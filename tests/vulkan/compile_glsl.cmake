@@ -66,7 +66,9 @@ endfunction()
 # Option set and the stages it is compiled for.
 # Several options join with "+".
 set(_variants "default:comp;default:frag;default:rgen;RAYCACHE_READ_ONLY:frag;RAYCACHE_END_FRAME:comp"
-              "RAYCACHE_CONFIDENCE:frag;RAYCACHE_CONFIDENCE+RAYCACHE_READ_ONLY:frag;RAYCACHE_CONFIDENCE+RAYCACHE_END_FRAME:comp")
+              "RAYCACHE_CONFIDENCE:frag;RAYCACHE_CONFIDENCE+RAYCACHE_READ_ONLY:frag;RAYCACHE_CONFIDENCE+RAYCACHE_END_FRAME:comp"
+              "RAYCACHE_ORIGINS:comp;RAYCACHE_ORIGINS+RAYCACHE_READ_ONLY:frag;RAYCACHE_ORIGINS+RAYCACHE_END_FRAME:comp"
+              "RAYCACHE_ORIGINS+RAYCACHE_CONFIDENCE+RAYCACHE_END_FRAME:comp")
 foreach(_file IN LISTS _files ITEMS use_all.glsl)
   string(MAKE_C_IDENTIFIER "${_file}" _id)
   foreach(_variant IN LISTS _variants)

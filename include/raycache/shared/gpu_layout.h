@@ -93,6 +93,11 @@ namespace shared {
 #ifndef RAYCACHE_CDCT_CUBES_BINDING
 #define RAYCACHE_CDCT_CUBES_BINDING 8
 #endif
+/* The CCT's origin test (only in shaders that define RAYCACHE_ORIGINS): a record per tile of texels
+ * (raycache/shared/origin_rule.h); the end-of-frame passes also read the CCT's cube table. */
+#ifndef RAYCACHE_CCT_ORIGINS_BINDING
+#define RAYCACHE_CCT_ORIGINS_BINDING 9
+#endif
 
 /* Frame buffer: header words. */
 #define RAYCACHE_FRAME_LIST_COUNT 0u    /* texels appended this frame (may pass the capacity: see OVERFLOW) */
@@ -114,6 +119,9 @@ namespace shared {
 #define RAYCACHE_FRAME_CUBE_WORDS (RAYCACHE_FRAME_COVERAGE + RAYCACHE_COVERAGE_WORDS)
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
 #define RAYCACHE_FRAME_CDCT_ENTRY 0x80000000u
+/* A store-list entry for a CCT tile's origin record (RAYCACHE_ORIGINS: stored from, or met by a lookup from
+ * too far); the rest of the entry is the record's index. CCT elements stay below this bit. */
+#define RAYCACHE_FRAME_TILE_ENTRY 0x40000000u
 /* The end-of-frame pass: invocations per group, at most this many groups (one dimension), so a store list
  * of at most this many entries (a longer frame overflows: sweep). */
 #define RAYCACHE_END_FRAME_GROUP_SIZE 256u
@@ -128,7 +136,8 @@ struct raycache_gpu_cube {
     uint first_texel; /* index of the cube's texel 0 in its texel and pending buffers */
     int face_size;    /* N, texels along a face's edge, 1..4096 */
     uint index;       /* the cube's counters in the frame buffer (cubes of both techniques number apart) */
-    uint reserved1;   /* padding to 32 bytes; write 0 */
+    uint first_tile;  /* CCT with RAYCACHE_ORIGINS: index of the cube's tile 0 in the origin records
+                         (raycache/shared/origin_rule.h); otherwise unused, write 0 */
 };
 
 /* A descriptor for a cube of face_size texels per edge whose texels start at element first_texel. */
@@ -139,7 +148,7 @@ RAYCACHE_FN raycache_gpu_cube raycache_make_gpu_cube(vec3 centre, float half_siz
     cube.first_texel = first_texel;
     cube.face_size = face_size;
     cube.index = 0u;
-    cube.reserved1 = 0u;
+    cube.first_tile = 0u;
     return cube;
 }
 
@@ -181,7 +190,7 @@ RAYCACHE_FN uint raycache_doubtful_bit(uint element) {
 static_assert(sizeof(raycache_gpu_cube) == 32, "raycache_gpu_cube must be 32 bytes, as in GLSL std430/std140");
 static_assert(offsetof(raycache_gpu_cube, centre) == 0 && offsetof(raycache_gpu_cube, half_size) == 12 &&
                   offsetof(raycache_gpu_cube, first_texel) == 16 && offsetof(raycache_gpu_cube, face_size) == 20 &&
-                  offsetof(raycache_gpu_cube, index) == 24 && offsetof(raycache_gpu_cube, reserved1) == 28,
+                  offsetof(raycache_gpu_cube, index) == 24 && offsetof(raycache_gpu_cube, first_tile) == 28,
               "raycache_gpu_cube offsets must match GLSL std430/std140");
 } // namespace shared
 } // namespace raycache

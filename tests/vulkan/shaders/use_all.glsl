@@ -6,7 +6,7 @@ bool raycache_test_fetch(raycache_texel_address texel, out vec3 color);
 #define RAYCACHE_FILTER_FETCH raycache_test_fetch
 #define RAYCACHE_CDCT
 #include "raycache/raycache.glsl"
-#if defined(RAYCACHE_CONFIDENCE) && defined(RAYCACHE_END_FRAME)
+#if (defined(RAYCACHE_CONFIDENCE) || defined(RAYCACHE_ORIGINS)) && defined(RAYCACHE_END_FRAME)
 #include "raycache/end_frame.glsl"
 #endif
 
@@ -53,6 +53,19 @@ void raycache_test_use_all() {
 #ifdef RAYCACHE_END_FRAME
     raycache_cct_end_frame(0u);
     raycache_cdct_end_frame(0u);
+#endif
+#ifdef RAYCACHE_ORIGINS
+    raycache_origin_tolerance tolerance = raycache_origin_tolerance(0.1, 0.01);
+    c = raycache_cct_lookup_from(cube, vec3(1.0, 0.5, -0.25), vec3(0.5), tolerance);
+    sum += vec4(c.color, c.hit ? 1.0 : 0.0);
+#ifndef RAYCACHE_READ_ONLY
+    sum.y += raycache_cct_store_from(cube, vec3(1.0, 0.5, -0.25), vec3(0.5), vec3(0.5), 3.0, tolerance) ? 1.0 : 0.0;
+#endif
+#ifdef RAYCACHE_END_FRAME
+    raycache_cct_end_frame_tile(0u);
+    raycache_cct_drop_tile(1u);
+    raycache_end_frame_drop_pass();
+#endif
 #endif
 #ifdef RAYCACHE_CONFIDENCE
     sum.w += (raycache_cct_is_doubtful(1u) ? 1.0 : 0.0) + (raycache_cdct_is_doubtful(2u) ? 1.0 : 0.0);
