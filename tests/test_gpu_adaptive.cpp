@@ -220,3 +220,44 @@ TEST_CASE("moving CDCT cubes keeps both words of each texel") {
     REQUIRE(s);
     CHECK(s->distance == doctest::Approx(2.0f + 16.0f));
 }
+
+// Origin records through a move, by hand: a kept cube's records move word for word; a 40-texel cube (3 tiles
+// a face edge) shrinking to 16 (one tile a face) gives its face-0 tile the union of the boxes of the fine
+// tiles its texels came from: fine (5, 5) in tile (0, 0), stored from (0, 0, 0) at 4, lands in coarse (2, 2)
+// (5.5 x 16 / 40 = 2.2); fine (35, 35) in tile (2, 2), from (1, 1, 1) at 2, lands in (14, 14): box
+// [(0, 0, 0), (1, 1, 1)], nearest 2. Keys: ordered(0) = 0x80000000, ~ordered(1) = ~0xBF800000 = 0x407FFFFF,
+// ordered(2) = 0xC0000000; the kept box (1, 2, 3) at 5: 0xBF800000, 0xC0000000, 0xC0400000, complements
+// 0x407FFFFF, 0x3FFFFFFF, 0x3FBFFFFF, nearest 0xC0A00000. A growing cube starts with no boxes.
+TEST_CASE("moving GPU cubes carries their tiles' origin boxes: copied, united when shrinking, none when growing") {
+    const GpuBufferLayout from = gpu_buffer_layout<CctTexel>({GpuCubeShape{40, {}}, GpuCubeShape{16, {}}, GpuCubeShape{8, {}}});
+    const GpuBufferLayout to = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
+    REQUIRE(from.cubes[1].first_tile == 54u);
+    REQUIRE(to.cubes[1].first_tile == 6u);
+    CctCube shrinking(40), kept(16), growing(8);
+    REQUIRE(shrinking.store(texel_direction({0, 5, 5}, 40), glm::vec3(1, 0, 0), glm::vec3(0.0f), 4.0f));
+    REQUIRE(shrinking.store(texel_direction({0, 35, 35}, 40), glm::vec3(0, 1, 0), glm::vec3(1.0f), 2.0f));
+    REQUIRE(kept.store(texel_direction({2, 4, 4}, 16), glm::vec3(0, 0, 1), glm::vec3(1.0f, 2.0f, 3.0f), 5.0f));
+    REQUIRE(growing.store(texel_direction({3, 1, 1}, 8), glm::vec3(1), glm::vec3(7.0f), 1.0f));
+    for (CctCube* c : {&shrinking, &kept, &growing}) c->begin_frame();
+    std::vector<std::uint32_t> words = cleared_gpu_words(from), records(from.origin_words, gpu_clear_word);
+    const CctCube* olds[3] = {&shrinking, &kept, &growing};
+    for (std::size_t k = 0; k < 3; ++k) {
+        write_gpu_words(*olds[k], from.cubes[k], words.data(), words.size());
+        write_gpu_origins(*olds[k], from.cubes[k], records.data(), records.size());
+    }
+    std::vector<std::uint32_t> new_words = cleared_gpu_words(to), new_records(to.origin_words, gpu_clear_word);
+    move_gpu_cubes<CctTexel>(from, words.data(), nullptr, to, new_words.data(), nullptr, -1.0f, records.data(), new_records.data());
+    auto record = [&](std::uint32_t tile) { return std::vector<std::uint32_t>(new_records.begin() + tile * 16, new_records.begin() + tile * 16 + 16); };
+    const std::uint32_t c = gpu_clear_word;
+    CHECK(record(0) == std::vector<std::uint32_t>{0x80000000u, 0x80000000u, 0x80000000u, 0x407FFFFFu, 0x407FFFFFu, 0x407FFFFFu,
+                                                  0xC0000000u, c, c, c, c, c, c, c, c, c});
+    CHECK(record(6 + 2) == std::vector<std::uint32_t>{0xBF800000u, 0xC0000000u, 0xC0400000u, 0x407FFFFFu, 0x3FFFFFFFu, 0x3FBFFFFFu,
+                                                      0xC0A00000u, c, c, c, c, c, c, c, c, c});
+    for (std::uint32_t tile = 0; tile < 18; ++tile)
+        if (tile != 0 && tile != 8) CHECK(record(tile) == std::vector<std::uint32_t>(16, c));
+    // Without records on either side, the texels move as before and no record is written.
+    std::vector<std::uint32_t> untouched(to.origin_words, 0x12345678u), plain = cleared_gpu_words(to);
+    move_gpu_cubes<CctTexel>(from, words.data(), nullptr, to, plain.data(), nullptr, -1.0f, nullptr, untouched.data());
+    CHECK(plain == new_words);
+    for (std::uint32_t w : untouched) CHECK(w == 0x12345678u);
+}

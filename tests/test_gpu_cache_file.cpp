@@ -1,5 +1,5 @@
-// GPU cubes in cache files (raycache/gpu_cache_file.hpp): texel and doubtful-bit buffers saved and loaded
-// back come out word for word and bit for bit; a file a CPU cache wrote loads into GPU buffers as those
+// GPU cubes in cache files (raycache/gpu_cache_file.hpp): texel and doubtful-bit buffers and origin records
+// saved and loaded back come out word for word and bit for bit; a file a CPU cache wrote loads into GPU buffers as those
 // cubes' own words; files that do not match the GPU cubes are refused by name.
 #include <doctest/doctest.h>
 
@@ -39,7 +39,7 @@ std::vector<GpuCubeShape> shapes_of(const std::vector<int>& sizes) {
 template <class Texel>
 struct Buffers {
     GpuBufferLayout layout;
-    std::vector<std::uint32_t> words, doubtful;
+    std::vector<std::uint32_t> words, doubtful, origins;
     std::vector<std::unique_ptr<CacheCube<Texel>>> cubes; // what was written
 };
 template <class Texel>
@@ -48,6 +48,7 @@ Buffers<Texel> filled(const std::vector<int>& sizes, std::uint64_t seed) {
     b.layout = raycache::gpu_buffer_layout<Texel>(shapes_of(sizes));
     b.words = raycache::cleared_gpu_words(b.layout);
     b.doubtful.assign(static_cast<std::size_t>(b.layout.doubtful_words), raycache::gpu_doubtful_clear_word);
+    b.origins.assign(static_cast<std::size_t>(b.layout.origin_words), raycache::gpu_clear_word);
     Lcg rng{seed};
     for (std::size_t k = 0; k < sizes.size(); ++k) {
         auto cube = std::make_unique<CacheCube<Texel>>(sizes[k]);
@@ -60,6 +61,13 @@ Buffers<Texel> filled(const std::vector<int>& sizes, std::uint64_t seed) {
             raycache::set_gpu_doubtful(b.doubtful.data(),
                                        b.layout.cubes[k].first_texel + static_cast<std::uint32_t>(raycache::texel_linear_index(t, sizes[k])));
         });
+        // Every tile holding a texel: an origin box and nearest distance of its own (the CCT's origin test).
+        cube->for_each_valid_texel([&](const raycache::TexelAddress& t) {
+            const raycache::TexelAddress first{t.face, t.column / 16 * 16, t.row / 16 * 16};
+            const glm::vec3 lo = 0.5f * glm::vec3(float(k), float(first.column), float(first.row)) - glm::vec3(float(t.face));
+            cube->set_origin_box(first, lo, lo + 0.25f, 1.0f + float(t.face));
+        });
+        raycache::write_gpu_origins(*cube, b.layout.cubes[k], b.origins.data(), b.origins.size());
         b.cubes.push_back(std::move(cube));
     }
     return b;
@@ -69,18 +77,24 @@ template <class Texel>
 void check_round_trip(const std::vector<int>& sizes) {
     const Buffers<Texel> saved = filled<Texel>(sizes, 17);
     const std::vector<std::uint8_t> bytes =
-        raycache::encode_gpu_cache<Texel>(scene, saved.layout, keys, saved.words.data(), saved.words.size(), saved.doubtful.data());
+        raycache::encode_gpu_cache<Texel>(scene, saved.layout, keys, saved.words.data(), saved.words.size(), saved.doubtful.data(),
+                                          saved.origins.data());
     const auto cubes = raycache::decode_gpu_cache<Texel>(bytes.data(), bytes.size(), scene, keys);
     REQUIRE(raycache::loaded_face_sizes(cubes) == sizes);
     // A fresh layout at the loaded sizes, cleared, then written: the same words and marks, bit for bit.
     const GpuBufferLayout layout = raycache::gpu_buffer_layout<Texel>(shapes_of(raycache::loaded_face_sizes(cubes)));
     std::vector<std::uint32_t> words = raycache::cleared_gpu_words(layout);
     std::vector<std::uint32_t> doubtful(static_cast<std::size_t>(layout.doubtful_words), raycache::gpu_doubtful_clear_word);
+    std::vector<std::uint32_t> origins(static_cast<std::size_t>(layout.origin_words), raycache::gpu_clear_word);
     std::size_t valid = 0;
     for (const auto& c : saved.cubes) valid += c->valid_texels();
-    CHECK(raycache::write_gpu_cubes(cubes, layout, words.data(), words.size(), doubtful.data()) == valid);
+    CHECK(raycache::write_gpu_cubes(cubes, layout, words.data(), words.size(), doubtful.data(), origins.data()) == valid);
     CHECK(words == saved.words);
     CHECK(doubtful == saved.doubtful);
+    CHECK(origins == saved.origins); // every tile's origin box and nearest distance
+    std::size_t boxes = 0;
+    for (std::size_t w = 0; w < origins.size(); w += RAYCACHE_ORIGIN_RECORD_WORDS) boxes += origins[w] != raycache::gpu_clear_word;
+    CHECK(boxes > 10u);
     CHECK(valid > 100u);
 }
 

@@ -40,6 +40,7 @@ struct GpuParams {
     std::int32_t frame[4];    // width, height, mode, max depth
     float relief[4];          // step, epsilon, max depth, max gap
     std::int32_t relief_i[4]; // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, pixel stride (warm-up)
+    float origin_test[4];     // CCT origin test: drift (x the cube's half-size; < 0: off), parallax, -, -
 };
 
 inline void set4(float* out, glm::vec3 v, float w) {

@@ -48,6 +48,7 @@ struct Tracer::Impl {
     std::unique_ptr<vk::Buffer> nodes, primitives, objects, cubes, params, dummy, texels, pending;
     std::unique_ptr<vk::Buffer> output, frame, gbuffer;
     std::unique_ptr<vk::Buffer> doubtful, cube_table, zeros; // RayCache's confidence test: doubtful bits, cube table
+    std::unique_ptr<vk::Buffer> origins; // the CCT's origin test: a record per tile (raycache/shared/origin_rule.h)
     raycache::GpuFrameLayout frame_layout;          // RayCache's frame buffer: counters, store list
     std::vector<std::uint32_t> frame_start;         // its words before every frame
     std::unique_ptr<Raster> raster;
@@ -75,17 +76,20 @@ struct Tracer::Impl {
     // Whether frames store into cubes, so end with RayCache's end-of-frame passes (a warm-up's resizing may
     // change the cubes, so ask again after it).
     bool ends_frames() const noexcept { return end_frame && texel_count > 0; }
+    // Whether the CCT's lookups and stores keep origins (and frames end with the drop pass).
+    bool origin_test() const noexcept { return !cdct && settings.origin_drift >= 0.0f; }
 
     // The buffers RayCache's bindings get now (the technique's own, stand-ins for the other's); place_cubes
     // replaces them, so take them again after it.
     struct CacheBuffers {
         const vk::Buffer *cct_texels, *cct_pending, *cdct_texels, *cdct_pending, *cct_doubtful, *cdct_doubtful, *cct_table, *cdct_table;
+        const vk::Buffer* cct_origins;
     };
     CacheBuffers cache_buffers() const {
         auto own = [&](bool mine, const std::unique_ptr<vk::Buffer>& b, const vk::Buffer& other) { return mine && b ? b.get() : &other; };
         return {own(!cdct, texels, *dummy),   own(!cdct, pending, *dummy),  own(cdct, texels, *dummy),
                 own(cdct, pending, *dummy),   own(!cdct, doubtful, *zeros), own(cdct, doubtful, *zeros),
-                own(!cdct, cube_table, *zeros), own(cdct, cube_table, *zeros)};
+                own(!cdct, cube_table, *zeros), own(cdct, cube_table, *zeros), own(!cdct, origins, *dummy)};
     }
 
     // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
@@ -123,12 +127,13 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
     // Everything new is made first and swapped in at the end, so a failed allocation leaves the old cubes whole.
     auto new_cubes = std::make_unique<vk::Buffer>(vk::buffer_of(context, per_object, 16));
     const std::uint32_t cached = static_cast<std::uint32_t>(shapes.size());
-    raycache::GpuFrameLayout new_frame_layout =
-        raycache::gpu_frame_layout(cached, raycache::gpu_frame_list_capacity(cached, next.texels, max_buffer), max_buffer);
+    // The list holds every texel and every origin record (tiles are listed by stores and stale lookups).
+    raycache::GpuFrameLayout new_frame_layout = raycache::gpu_frame_layout(
+        cached, raycache::gpu_frame_list_capacity(cached, next.texels + next.origin_tiles, max_buffer), max_buffer);
     // Lookups mark their direction cells only for adaptive sizes (fixed ones never read them).
     std::vector<std::uint32_t> new_frame_start = raycache::gpu_frame_start_words(new_frame_layout, settings.adaptive);
     auto new_frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(new_frame_layout.bytes, 16));
-    std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table;
+    std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table, new_origins;
     if (next.texels > 0) {
         new_texels = std::make_unique<vk::Buffer>(context, next.bytes);
         new_pending = std::make_unique<vk::Buffer>(context, next.bytes);
@@ -137,11 +142,17 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
         new_doubtful = std::make_unique<vk::Buffer>(context, next.doubtful_bytes);
         new_doubtful->fill(raycache::gpu_doubtful_clear_word);
         new_table = std::make_unique<vk::Buffer>(vk::buffer_of(context, next.cubes)); // by first_texel, as placed
+        if (origin_test()) {
+            new_origins = std::make_unique<vk::Buffer>(context, next.origin_bytes);
+            new_origins->fill(RAYCACHE_GPU_CLEAR_WORD);
+        }
         if (texels && move_old) { // moving: the device is idle (render() waited for the frame and its end-of-frame passes)
+            const bool boxes = origins && new_origins && origins->as<std::uint32_t>() && new_origins->as<std::uint32_t>();
             with_texel([&](auto texel) {
                 return raycache::move_gpu_cubes<decltype(texel)>(layout, texels->as<std::uint32_t>(), doubtful->as<std::uint32_t>(), next,
                                                                  new_texels->as<std::uint32_t>(), new_doubtful->as<std::uint32_t>(),
-                                                                 settings.edge_threshold);
+                                                                 settings.edge_threshold, boxes ? origins->as<std::uint32_t>() : nullptr,
+                                                                 boxes ? new_origins->as<std::uint32_t>() : nullptr);
             });
         }
     }
@@ -153,6 +164,7 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
     pending = std::move(new_pending);
     doubtful = std::move(new_doubtful);
     cube_table = std::move(new_table);
+    origins = std::move(new_origins);
     layout = std::move(next);
     texel_count = static_cast<std::uint32_t>(layout.texels);
 }
@@ -165,11 +177,11 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
         throw std::invalid_argument("Vulkan tracer: --cache cdct needs a device with shaderInt64 and shaderBufferInt64Atomics");
     // Shaders first: a missing or rejected SPIR-V file is the first thing to report.
     const std::string suffix = t.cdct ? "_cdct" : "";
-    std::vector<VkDescriptorType> bindings(14, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    std::vector<VkDescriptorType> bindings(15, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     t.whitted = std::make_unique<vk::ComputePipeline>(context, spirv_dir + "/whitted" + suffix + ".spv", bindings, 0);
     if (uses_caches(settings.mode))
         t.end_frame = std::make_unique<vk::ComputePipeline>(
-            context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(9, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+            context, spirv_dir + "/end_frame" + suffix + ".spv", std::vector<VkDescriptorType>(10, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
             8);
     const bool rsh = settings.secondary == Secondary::rsh;
     if (rsh && settings.mode != CacheMode::off)
@@ -250,7 +262,8 @@ void Tracer::save_caches(const std::string& path, const raycache::SceneIdentity&
     t.require_cubes("saving caches");
     const std::vector<std::uint8_t> bytes = t.with_texel([&](auto texel) {
         return raycache::encode_gpu_cache<decltype(texel)>(identity, t.layout, t.cube_keys(), t.texels->as<std::uint32_t>(),
-                                                           static_cast<std::size_t>(t.layout.words), t.doubtful->as<std::uint32_t>());
+                                                           static_cast<std::size_t>(t.layout.words), t.doubtful->as<std::uint32_t>(),
+                                                           t.origins ? t.origins->as<std::uint32_t>() : nullptr);
     });
     raycache::write_file_atomically(path, bytes);
 }
@@ -276,8 +289,9 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
         t.place_cubes(raycache::loaded_face_sizes(cubes), false); // the old cubes are replaced, not moved in
         t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
         t.doubtful->fill(raycache::gpu_doubtful_clear_word);
+        if (t.origins) t.origins->fill(RAYCACHE_GPU_CLEAR_WORD);
         raycache::write_gpu_cubes(cubes, t.layout, t.texels->as<std::uint32_t>(), static_cast<std::size_t>(t.layout.words),
-                                  t.doubtful->as<std::uint32_t>());
+                                  t.doubtful->as<std::uint32_t>(), t.origins ? t.origins->as<std::uint32_t>() : nullptr);
         for (std::size_t k = 0; k < cubes.size(); ++k) t.sized[k] = cubes[k].cube->valid_texels() > 0;
     });
 }
@@ -360,6 +374,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.relief_i[1] = t.settings.secant ? RAYCACHE_DEPTH_SEARCH_SECANT : RAYCACHE_DEPTH_SEARCH_RELIEF;
     p.relief_i[2] = t.settings.max_reads;
     p.relief_i[3] = 1; // every pixel (trace_pass sets its own stride)
+    p.origin_test[0] = t.origin_test() ? t.settings.origin_drift : -1.0f;
+    p.origin_test[1] = t.settings.origin_parallax;
     t.params->upload(&p, sizeof p);
     // RayCache's frame buffer, started: before the frame, and again between a warm-up and the full pass.
     auto start_frame_buffer = [&] { t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); };
@@ -369,7 +385,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
 
     // RayCache's end-of-frame pass over the texels stored since the frame buffer was started, dispatched from
     // the frame buffer's own group count; then, after a barrier (it reads the texels just published), the
-    // confidence test's mark pass over the same list. Recorded after the tracing dispatch and a barrier, in
+    // confidence test's mark pass over the same list, and (CCT) the origin test's drop pass. Recorded after the tracing dispatch and a barrier, in
     // its submission: a second submission cost the frame a trip to the host and back.
     auto record_end_of_frame = [&](vk::Commands& commands) {
         struct Pass {
@@ -381,13 +397,17 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
             const Pass push{mark, t.settings.edge_threshold};
             commands.dispatch_indirect(*t.end_frame,
                                        {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame,
-                                        *c.cct_doubtful, *c.cdct_doubtful, *c.cct_table, *c.cdct_table},
+                                        *c.cct_doubtful, *c.cdct_doubtful, *c.cct_table, *c.cdct_table, *c.cct_origins},
                                        &push, sizeof push, *t.frame, raycache::gpu_end_frame_dispatch_offset);
         };
         pass(0u);
         if (raycache::shared::raycache_edge_test_enabled(t.settings.edge_threshold)) {
             commands.barrier();
             pass(1u);
+        }
+        if (t.origin_test()) { // after the marks, which still compare the stale tiles' texels (as C++'s do)
+            commands.barrier();
+            pass(2u);
         }
     };
 
@@ -414,7 +434,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
             }
             commands.dispatch(*t.whitted,
                               {*c.cct_texels, *c.cct_pending, *c.cdct_texels, *c.cdct_pending, *t.frame, *t.nodes, *t.primitives,
-                               *t.objects, *t.params, *t.output, *t.cubes, gbuffer, *c.cct_doubtful, *c.cdct_doubtful},
+                               *t.objects, *t.params, *t.output, *t.cubes, gbuffer, *c.cct_doubtful, *c.cdct_doubtful, *c.cct_origins},
                               nullptr, 0, vk::group_count(columns, 8), vk::group_count(rows, 8));
             t.timestamps->write(commands, 1);
             if (caching) {

@@ -50,6 +50,11 @@ struct TracerSettings {
     Secondary secondary = Secondary::bvh;
     std::uint32_t pair_capacity = 1u << 21; // rsh: pairs a stream holds (RshSettings)
     float edge_threshold = 0.1f; // cct, cdct: the confidence test's threshold (RayCache's mark pass); < 0: off
+    // cct: the origin test (RAYCACHE_ORIGINS; the Embree tracer's defaults): a tile answers rays leaving from
+    // within origin_drift x its cube's half-size of the origins it was stored from, and within
+    // origin_parallax x the distance to the nearest surface its rays hit; origin_drift < 0: off.
+    float origin_drift = 0.1f;
+    float origin_parallax = 0.01f;
 };
 
 struct FrameStats {

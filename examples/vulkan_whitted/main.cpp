@@ -60,10 +60,6 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // What the GPU side does not do yet: refused rather than ignored.
     const rcx::Options defaults;
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
-    if (o.origin_drift != defaults.origin_drift)
-        throw InputError("--origin-drift is not supported by the Vulkan tracer: its cubes keep no origins yet");
-    if (o.origin_parallax != defaults.origin_parallax)
-        throw InputError("--origin-parallax is not supported by the Vulkan tracer: its cubes keep no origins yet");
     if (!o.pyramid)
         throw InputError("--no-pyramid is not supported by the Vulkan tracer: its relief walk never uses a depth pyramid");
     if (o.invalidate != defaults.invalidate)
@@ -130,6 +126,8 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.secondary = v.secondary;
     settings.pair_capacity = v.pair_capacity;
     settings.edge_threshold = o.edge_threshold;
+    settings.origin_drift = o.origin_drift;
+    settings.origin_parallax = o.origin_parallax;
     const std::string spirv = rcx::gpu::default_spirv_dir();
     std::unique_ptr<rcx::gpu::Tracer> tracer, reference;
     try {

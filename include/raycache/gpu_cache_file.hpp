@@ -2,18 +2,21 @@
 // format of raycache/cache_file.hpp, so that a GPU tracer's walkthrough can start warm as a CPU
 // SceneCache's does. Between frames, with the device done with the buffers:
 //
-//   save: read back the texel buffer and the doubtful-bit buffer (the pending twin is empty between frames);
-//         bytes = encode_gpu_cache<Texel>(scene, layout, keys, words, word_count, doubtful);
+//   save: read back the texel buffer, the doubtful-bit buffer and (CCT with the origin test) the origin
+//         records (the pending twin is empty between frames);
+//         bytes = encode_gpu_cache<Texel>(scene, layout, keys, words, word_count, doubtful, origins);
 //         write_file_atomically(path, bytes);
 //   load: cubes = load_gpu_cache_file<Texel>(path, scene, keys, fixed_face_sizes);
 //         place the cubes at loaded_face_sizes(cubes) (gpu_buffer_layout), fill the new texel buffer with
 //         gpu_clear_word and the doubtful bits with gpu_doubtful_clear_word, then
-//         write_gpu_cubes(cubes, layout, words, word_count, doubtful); upload; the next frame reads them.
+//         write_gpu_cubes(cubes, layout, words, word_count, doubtful, origins) (origin records filled with
+//         gpu_clear_word first); upload; the next frame reads them.
 //
 // `keys` names the layout's cubes, in its order: the caller's (object, part) key of what each caches and
-// where it sits, as a SceneCache keys its cubes. What the GPU does not keep is not in its files: tiles
-// have no origin boxes (the GPU has no origin test) and no path records (GPU caches are not invalidated),
-// and the cubes' rays' reach is unknown. A file saved by a SceneCache loads here with those left out.
+// where it sits, as a SceneCache keys its cubes. Tiles keep their origin boxes and nearest distances when
+// origin records are given (the CCT's origin test, RAYCACHE_ORIGINS). What the GPU does not keep is not in
+// its files: no path records (GPU caches are not invalidated), and the cubes' rays' reach is unknown. A file
+// saved by a SceneCache loads here with those left out.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -54,12 +57,14 @@ inline void check_gpu_keys(const GpuBufferLayout& layout, const std::vector<GpuC
 } // namespace detail
 
 // The bytes of a cache file holding the layout's cubes, read from `words` (the texel buffer's contents,
-// `word_count` 32-bit words) and `doubtful` (the doubtful-bit buffer's, layout.doubtful_words words; null:
-// none doubtful). Throws std::invalid_argument for keys that do not match the layout, a cube that does not
-// fit in `words`, or as encode_cache does.
+// `word_count` 32-bit words), `doubtful` (the doubtful-bit buffer's, layout.doubtful_words words; null:
+// none doubtful) and `origins` (the origin records, layout.origin_words words; null: no origin boxes).
+// Throws std::invalid_argument for keys that do not match the layout, a cube that does not fit in `words`,
+// or as encode_cache does.
 template <class Texel>
 std::vector<std::uint8_t> encode_gpu_cache(const SceneIdentity& scene, const GpuBufferLayout& layout, const std::vector<GpuCubeKey>& keys,
-                                           const std::uint32_t* words, std::size_t word_count, const std::uint32_t* doubtful) {
+                                           const std::uint32_t* words, std::size_t word_count, const std::uint32_t* doubtful,
+                                           const std::uint32_t* origins = nullptr) {
     detail::check_gpu_keys(layout, keys);
     std::vector<std::unique_ptr<CacheCube<Texel>>> cubes;
     std::vector<CubeToSave<Texel>> save;
@@ -67,6 +72,7 @@ std::vector<std::uint8_t> encode_gpu_cache(const SceneIdentity& scene, const Gpu
         const shared::raycache_gpu_cube& at = layout.cubes[k];
         auto cube = std::make_unique<CacheCube<Texel>>(at.face_size);
         read_gpu_words(*cube, at, words, word_count);
+        if (origins) read_gpu_origins(*cube, at, origins, static_cast<std::size_t>(layout.origin_words));
         cube->begin_frame(); // the read texels become the cube's (doubtful marks need visible ones)
         if (doubtful)
             cube->for_each_valid_texel([&](const TexelAddress& t) {
@@ -133,12 +139,13 @@ std::vector<int> loaded_face_sizes(const std::vector<LoadedCube<Texel>>& cubes) 
 }
 
 // Writes loaded cubes into a cleared texel buffer's contents (`words`, `word_count` words) and doubtful bits
-// (`doubtful`, layout.doubtful_words words, cleared; null: marks dropped) where `layout` places them, cube k
-// at layout.cubes[k]. Returns the texels written. Throws std::invalid_argument, before writing anything,
-// when the layout has another number of cubes or other face sizes, or a cube does not fit.
+// (`doubtful`, layout.doubtful_words words, cleared; null: marks dropped) and their tiles' origin boxes into
+// the origin records (`origins`, layout.origin_words words; null: boxes dropped) where `layout` places them,
+// cube k at layout.cubes[k]. Returns the texels written. Throws std::invalid_argument, before writing
+// anything, when the layout has another number of cubes or other face sizes, or a cube does not fit.
 template <class Texel>
 std::size_t write_gpu_cubes(const std::vector<LoadedCube<Texel>>& cubes, const GpuBufferLayout& layout, std::uint32_t* words,
-                            std::size_t word_count, std::uint32_t* doubtful) {
+                            std::size_t word_count, std::uint32_t* doubtful, std::uint32_t* origins = nullptr) {
     if (cubes.size() != layout.cubes.size())
         throw std::invalid_argument("RayCache: write_gpu_cubes: " + std::to_string(cubes.size()) + " cubes for a layout of " +
                                     std::to_string(layout.cubes.size()));
@@ -148,6 +155,7 @@ std::size_t write_gpu_cubes(const std::vector<LoadedCube<Texel>>& cubes, const G
         const CacheCube<Texel>& cube = *cubes[k].cube;
         const shared::raycache_gpu_cube& at = layout.cubes[k];
         write_gpu_words(cube, at, words, word_count);
+        if (origins) write_gpu_origins(cube, at, origins, static_cast<std::size_t>(layout.origin_words));
         cube.for_each_valid_texel([&](const TexelAddress& t) {
             ++written;
             if (doubtful && cube.is_doubtful(t))

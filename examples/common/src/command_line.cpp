@@ -166,12 +166,11 @@ CommandLine::CommandLine(const std::string& program)
                number("--edge-threshold", o.edge_threshold, false));
     add_option("--origin-drift", "F",
                "CCT: a tile met by a ray leaving further than F x the cube's\n"
-               "half-size from its stores' origins refills; negative: off\n"
-               "(Embree tracer) " + shown_default(d.origin_drift),
+               "half-size from its stores' origins refills; negative: off " + shown_default(d.origin_drift),
                number("--origin-drift", o.origin_drift, false));
     add_option("--origin-parallax", "F",
                "CCT: ... or further than F x the distance to the nearest surface\n"
-               "its rays hit (radians); inf: off (Embree tracer) " + shown_default(d.origin_parallax),
+               "its rays hit (radians); inf: off " + shown_default(d.origin_parallax),
                [&o](const std::string& text) {
                    o.origin_parallax = text == "inf" ? std::numeric_limits<float>::infinity()
                                                      : parse_float_value("--origin-parallax", text, true);

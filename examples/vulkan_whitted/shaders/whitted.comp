@@ -15,6 +15,11 @@
 #define RAYCACHE_CONFIDENCE
 #define RAYCACHE_CCT_DOUBTFUL_BINDING 12
 #define RAYCACHE_CDCT_DOUBTFUL_BINDING 13
+#ifndef WHITTED_CDCT
+// RayCache's origin test (CCT): a tile answers rays from near the origins it was stored from.
+#define RAYCACHE_ORIGINS
+#define RAYCACHE_CCT_ORIGINS_BINDING 14
+#endif
 #ifdef WHITTED_CDCT
 #include "raycache/cdct.glsl"
 #else
@@ -26,8 +31,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "scene.glsl"
 
 // RayCache's buffers take bindings 0..4 (raycache/shared/gpu_layout.h: CCT texels and pending, CDCT texels
-// and pending, the frame buffer with its counters and store list) and 12, 13 (doubtful bits, moved from
-// their defaults 5, 6); the scene's 5..8 (scene.glsl).
+// and pending, the frame buffer with its counters and store list), 12, 13 (doubtful bits, moved from
+// their defaults 5, 6) and 14 (the CCT's origin records, moved from 9); the scene's 5..8 (scene.glsl).
 layout(std430, binding = 9) writeonly buffer Output { vec4 pixels[]; };
 layout(std430, binding = 10) readonly buffer Cubes { raycache_gpu_cube cubes[]; };
 // Hybrid (Params.frame.z >= 16 adds it to the mode): the primary hit of each pixel from the raster pass,
@@ -98,10 +103,13 @@ vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
     }
     return r.rgb;
 #else
-    raycache_cct_result c = raycache_cct_lookup(cube, d);
+    bool origins = origin_test.x >= 0.0;
+    raycache_origin_tolerance tolerance = raycache_origin_tolerance(origin_test.x * cube.half_size, origin_test.y);
+    raycache_cct_result c = origins ? raycache_cct_lookup_from(cube, d, o, tolerance) : raycache_cct_lookup(cube, d);
     if (c.hit) return c.color;
     vec4 r = trace_subtree(o, d, depth + 1);
-    raycache_cct_store(cube, d, r.rgb);
+    if (origins) raycache_cct_store_from(cube, d, r.rgb, o, r.w, tolerance);
+    else raycache_cct_store(cube, d, r.rgb);
     return r.rgb;
 #endif
 }
