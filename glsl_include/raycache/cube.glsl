@@ -12,6 +12,9 @@
  *                        that runs between frames); otherwise texel buffers are readonly
  *   RAYCACHE_CONFIDENCE  the confidence test: doubtful-bit buffers, doubtful texels read as empty
  *                        (raycache/shared/gpu_layout.h; the mark pass: raycache/end_frame.glsl)
+ *   RAYCACHE_ORIGINS     the CCT's origin test: origin records per tile, raycache_cct_lookup_from and
+ *                        raycache_cct_store_from (raycache/shared/origin_rule.h; the drop pass:
+ *                        raycache/end_frame.glsl)
  * Stores from a fragment shader need the device feature fragmentStoresAndAtomics.
  */
 #ifndef RAYCACHE_CUBE_GLSL

@@ -35,6 +35,10 @@
  * the frame and bind the doubtful-bit buffers (CCT 5, CDCT 6); a second end-of-frame pass, the mark pass
  * (with the cube tables, CCT 7, CDCT 8), marks the texels whose colours differ from a neighbour's, and
  * lookups and searches then miss on them (raycache/shared/gpu_layout.h, raycache/end_frame.glsl).
+ * The origin test (C++'s lookup and store with an OriginTolerance; CCT): define RAYCACHE_ORIGINS in every
+ * shader of the frame, bind the origin records (9), look up and store with raycache_cct_lookup_from and
+ * raycache_cct_store_from, and end frames with the drop pass too (raycache/shared/origin_rule.h,
+ * raycache/end_frame.glsl).
  * glslangValidator --target-env vulkan1.1 -I <RayCache_GLSL_INCLUDE_DIR>, or raycache_add_glsl_shader().
  */
 #ifndef RAYCACHE_RAYCACHE_GLSL

@@ -40,9 +40,14 @@
  * table (binding RAYCACHE_CCT_CUBES_BINDING / RAYCACHE_CDCT_CUBES_BINDING: the technique's raycache_gpu_cube
  * descriptors by increasing first_texel, as raycache::gpu_buffer_layout places them).
  *
+ * Origin test (optional: shaders that define RAYCACHE_ORIGINS; CCT): a record of 16 words per tile of 16 x 16
+ * texels (binding RAYCACHE_CCT_ORIGINS_BINDING, from each descriptor's first_tile on), whose tiles the store
+ * list also lists (RAYCACHE_FRAME_TILE_ENTRY); a third end-of-frame pass, the drop pass, empties the tiles
+ * a lookup met from too far. Layout and rule: raycache/shared/origin_rule.h.
+ *
  * Clearing: fill both buffers with RAYCACHE_GPU_CLEAR_WORD (vkCmdFillBuffer), and the doubtful-bit buffer
- * with 0. Every all-ones word is invalid, in the CDCT too (negative distance bits), and is larger than every
- * valid word.
+ * with 0, and origin records with RAYCACHE_GPU_CLEAR_WORD. Every all-ones word is invalid, in the CDCT too
+ * (negative distance bits), and is larger than every valid word.
  */
 #ifndef RAYCACHE_SHARED_GPU_LAYOUT_H
 #define RAYCACHE_SHARED_GPU_LAYOUT_H
