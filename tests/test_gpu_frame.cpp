@@ -95,6 +95,14 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     CHECK(s.total.refused_stores == 7u);
     CHECK(s.listed == 5u);
     CHECK(s.overflow == 2u);
+    // The list starts at word 8 + 2 x 52 = 112: a CCT texel, a tile, a CDCT texel, a tile, a CDCT entry with
+    // the tile bit set (a CDCT element), and past the capacity a tile that is not counted: 2 tiles.
+    w.resize(static_cast<std::size_t>(f.words), 0u);
+    const std::uint32_t entries[] = {17u, RAYCACHE_FRAME_TILE_ENTRY | 3u, RAYCACHE_FRAME_CDCT_ENTRY | 9u, RAYCACHE_FRAME_TILE_ENTRY,
+                                     RAYCACHE_FRAME_CDCT_ENTRY | RAYCACHE_FRAME_TILE_ENTRY | 1u};
+    for (std::uint32_t k = 0; k < 5; ++k) w[112 + k] = entries[k];
+    w.push_back(RAYCACHE_FRAME_TILE_ENTRY | 4u);
+    CHECK(gpu_listed_tiles(w.data(), f) == 2u);
 }
 
 TEST_CASE("a GPU byte budget caps a texel buffer so that texels, pending twin and doubtful bits fit it, to the texel") {
@@ -104,6 +112,16 @@ TEST_CASE("a GPU byte budget caps a texel buffer so that texels, pending twin an
     CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20) == 516220u);
     CHECK(raycache::gpu_texel_bytes_within<raycache::CdctTexel>(1u << 20) == 520216u);
     CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(3) == 0u);
+    // With origin records, one byte a texel more: t (64 + 9) / 8 <= 1,048,572 gives t = 114,912 (73 x 114,912 =
+    // 8,388,576 exactly): 459,648 bytes. behind-8's 9 cubes then take N = 46 (9 x 6 x 46^2 = 114,264 texels;
+    // 47 would take 119,286), laid out as 2 x 457,056 + 4 x 3,571 + 9 x 54 tiles x 64 = 959,500 bytes.
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20, true) == 459648u);
+    const std::vector<int> nine = fit_gpu_face_sizes(std::vector<int>(9, 256), 4, raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20, true));
+    CHECK(nine == std::vector<int>(9, 46));
+    std::vector<raycache::GpuCubeShape> nine_shapes;
+    for (int n : nine) nine_shapes.push_back({n, raycache::CubeBounds{}});
+    CHECK(raycache::gpu_cube_bytes(raycache::gpu_buffer_layout<raycache::CctTexel>(nine_shapes), true) == 959500u);
+    CHECK(raycache::gpu_cube_bytes(raycache::gpu_buffer_layout<raycache::CctTexel>(nine_shapes), false) == 928396u);
     // One cube in 1 MiB: 6 N^2 <= 129,055 gives N = 146 (127,896 texels; 147 would take 129,654).
     CHECK(fit_gpu_face_sizes({512}, 4, raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20)) == std::vector<int>{146});
     // behind-32's 33 cubes at 512 texels in 64 MiB, CDCT: the laid-out buffers stay within it.

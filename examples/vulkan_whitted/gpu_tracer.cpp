@@ -118,6 +118,10 @@ void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
         throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(next.bytes) +
                                     " bytes, more than one storage buffer may hold on this device (" +
                                     std::to_string(max_buffer) + "); use a smaller --face-size");
+    // The budget's bound counts origin records at one byte a texel, which faces under 8 texels pass.
+    if (raycache::gpu_cube_bytes(next, origin_test()) > settings.budget_bytes)
+        throw std::invalid_argument("Vulkan tracer: the cubes' buffers need " + std::to_string(raycache::gpu_cube_bytes(next, origin_test())) +
+                                    " bytes, more than --budget-mib allows (" + std::to_string(settings.budget_bytes) + " bytes)");
     std::vector<raycache::shared::raycache_gpu_cube> per_object;
     for (const int k : shape_of) {
         raycache::shared::raycache_gpu_cube none{};
@@ -225,7 +229,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     if (cached > 0) {
         if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
         const std::uint64_t within =
-            t.with_texel([&](auto texel) { return raycache::gpu_texel_bytes_within<decltype(texel)>(settings.budget_bytes); });
+            t.with_texel([&](auto texel) { return raycache::gpu_texel_bytes_within<decltype(texel)>(settings.budget_bytes, t.origin_test()); });
         t.cube_room = std::min(range - counter_bytes, within);
         const int start = settings.adaptive ? settings.adaptive_resolution.first_face_size : t.settings.face_size;
         t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, t.cube_room)[0];
@@ -455,7 +459,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         // The list holds every texel, or 16,776,960 of them for larger cubes: more stores in one frame would need
         // the library's sweep, which this tracer does not run.
         if (frame_stats.overflow > 0)
-            throw std::runtime_error("Vulkan tracer: more texels stored in one frame than RayCache's store list holds (" +
+            throw std::runtime_error("Vulkan tracer: more texels and tiles listed in one frame than RayCache's store list holds (" +
                                      std::to_string(t.frame_layout.list_capacity) + ")");
         return frame_stats;
     };
@@ -486,7 +490,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         const auto warm_up_start = std::chrono::steady_clock::now();
         trace_pass(warm_up_stride, t.raster != nullptr);
         const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
-        warm_up_stored = warm_up_stats.listed;
+        warm_up_stored = warm_up_stats.listed - raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout);
         warm_up_ms = ms_since(warm_up_start);
         resize(warm_up_stats);
         start_frame_buffer(); // after the resize: the frame buffer it made, if any
@@ -512,7 +516,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     const double ms = ms_since(start);
 
     const raycache::GpuFrameStatistics gpu_stats = frame_statistics();
-    resize(gpu_stats);
+    const std::uint64_t listed_tiles = t.ends_frames() ? raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout) : 0;
+    resize(gpu_stats); // may replace the frame buffer
 
     Image image(width, height);
     const float* out = t.output->as<float>();
@@ -523,7 +528,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         stats->milliseconds = ms;
         stats->gpu_trace_milliseconds = times.trace_ms;
         stats->end_frame_milliseconds = times.end_frame_ms;
-        stats->stored_texels = gpu_stats.listed;
+        stats->stored_texels = gpu_stats.listed - listed_tiles;
         stats->lookups = gpu_stats.total.lookups;
         stats->hits = gpu_stats.total.hits;
         stats->update_ms = t.update_ms;

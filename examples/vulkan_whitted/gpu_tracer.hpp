@@ -37,7 +37,8 @@ struct TracerSettings {
     bool adaptive = false;    // each cube's face size follows its rays (raycache/gpu_adaptive.hpp), from
                               // adaptive_resolution.first_face_size, within min_face_size..max_face_size
     raycache::AdaptiveResolution adaptive_resolution{};
-    // Bytes the cubes' texel, pending and doubtful-bit buffers may take together (raycache::gpu_texel_bytes_within):
+    // Bytes the cubes' texel, pending and doubtful-bit buffers (and, CCT, origin records) may take together
+    // (raycache::gpu_texel_bytes_within):
     // fixed faces are lowered to fit it, adaptive cubes are fitted to it after every frame (largest first).
     std::uint64_t budget_bytes = std::uint64_t{256} << 20;
     bool secant = true;       // CDCT search: the secant search (a few reads) or, false, the relief walk

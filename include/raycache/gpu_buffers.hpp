@@ -70,14 +70,23 @@ struct GpuBufferLayout {
 // buffer, its pending twin and the doubtful bits (GpuBufferLayout::doubtful_bytes) together stay within
 // `budget_bytes`. Give it (or the device's maxStorageBufferRange, if smaller) to fit_gpu_face_sizes and
 // next_gpu_face_sizes as their cap: when the cubes reach it, the largest are lowered until they fit
-// (coarser faces, largest first; no cube is dropped). The frame buffer comes on top.
+// (coarser faces, largest first; no cube is dropped). The frame buffer comes on top. With origin_records
+// (the CCT's origin test), the origin records are counted too, at one byte a texel: 64 bytes a tile of up
+// to 16 x 16 texels, which is at most one byte a texel on faces of 8 texels or more (8 x 8 texels, one
+// tile: exactly one); smaller faces take more (check layouts of such faces against the budget yourself).
 template <class Texel>
-constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes) noexcept {
-    // t texels take 8w t bytes and 4 ceil(t / 32) <= t / 8 + 4 bytes of bits: at most budget when
-    // t (64w + 1) / 8 <= budget - 4.
+constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes, bool origin_records = false) noexcept {
+    // t texels take 8w t bytes, 4 ceil(t / 32) <= t / 8 + 4 bytes of bits and, with origin records, at most
+    // t bytes of those: at most budget when t (64w + 1 + 8 [records]) / 8 <= budget - 4.
     constexpr std::uint64_t w = gpu_words_per_texel<Texel>;
     if (budget_bytes < 4) return 0;
-    return (budget_bytes - 4) * 8 / (64 * w + 1) * 4 * w;
+    return (budget_bytes - 4) * 8 / (64 * w + (origin_records ? 9 : 1)) * 4 * w;
+}
+
+// The bytes a layout's buffers take: texels, their pending twin and doubtful bits, and with origin_records
+// the origin records (what gpu_texel_bytes_within bounds).
+inline std::uint64_t gpu_cube_bytes(const GpuBufferLayout& layout, bool origin_records) noexcept {
+    return 2 * layout.bytes + layout.doubtful_bytes + (origin_records ? layout.origin_bytes : 0);
 }
 
 // The word that empties a doubtful-bit buffer (no texel doubtful); clear it with the texel buffers.

@@ -163,6 +163,18 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
     return s;
 }
 
+// Of a frame's listed entries, the tiles (the CCT's origin test lists tiles beside texels): scans the store
+// list of the whole frame buffer read back (`words`, f.words of them). The texels stored are
+// GpuFrameStatistics::listed less these.
+inline std::uint64_t gpu_listed_tiles(const std::uint32_t* words, const GpuFrameLayout& f) noexcept {
+    const std::uint32_t listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);
+    const std::uint32_t* list = words + shared::raycache_frame_list_word(f.cube_count, 0);
+    std::uint64_t tiles = 0;
+    for (std::uint32_t k = 0; k < listed; ++k)
+        tiles += (list[k] & (RAYCACHE_FRAME_CDCT_ENTRY | RAYCACHE_FRAME_TILE_ENTRY)) == RAYCACHE_FRAME_TILE_ENTRY;
+    return tiles;
+}
+
 // Face sizes that fit one storage buffer of `max_bytes`: each cube keeps min(requested, cap) for the largest
 // cap (1..4096) whose cubes' texels, `bytes_per_texel` each, fit; cubes below the cap keep their size, so
 // small cubes are not lowered for large ones. Throws std::invalid_argument for a requested size outside

@@ -287,3 +287,59 @@ TEST_CASE("after a store-list overflow, the sweep publishes and drops what the l
     random_frames(rig, 12, 4, true);
     CHECK(rig.overflow_last_frame > 0u);
 }
+
+TEST_CASE("the origin test's boundaries, by hand: within the allowed drift is inclusive, and a store's hit distance tightens it") {
+    rcx::vk::Context* vk = rcx_test::context();
+    if (!vk) return;
+    const glm::vec3 a = texel_direction(TexelAddress{0, 3, 3}, 16), b = texel_direction(TexelAddress{1, 3, 3}, 16);
+    const glm::vec3 c = texel_direction(TexelAddress{0, 5, 5}, 16), d = texel_direction(TexelAddress{0, 7, 7}, 16);
+    const glm::vec3 e = texel_direction(TexelAddress{0, 9, 9}, 16);
+    auto x = [](float v) { return glm::vec3(v, 0.0f, 0.0f); };
+    {
+        // Drift 0.25, no bound by distance: a box [0, 0] answers x = 0.25 and -0.25, not the next float up.
+        Rig rig(*vk, {16}, OriginTolerance{0.25f, std::numeric_limits<float>::infinity()}, -1.0f);
+        rig.store(0, a, glm::vec3(1.0f, 0.0f, 0.0f), x(0.0f), 10.0f);
+        rig.store(0, b, glm::vec3(0.0f, 1.0f, 0.0f), x(0.0f), 10.0f);
+        rig.run();
+        rig.lookup(0, a, x(0.25f));
+        rig.lookup(0, a, x(-0.25f));
+        rig.lookup(0, b, x(std::nextafter(0.25f, 1.0f)));
+        const std::vector<glm::uvec4> r = rig.run();
+        CHECK(r[0].x == 1u);
+        CHECK(r[1].x == 1u);
+        CHECK(r[2].x == 0u);
+        rig.check_same();
+    }
+    // Drift 1, parallax 0.125: stored from 0 at distance 2, lookups allow min(1, 0.125 x 2) = 0.25. A store
+    // whose ray hit at 1 allows min(1, 0.125 x min(2, 1)) = 0.125: a box 0.125 wide is kept, 0.25 refused;
+    // one that hit at 4 allows 0.25 (the tile's nearest, 2, decides). Then the box is [0, 0.25] and its
+    // nearest 1: lookups allow 0.125, up to x = 0.375 exactly.
+    Rig rig(*vk, {16}, OriginTolerance{1.0f, 0.125f}, -1.0f);
+    rig.store(0, a, glm::vec3(1.0f, 0.0f, 0.0f), x(0.0f), 2.0f);
+    rig.run();
+    rig.lookup(0, a, x(0.25f));
+    rig.lookup(0, a, x(-0.25f));
+    rig.store(0, c, glm::vec3(0.5f), x(0.125f), 1.0f);
+    rig.store(0, d, glm::vec3(0.5f), x(0.25f), 1.0f);
+    rig.store(0, e, glm::vec3(0.5f), x(0.25f), 4.0f);
+    std::vector<glm::uvec4> r = rig.run();
+    CHECK(r[0].x == 1u);
+    CHECK(r[1].x == 1u);
+    CHECK(r[2].x == 1u);
+    CHECK(r[3].x == 0u);
+    CHECK(r[4].x == 1u);
+    rig.check_same();
+    CHECK(rig.origins.as<std::uint32_t>()[RAYCACHE_ORIGIN_NEAREST] == 0xBF800000u); // 1.0 = 0x3F800000, sign bit set
+    rig.lookup(0, c, x(0.375f));
+    rig.lookup(0, e, x(-0.125f));
+    r = rig.run();
+    CHECK(r[0].x == 1u);
+    CHECK(r[1].x == 1u);
+    rig.lookup(0, c, x(std::nextafter(0.375f, 1.0f))); // beyond by one float: a miss, and the tile goes
+    rig.lookup(0, e, x(0.0f));                         // same tile, same frame: still answered (marks drop between frames)
+    r = rig.run();
+    CHECK(r[0].x == 0u);
+    CHECK(r[1].x == 1u);
+    rig.check_same();
+    CHECK(rig.gpu_boxes() == 0u);
+}
