@@ -115,6 +115,8 @@ GpuBufferLayout gpu_buffer_layout(const std::vector<GpuCubeShape>& shapes, std::
         layout.cubes.back().first_tile = static_cast<std::uint32_t>(layout.origin_tiles);
         layout.texels += count;
         layout.origin_tiles += shared::raycache_origin_tile_count(s.face_size);
+        if (layout.origin_tiles * RAYCACHE_ORIGIN_RECORD_WORDS > (std::uint64_t{1} << 32)) // the shaders' uint word index
+            throw std::invalid_argument("RayCache: GPU cubes 0 to " + std::to_string(k) + " have more than 2^28 tiles of origin records");
     }
     layout.words = layout.texels * gpu_words_per_texel<Texel>;
     layout.bytes = layout.words * sizeof(std::uint32_t);
