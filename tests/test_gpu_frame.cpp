@@ -122,6 +122,24 @@ TEST_CASE("a GPU byte budget caps a texel buffer so that texels, pending twin an
     for (int n : nine) nine_shapes.push_back({n, raycache::CubeBounds{}});
     CHECK(raycache::gpu_cube_bytes(raycache::gpu_buffer_layout<raycache::CctTexel>(nine_shapes), true) == 959500u);
     CHECK(raycache::gpu_cube_bytes(raycache::gpu_buffer_layout<raycache::CctTexel>(nine_shapes), false) == 928396u);
+    // Faces smaller than 8 take ceil(64 / N^2) bytes a texel of records: N = 1 one tile a texel, 64; N = 3, 8
+    // (64 / 9 = 7.1); N = 7, 2 (1.3). With N = 1 allowed, t (64 + 1 + 512) / 8 <= 1,048,572: t = 14,538
+    // (577 x 14,538 = 8,388,426; one more passes 8,388,576): 58,152 bytes.
+    CHECK(raycache::gpu_origin_bytes_per_texel(1) == 64u);
+    CHECK(raycache::gpu_origin_bytes_per_texel(3) == 8u);
+    CHECK(raycache::gpu_origin_bytes_per_texel(7) == 2u);
+    CHECK(raycache::gpu_origin_bytes_per_texel(8) == 1u);
+    CHECK(raycache::gpu_origin_bytes_per_texel(17) == 1u);
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20, true, 1) == 58152u);
+    // The bound holds for every face size from the smallest on: a cube of each size N = 1..64 in a budget
+    // sized by gpu_texel_bytes_within at the smallest size N fits, with its records.
+    for (int n = 1; n <= 64; ++n) {
+        CAPTURE(n);
+        const std::uint64_t texels = 6ull * n * n;
+        const std::uint64_t records = 6ull * ((n + 15) / 16) * ((n + 15) / 16) * 64;
+        CHECK(records <= raycache::gpu_origin_bytes_per_texel(n) * texels);
+        for (int smaller = 1; smaller <= n; ++smaller) CHECK(records <= raycache::gpu_origin_bytes_per_texel(smaller) * texels);
+    }
     // One cube in 1 MiB: 6 N^2 <= 129,055 gives N = 146 (127,896 texels; 147 would take 129,654).
     CHECK(fit_gpu_face_sizes({512}, 4, raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20)) == std::vector<int>{146});
     // behind-32's 33 cubes at 512 texels in 64 MiB, CDCT: the laid-out buffers stay within it.

@@ -228,8 +228,14 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.cube_room = range;
     if (cached > 0) {
         if (range <= counter_bytes) throw std::invalid_argument("Vulkan tracer: too many cached objects for one storage buffer");
-        const std::uint64_t within =
-            t.with_texel([&](auto texel) { return raycache::gpu_texel_bytes_within<decltype(texel)>(settings.budget_bytes, t.origin_test()); });
+        // Origin records are bounded per texel by the smallest face the cubes take: adaptive ones no smaller
+        // than their minimum, so no resize passes the budget; fixed ones lowered under 8 texels to fit a tiny
+        // budget are refused here, by place_cubes.
+        const int smallest = settings.adaptive ? std::min(settings.adaptive_resolution.min_face_size, settings.adaptive_resolution.first_face_size)
+                                               : std::min(settings.face_size, 8);
+        const std::uint64_t within = t.with_texel([&](auto texel) {
+            return raycache::gpu_texel_bytes_within<decltype(texel)>(settings.budget_bytes, t.origin_test(), smallest);
+        });
         t.cube_room = std::min(range - counter_bytes, within);
         const int start = settings.adaptive ? settings.adaptive_resolution.first_face_size : t.settings.face_size;
         t.settings.face_size = raycache::fit_gpu_face_sizes(std::vector<int>(cached, start), word_bytes, t.cube_room)[0];

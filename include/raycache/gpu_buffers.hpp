@@ -71,16 +71,22 @@ struct GpuBufferLayout {
 // `budget_bytes`. Give it (or the device's maxStorageBufferRange, if smaller) to fit_gpu_face_sizes and
 // next_gpu_face_sizes as their cap: when the cubes reach it, the largest are lowered until they fit
 // (coarser faces, largest first; no cube is dropped). The frame buffer comes on top. With origin_records
-// (the CCT's origin test), the origin records are counted too, at one byte a texel: 64 bytes a tile of up
-// to 16 x 16 texels, which is at most one byte a texel on faces of 8 texels or more (8 x 8 texels, one
-// tile: exactly one); smaller faces take more (check layouts of such faces against the budget yourself).
+// (the CCT's origin test), the origin records are counted too: 64 bytes a tile of up to 16 x 16 texels, at
+// most gpu_origin_bytes_per_texel(smallest_face) a texel on faces of smallest_face texels or more.
+// Give the smallest face size the cubes may take (adaptive: AdaptiveResolution::min_face_size).
+inline constexpr std::uint64_t gpu_origin_bytes_per_texel(int smallest_face) noexcept {
+    // 64 ceil(N / 16)^2 / N^2 bytes a texel: 64 / N^2 up to N = 8, and at most 1 from there on (N = 8: one
+    // tile of 64 texels; N = 17: 4 tiles of 289; the ratio falls towards 1/4).
+    const std::uint64_t n = smallest_face < 1 ? 1 : static_cast<std::uint64_t>(smallest_face);
+    return n >= 8 ? 1 : (64 + n * n - 1) / (n * n);
+}
 template <class Texel>
-constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes, bool origin_records = false) noexcept {
+constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes, bool origin_records = false, int smallest_face = 8) noexcept {
     // t texels take 8w t bytes, 4 ceil(t / 32) <= t / 8 + 4 bytes of bits and, with origin records, at most
-    // t bytes of those: at most budget when t (64w + 1 + 8 [records]) / 8 <= budget - 4.
+    // c t bytes of those (c = gpu_origin_bytes_per_texel): at most budget when t (64w + 1 + 8c) / 8 <= budget - 4.
     constexpr std::uint64_t w = gpu_words_per_texel<Texel>;
     if (budget_bytes < 4) return 0;
-    return (budget_bytes - 4) * 8 / (64 * w + (origin_records ? 9 : 1)) * 4 * w;
+    return (budget_bytes - 4) * 8 / (64 * w + 1 + (origin_records ? 8 * gpu_origin_bytes_per_texel(smallest_face) : 0)) * 4 * w;
 }
 
 // The bytes a layout's buffers take: texels, their pending twin and doubtful bits, and with origin_records
