@@ -96,14 +96,9 @@ struct raycache_origin_tolerance {
     float parallax;
 };
 
-/* First word of the origin record of the tile holding element i of `cube` (which must hold it), or
+/* First word of the origin record of the tile holding texel a of `cube` (a texel of it), or
  * RAYCACHE_NO_TEXEL when the record lies past the buffer. */
-uint raycache_cct_origin_record(raycache_gpu_cube cube, uint i) {
-    uint n = uint(cube.face_size), local = i - cube.first_texel;
-    raycache_texel_address a;
-    a.face = int(local / (n * n));
-    a.row = int((local / n) % n);
-    a.column = int(local % n);
+uint raycache_cct_origin_record(raycache_gpu_cube cube, raycache_texel_address a) {
     uint r = (cube.first_tile + raycache_origin_tile_index(a, cube.face_size)) * RAYCACHE_ORIGIN_RECORD_WORDS;
     return r + RAYCACHE_ORIGIN_RECORD_WORDS <= uint(raycache_cct_origins.length()) ? r : RAYCACHE_NO_TEXEL;
 }
@@ -112,11 +107,11 @@ uint raycache_cct_origin_record(raycache_gpu_cube cube, uint i) {
 bool raycache_cct_origin_box(uint r, out vec3 lo, out vec3 hi) {
     lo = vec3(0.0);
     hi = vec3(0.0);
-    if (raycache_cct_origins[r + RAYCACHE_ORIGIN_LO] == RAYCACHE_GPU_CLEAR_WORD) return false;
-    for (uint k = 0u; k < 3u; ++k) {
-        lo[k] = raycache_key_float(raycache_cct_origins[r + RAYCACHE_ORIGIN_LO + k]);
-        hi[k] = raycache_key_float(~raycache_cct_origins[r + RAYCACHE_ORIGIN_HI + k]);
-    }
+    if (!raycache_origin_has_box(raycache_cct_origins[r + RAYCACHE_ORIGIN_LO])) return false;
+    lo = raycache_origin_corner(raycache_cct_origins[r + RAYCACHE_ORIGIN_LO], raycache_cct_origins[r + RAYCACHE_ORIGIN_LO + 1u],
+                                raycache_cct_origins[r + RAYCACHE_ORIGIN_LO + 2u], false);
+    hi = raycache_origin_corner(raycache_cct_origins[r + RAYCACHE_ORIGIN_HI], raycache_cct_origins[r + RAYCACHE_ORIGIN_HI + 1u],
+                                raycache_cct_origins[r + RAYCACHE_ORIGIN_HI + 2u], true);
     return true;
 }
 
@@ -133,10 +128,10 @@ void raycache_cct_list_tile(uint r) {
  * tile without a box answers any origin); the tile is then dropped at the end of the frame (not under
  * RAYCACHE_READ_ONLY) and refills from the current rays. As C++'s CacheCube::lookup(direction, origin, tolerance). */
 raycache_cct_result raycache_cct_lookup_from(raycache_gpu_cube cube, vec3 direction, vec3 origin, raycache_origin_tolerance tolerance) {
-    uint i = raycache_cube_texel(cube, direction);
-    raycache_cct_result result = raycache_cct_peek_element(i);
+    raycache_texel_address a = raycache_cube_texel_address(cube, direction);
+    raycache_cct_result result = raycache_cct_peek_element(raycache_cube_element(cube, a));
     if (result.hit) {
-        uint r = raycache_cct_origin_record(cube, i);
+        uint r = raycache_cct_origin_record(cube, a);
         vec3 lo, hi;
         if (r == RAYCACHE_NO_TEXEL) {
             result.hit = false;
@@ -197,13 +192,14 @@ bool raycache_cct_store(raycache_gpu_cube cube, vec3 direction, vec3 color) {
  * hit_distance, tolerance). */
 bool raycache_cct_store_from(raycache_gpu_cube cube, vec3 direction, vec3 color, vec3 origin, float hit_distance,
                              raycache_origin_tolerance tolerance) {
-    uint i = raycache_cube_texel(cube, direction);
+    raycache_texel_address a = raycache_cube_texel_address(cube, direction);
+    uint i = raycache_cube_element(cube, a);
     uint word = raycache_pack_rgb9e5(color);
     if (!raycache_cct_may_store(i, word) || !raycache_is_finite3(origin) || !(hit_distance >= 0.0)) {
         raycache_frame_count(cube.index, RAYCACHE_FRAME_REFUSED);
         return false;
     }
-    uint r = raycache_cct_origin_record(cube, i);
+    uint r = raycache_cct_origin_record(cube, a);
     vec3 lo, hi;
     if (r == RAYCACHE_NO_TEXEL ||
         (raycache_cct_origin_box(r, lo, hi) &&
@@ -213,9 +209,8 @@ bool raycache_cct_store_from(raycache_gpu_cube cube, vec3 direction, vec3 color,
         return false;
     }
     for (uint k = 0u; k < 3u; ++k) {
-        uint key = raycache_ordered_key(origin[k]);
-        atomicMin(raycache_cct_origins[r + RAYCACHE_ORIGIN_PENDING + RAYCACHE_ORIGIN_LO + k], key);
-        atomicMin(raycache_cct_origins[r + RAYCACHE_ORIGIN_PENDING + RAYCACHE_ORIGIN_HI + k], ~key);
+        atomicMin(raycache_cct_origins[r + RAYCACHE_ORIGIN_PENDING + RAYCACHE_ORIGIN_LO + k], raycache_origin_corner_word(origin[k], false));
+        atomicMin(raycache_cct_origins[r + RAYCACHE_ORIGIN_PENDING + RAYCACHE_ORIGIN_HI + k], raycache_origin_corner_word(origin[k], true));
     }
     if (hit_distance < RAYCACHE_INFINITY) // an escaped ray leaves the nearest distance as it is (clear: infinity)
         atomicMin(raycache_cct_origins[r + RAYCACHE_ORIGIN_PENDING + RAYCACHE_ORIGIN_NEAREST], raycache_ordered_key(hit_distance));

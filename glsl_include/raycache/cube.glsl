@@ -56,14 +56,28 @@ bool raycache_cube_has_texels(raycache_gpu_cube cube) {
     return cube.face_size >= RAYCACHE_MIN_FACE_SIZE && cube.face_size <= RAYCACHE_MAX_FACE_SIZE;
 }
 
+/* The texel of the cube that s falls in (need not be unit length); face RAYCACHE_NO_FACE when s is not a
+ * direction or the cube has no texels. */
+raycache_texel_address raycache_cube_texel_address(raycache_gpu_cube cube, vec3 s) {
+    if (raycache_cube_has_texels(cube)) return raycache_texel_of(s, cube.face_size);
+    raycache_texel_address none;
+    none.face = RAYCACHE_NO_FACE;
+    none.column = 0;
+    none.row = 0;
+    return none;
+}
+
+/* Element of the cube's texel (and pending) buffer holding texel a; RAYCACHE_NO_TEXEL for no texel. */
+uint raycache_cube_element(raycache_gpu_cube cube, raycache_texel_address a) {
+    if (a.face == RAYCACHE_NO_FACE) return RAYCACHE_NO_TEXEL;
+    return cube.first_texel + raycache_texel_linear_index(a, cube.face_size);
+}
+
 /* Element of the cube's texel (and pending) buffer holding the texel that s falls in; s need not be
  * unit length. RAYCACHE_NO_TEXEL when s is not a direction or the cube has no texels. Callers check
  * the element against the buffer's length before reading. */
 uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
-    if (!raycache_cube_has_texels(cube)) return RAYCACHE_NO_TEXEL;
-    raycache_texel_address a = raycache_texel_of(s, cube.face_size);
-    if (a.face == RAYCACHE_NO_FACE) return RAYCACHE_NO_TEXEL;
-    return cube.first_texel + raycache_texel_linear_index(a, cube.face_size);
+    return raycache_cube_element(cube, raycache_cube_texel_address(cube, s));
 }
 
 /* Counts a lookup of `cube` as a hit or a miss in the frame buffer (nothing under RAYCACHE_READ_ONLY). */

@@ -146,10 +146,14 @@ inline std::vector<std::uint32_t> cleared_gpu_words(const GpuBufferLayout& layou
 namespace detail {
 // Throws unless `at` describes `cube` and its texels fit in `word_count` words.
 template <class Texel>
-void check_gpu_cube(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::size_t word_count) {
+void check_gpu_face_size(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at) {
     if (at.face_size != cube.face_size())
         throw std::invalid_argument("RayCache: a GPU cube of face size " + std::to_string(at.face_size) +
                                     " cannot hold a cube of face size " + std::to_string(cube.face_size()));
+}
+template <class Texel>
+void check_gpu_cube(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::size_t word_count) {
+    check_gpu_face_size(cube, at);
     const std::uint64_t end = (std::uint64_t{at.first_texel} + cube.texel_count()) * gpu_words_per_texel<Texel>;
     if (end > word_count)
         throw std::invalid_argument("RayCache: a GPU cube ending at word " + std::to_string(end) + " does not fit in " +
@@ -247,16 +251,14 @@ void for_each_gpu_tile(int n, std::size_t first_word, F&& f) {
 template <class Texel>
 void write_gpu_origins(const CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, std::uint32_t* words,
                        std::size_t word_count) {
-    if (at.face_size != cube.face_size())
-        throw std::invalid_argument("RayCache: GPU origin records of face size " + std::to_string(at.face_size) +
-                                    " cannot hold a cube of face size " + std::to_string(cube.face_size()));
+    detail::check_gpu_face_size(cube, at);
     detail::for_each_gpu_tile(cube.face_size(), detail::first_origin_word(at, word_count), [&](const TexelAddress& first, std::size_t w) {
         for (std::uint32_t i = 0; i < RAYCACHE_ORIGIN_RECORD_WORDS; ++i) words[w + i] = gpu_clear_word;
         const auto box = cube.origin_box(first);
         if (!box) return;
         for (int k = 0; k < 3; ++k) {
-            words[w + RAYCACHE_ORIGIN_LO + k] = shared::raycache_ordered_key(box->first[k] + 0.0f);
-            words[w + RAYCACHE_ORIGIN_HI + k] = ~shared::raycache_ordered_key(box->second[k] + 0.0f);
+            words[w + RAYCACHE_ORIGIN_LO + k] = shared::raycache_origin_corner_word(box->first[k], false);
+            words[w + RAYCACHE_ORIGIN_HI + k] = shared::raycache_origin_corner_word(box->second[k], true);
         }
         const float nearest = cube.nearest_hit(first);
         if (nearest < std::numeric_limits<float>::infinity()) words[w + RAYCACHE_ORIGIN_NEAREST] = shared::raycache_ordered_key(nearest);
@@ -265,12 +267,10 @@ void write_gpu_origins(const CacheCube<Texel>& cube, const shared::raycache_gpu_
 
 // The visible origin box of a GPU record (its first word at `record`); std::nullopt when it has none.
 inline std::optional<std::pair<glm::vec3, glm::vec3>> gpu_origin_box(const std::uint32_t* record) noexcept {
-    if (record[RAYCACHE_ORIGIN_LO] == gpu_clear_word) return std::nullopt;
-    glm::vec3 lo, hi;
-    for (int k = 0; k < 3; ++k)
-        lo[k] = shared::raycache_key_float(record[RAYCACHE_ORIGIN_LO + k]),
-        hi[k] = shared::raycache_key_float(~record[RAYCACHE_ORIGIN_HI + k]);
-    return std::make_pair(lo, hi);
+    if (!shared::raycache_origin_has_box(record[RAYCACHE_ORIGIN_LO])) return std::nullopt;
+    const std::uint32_t* lo = record + RAYCACHE_ORIGIN_LO;
+    const std::uint32_t* hi = record + RAYCACHE_ORIGIN_HI;
+    return std::make_pair(shared::raycache_origin_corner(lo[0], lo[1], lo[2], false), shared::raycache_origin_corner(hi[0], hi[1], hi[2], true));
 }
 
 // Sets the origin box and nearest distance of each tile of `cube` that holds a texel from the visible part
@@ -279,9 +279,7 @@ inline std::optional<std::pair<glm::vec3, glm::vec3>> gpu_origin_box(const std::
 template <class Texel>
 void read_gpu_origins(CacheCube<Texel>& cube, const shared::raycache_gpu_cube& at, const std::uint32_t* words,
                       std::size_t word_count) {
-    if (at.face_size != cube.face_size())
-        throw std::invalid_argument("RayCache: GPU origin records of face size " + std::to_string(at.face_size) +
-                                    " cannot be read into a cube of face size " + std::to_string(cube.face_size()));
+    detail::check_gpu_face_size(cube, at);
     detail::for_each_gpu_tile(cube.face_size(), detail::first_origin_word(at, word_count), [&](const TexelAddress& first, std::size_t w) {
         if (const auto box = gpu_origin_box(words + w))
             cube.set_origin_box(first, box->first, box->second, shared::raycache_origin_nearest(words[w + RAYCACHE_ORIGIN_NEAREST]));

@@ -85,6 +85,20 @@ RAYCACHE_FN uint raycache_origin_tile_index(raycache_texel_address a, int face_s
     return (uint(a.face) * t + uint(a.row) / RAYCACHE_ORIGIN_TILE_EDGE) * t + uint(a.column) / RAYCACHE_ORIGIN_TILE_EDGE;
 }
 
+/* A record's word for one coordinate of a box's lower corner, and of its upper corner (complemented, so
+ * that atomicMin widens both and the clear word is an empty box); the coordinate a corner's words hold. */
+RAYCACHE_FN uint raycache_origin_corner_word(float x, bool upper) {
+    return upper ? ~raycache_ordered_key(x) : raycache_ordered_key(x);
+}
+RAYCACHE_FN vec3 raycache_origin_corner(uint x, uint y, uint z, bool upper) {
+    return upper ? vec3(raycache_key_float(~x), raycache_key_float(~y), raycache_key_float(~z))
+                 : vec3(raycache_key_float(x), raycache_key_float(y), raycache_key_float(z));
+}
+/* Whether a record has a box (its first lower-corner word is not the clear word). */
+RAYCACHE_FN bool raycache_origin_has_box(uint first_lo_word) {
+    return first_lo_word != RAYCACHE_GPU_CLEAR_WORD;
+}
+
 /* The nearest hit distance a record's word holds (the clear word: infinity). */
 RAYCACHE_FN float raycache_origin_nearest(uint word) {
     return word == RAYCACHE_GPU_CLEAR_WORD ? RAYCACHE_INFINITY : raycache_key_float(word);
