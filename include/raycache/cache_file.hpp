@@ -617,7 +617,9 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             // texels count as having seen everything, as unrecorded texels do).
             detail::BlockRecord blocks[detail::file_record_blocks];
             c.cube->for_each_block_state_of_tile(index, [&](const typename CacheCube<Texel>::BlockState& b) {
-                if (b.unrecorded_texels == 0 && detail::is_file_record(b.record())) blocks[b.block] = detail::BlockRecord{true, b.record()};
+                if (b.unrecorded_texels != 0) return;
+                const PathRecord record = b.record();
+                if (detail::is_file_record(record)) blocks[b.block] = detail::BlockRecord{true, record};
             });
             for (const detail::BlockRecord& b : blocks) {
                 w.u32(b.recorded ? 1 : 0);

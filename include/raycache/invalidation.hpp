@@ -215,11 +215,10 @@ inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
     // The ball around the hit points, once per union; hit points so far out that it overflows bound nothing.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
-    if (has_vertices && !(shared::raycache_is_finite3(centre) && std::isfinite(radius) &&
-                          std::isfinite(std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)))))
-        return true;
+    const float farthest = std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi));
+    if (has_vertices && !(shared::raycache_is_finite3(centre) && std::isfinite(radius) && std::isfinite(farthest))) return true;
     // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
-    const float scale = std::max(1.0f, std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi)));
+    const float scale = std::max(1.0f, farthest);
     const float escapes_from = radius + 1e-3f * scale; // the ball the escaped bounces leave from
     // The escapes' cone costs eight normalisations: made only for a sphere that the escapes' directions face.
     std::optional<shared::raycache_direction_cone> escapes;
