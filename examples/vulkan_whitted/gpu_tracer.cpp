@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <glm/glm.hpp>
 #include <raycache/shared/depth_secant.h>
@@ -95,7 +96,14 @@ struct Tracer::Impl {
     // Places the cubes with these face sizes (one per shape): the layout, the per-object descriptors, the
     // texel, pending and doubtful buffers (cleared, or with the old cubes moved in: raycache::move_gpu_cubes,
     // unless `move_old` is false) and the frame buffer sized for the new texel count.
-    void place_cubes(const std::vector<int>& sizes, bool move_old = true);
+    void place_cubes(const std::vector<int>& sizes, bool move_old = true) { place_layout(layout_of(sizes), move_old); }
+    // The layout of the cubes at these face sizes (one per shape), and placing a layout made by it.
+    raycache::GpuBufferLayout layout_of(const std::vector<int>& sizes) const {
+        std::vector<raycache::GpuCubeShape> placed = shapes;
+        for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = sizes[k];
+        return with_texel([&](auto texel) { return raycache::gpu_buffer_layout<decltype(texel)>(placed); });
+    }
+    void place_layout(raycache::GpuBufferLayout next, bool move_old);
 
     // The cubes' keys in a cache file, in layout order: the cached object's index in the scene, its placement.
     std::vector<raycache::GpuCubeKey> cube_keys() const {
@@ -110,17 +118,14 @@ struct Tracer::Impl {
     }
 };
 
-void Tracer::Impl::place_cubes(const std::vector<int>& sizes, bool move_old) {
-    std::vector<raycache::GpuCubeShape> placed = shapes;
-    for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = sizes[k];
-    raycache::GpuBufferLayout next = with_texel([&](auto texel) { return raycache::gpu_buffer_layout<decltype(texel)>(placed); });
+void Tracer::Impl::place_layout(raycache::GpuBufferLayout next, bool move_old) {
     if (next.bytes > max_buffer)
         throw std::invalid_argument("Vulkan tracer: the cubes need " + std::to_string(next.bytes) +
                                     " bytes, more than one storage buffer may hold on this device (" +
                                     std::to_string(max_buffer) + "); use a smaller --face-size");
     // The budget's bound counts origin records at one byte a texel, which faces under 8 texels pass.
-    if (raycache::gpu_cube_bytes(next, origin_test()) > settings.budget_bytes)
-        throw std::invalid_argument("Vulkan tracer: the cubes' buffers need " + std::to_string(raycache::gpu_cube_bytes(next, origin_test())) +
+    if (const std::uint64_t need = raycache::gpu_cube_bytes(next, origin_test()); need > settings.budget_bytes)
+        throw std::invalid_argument("Vulkan tracer: the cubes' buffers need " + std::to_string(need) +
                                     " bytes, more than --budget-mib allows (" + std::to_string(settings.budget_bytes) + " bytes)");
     std::vector<raycache::shared::raycache_gpu_cube> per_object;
     for (const int k : shape_of) {
@@ -289,14 +294,12 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
         const auto cubes = raycache::load_gpu_cache_file<Texel>(path, identity, t.cube_keys(), fixed); // checked whole first
         // The file's sizes must fit the device's buffer and the budget, as the tracer's own do, before
         // anything is replaced (adaptive cubes of another run may be larger than this one allows).
-        std::vector<raycache::GpuCubeShape> placed = t.shapes;
-        for (std::size_t k = 0; k < placed.size(); ++k) placed[k].face_size = cubes[k].cube->face_size();
-        const std::uint64_t need = raycache::gpu_buffer_layout<Texel>(placed).bytes;
-        if (need > t.cube_room)
-            throw raycache::CacheFileError("RayCache: cache file '" + path + "': its cubes need " + std::to_string(need) +
+        raycache::GpuBufferLayout next = t.layout_of(raycache::loaded_face_sizes(cubes));
+        if (next.bytes > t.cube_room)
+            throw raycache::CacheFileError("RayCache: cache file '" + path + "': its cubes need " + std::to_string(next.bytes) +
                                            " bytes of texels, more than this tracer's cubes may take (" + std::to_string(t.cube_room) +
                                            ": the device's storage buffer and --budget-mib); nothing was loaded");
-        t.place_cubes(raycache::loaded_face_sizes(cubes), false); // the old cubes are replaced, not moved in
+        t.place_layout(std::move(next), false); // the old cubes are replaced, not moved in
         t.texels->fill(RAYCACHE_GPU_CLEAR_WORD);
         t.doubtful->fill(raycache::gpu_doubtful_clear_word);
         if (t.origins) t.origins->fill(RAYCACHE_GPU_CLEAR_WORD);
@@ -496,7 +499,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         const auto warm_up_start = std::chrono::steady_clock::now();
         trace_pass(warm_up_stride, t.raster != nullptr);
         const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
-        warm_up_stored = warm_up_stats.listed - raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout);
+        if (stats) warm_up_stored = warm_up_stats.listed - raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout);
         warm_up_ms = ms_since(warm_up_start);
         resize(warm_up_stats);
         start_frame_buffer(); // after the resize: the frame buffer it made, if any
@@ -522,7 +525,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     const double ms = ms_since(start);
 
     const raycache::GpuFrameStatistics gpu_stats = frame_statistics();
-    const std::uint64_t listed_tiles = t.ends_frames() ? raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout) : 0;
+    // Scanned only for the caller's statistics (the list's tiles are not texels stored).
+    const std::uint64_t listed_tiles = stats && t.ends_frames() ? raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout) : 0;
     resize(gpu_stats); // may replace the frame buffer
 
     Image image(width, height);
