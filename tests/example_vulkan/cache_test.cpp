@@ -335,6 +335,17 @@ void run_budget_case(rcx::vk::Context& context) {
     check(refused, "a budget of 100 bytes, below one texel a face for 9 cubes, is refused");
 }
 
+// Whether tracer.load_caches(path, identity) throws CacheFileError whose message contains `names`.
+bool load_refused(rcx::gpu::Tracer& tracer, const std::string& path, const raycache::SceneIdentity& identity,
+                  const std::string& names = "") {
+    try {
+        tracer.load_caches(path, identity);
+    } catch (const raycache::CacheFileError& e) {
+        return std::string(e.what()).find(names) != std::string::npos;
+    }
+    return false;
+}
+
 // Warm start: cubes saved after three orbit frames and loaded into a fresh tracer make the same next frame,
 // pixel for pixel and hit for hit, as the tracer that saved them, adaptive (the file's face sizes taken) and
 // fixed; a fixed face size the file does not have, or another scene, is refused and leaves the cubes.
@@ -369,12 +380,7 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
             rcx::gpu::TracerSettings tight = settings;
             tight.budget_bytes = 64u << 10;
             rcx::gpu::Tracer small(context, scene, spirv, tight);
-            bool refused = false;
-            try {
-                small.load_caches(path, identity);
-            } catch (const raycache::CacheFileError& e) {
-                refused = std::string(e.what()).find("--budget-mib") != std::string::npos;
-            }
+            const bool refused = load_refused(small, path, identity, "--budget-mib");
             rcx::gpu::FrameStats cold;
             small.render(scene.camera_at(3), size, size, &cold);
             check(refused && cold.hits == 0, variant + ": a tracer with a 64 KiB budget refuses the file's larger cubes and stays cold");
@@ -383,19 +389,9 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
         rcx::gpu::TracerSettings other = settings;
         other.face_size = 32;
         rcx::gpu::Tracer smaller(context, scene, spirv, other);
-        bool refused = false;
-        try {
-            smaller.load_caches(path, identity);
-        } catch (const raycache::CacheFileError& e) {
-            refused = std::string(e.what()).find("48") != std::string::npos;
-        }
-        check(refused, variant + ": a tracer of 32-texel faces refuses the file's 48-texel cubes, naming the size");
-        refused = false;
-        try {
-            loaded.load_caches(path, raycache::SceneIdentity{1, "another scene"});
-        } catch (const raycache::CacheFileError&) {
-            refused = true;
-        }
+        check(load_refused(smaller, path, identity, "48"),
+              variant + ": a tracer of 32-texel faces refuses the file's 48-texel cubes, naming the size");
+        const bool refused = load_refused(loaded, path, raycache::SceneIdentity{1, "another scene"});
         // Kept as they were: the next frame equals the saving tracer's next frame (both went through frame 3,
         // whose stores, and tiles dropped by the origin test, changed the cubes alike).
         rcx::gpu::FrameStats c, d;
