@@ -455,6 +455,66 @@ TEST_CASE("a cube resampled to a coarser size keeps, per record block, the union
     }
 }
 
+TEST_CASE("a block counts the texels that hold a value, recorded or not, on faces that end within a block") {
+    // Face 20: the second tile of a row holds columns 16..19 only, so its blocks 0..3 of each row are one
+    // block wide and the rest lie off the face. Texels are stored with and without records, some emptied
+    // again; every block's count must equal the count of the texels set here that lie in it.
+    CctCube cube(20);
+    std::mt19937 random(7);
+    std::vector<int> held(6 * 20 * 20, 0);
+    auto index = [](const TexelAddress& t) { return static_cast<std::size_t>((t.face * 20 + t.row) * 20 + t.column); };
+    PathRecord path;
+    path.hit(3, glm::vec3(5.0f));
+    for (int k = 0; k < 900; ++k) {
+        const TexelAddress t{static_cast<int>(random() % 6), static_cast<int>(random() % 20), static_cast<int>(random() % 20)};
+        const bool stored = random() % 2 ? cube.store_at(t, glm::vec3(0.5f), path) : cube.store_at(t, glm::vec3(0.5f));
+        if (stored) held[index(t)] = 1;
+    }
+    cube.begin_frame();
+    for (int k = 0; k < 200; ++k) {
+        const TexelAddress t{static_cast<int>(random() % 6), static_cast<int>(random() % 20), static_cast<int>(random() % 20)};
+        cube.invalidate(t);
+        held[index(t)] = 0;
+    }
+    std::size_t blocks = 0, total = 0;
+    cube.for_each_block_state([&](const CctCube::BlockState& b) {
+        int expected = 0;
+        for (int row = b.row0; row < b.row1; ++row)
+            for (int column = b.column0; column < b.column1; ++column) expected += held[index({b.face, column, row})];
+        CHECK(b.valid_texels == expected);
+        total += static_cast<std::size_t>(b.valid_texels);
+        ++blocks;
+    });
+    CHECK(total == cube.valid_texels());
+    CHECK(blocks > 0);
+}
+
+TEST_CASE("a cube resampled to a coarser size leaves out the paths of blocks whose texels were all emptied") {
+    // Two blocks of a 16-texel face that fall into one block of an 8-texel face: the first saw object 7,
+    // then lost its only texel; the second holds a texel that saw object 9. The coarse block's texel came
+    // from the second alone, so its record names 9 and not 7 (a union with 7 would drop it for moves of 7).
+    CctCube from(16);
+    PathRecord saw_7, saw_9;
+    saw_7.hit(7, glm::vec3(5.0f));
+    saw_9.hit(9, glm::vec3(5.0f));
+    const TexelAddress emptied{RAYCACHE_FACE_POSITIVE_Z, 1, 1}, kept{RAYCACHE_FACE_POSITIVE_Z, 5, 1}; // blocks 0 and 1
+    REQUIRE(from.store_at(emptied, glm::vec3(0.5f), saw_7));
+    REQUIRE(from.store_at(kept, glm::vec3(0.5f), saw_9));
+    from.begin_frame();
+    from.invalidate(emptied);
+    CctCube to(8); // texels (1,1) and (5,1) of the fine face lie in texels (0,0) and (2,0): coarse block 0
+    REQUIRE(raycache::resample_into(from, to) == 1);
+    raycache::carry_path_records(from, to);
+    bool found = false;
+    to.for_each_block_state([&](const CctCube::BlockState& b) {
+        if (b.face != RAYCACHE_FACE_POSITIVE_Z || b.block != 0) return;
+        found = true;
+        CHECK(b.valid_texels == 1);
+        CHECK(b.objects == raycache::object_bits(9));
+    });
+    CHECK(found);
+}
+
 TEST_CASE("two rays stored into one texel in one frame leave the same path record whichever came first") {
     // The smaller word wins a same-frame rivalry either way; the texel's block must record both paths
     // either way too, or which texels a move drops (and so later frames) would depend on thread timing.

@@ -340,6 +340,7 @@ public:
         bool has_origins;
         glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
         int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
+        int valid_texels;                // texels of the block holding a value (recorded or not)
 
         bool lit() const noexcept { return (path_flags & path_lit) != 0; }             // a path cast shadow rays
         bool chained() const noexcept { return (path_flags & path_chained) != 0; }     // bounced between hit points
@@ -415,6 +416,14 @@ public:
                     if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
                         ++t.unrecorded_texels;
                 });
+            // The recorded texels hold values; a row of the block is a run of bits within one word.
+            t.valid_texels = t.unrecorded_texels;
+            const std::uint64_t row_mask = (std::uint64_t{1} << (t.column1 - t.column0)) - 1u;
+            for (int row = t.row0; row < t.row1; ++row) {
+                const int slot = slot_of(TexelAddress{t.face, t.column0, row});
+                for (std::uint64_t w = (tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & row_mask; w; w &= w - 1)
+                    ++t.valid_texels;
+            }
             f(static_cast<const BlockState&>(t));
         }
     }

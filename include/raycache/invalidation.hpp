@@ -313,6 +313,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         std::array<PathRecord, CacheCube<Texel>::record_blocks> records;
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
+            if (t.valid_texels == 0) continue; // nothing to empty, and its paths answer for no texel
             Group& g = groups[group_of(t.block)];
             const PathRecord& r = records[i] = t.record();
             g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
@@ -333,6 +334,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         }
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
+            if (t.valid_texels == 0) continue;
             const std::size_t k = group_of(t.block);
             if (group_paths_meet[k] && paths_meet(records[i], changes)) {
                 ++c.blocks_by_path;
@@ -466,6 +468,9 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
     };
     const int tn_int = to.face_size();
     from.for_each_block_state([&](const Block& o) {
+        // A block holding no value gives no texel to `to` (resample_into() copies values), so no new block
+        // needs its paths: after a cold frame most blocks of the sparse tiles are such.
+        if (o.valid_texels == 0) return;
         const auto [c_lo, c_hi] = range(o.column0, o.column1);
         const auto [r_lo, r_hi] = range(o.row0, o.row1);
         for (int br = r_lo; br <= r_hi; ++br)
