@@ -632,7 +632,13 @@ public:
         // every cube gives them back, then the tiles the frame wanted are allocated, empty, cube by cube.
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.give_back_refused_frame(); });
         for (Entry& e : entries_) with_cube(e, [](auto& cube) { cube.allocate_wanted_tiles(); });
-        mark_doubtful_edges_of_frame(parallel_for);
+        // The new face sizes first: a cube about to be replaced needs no confidence test of its own (the
+        // smaller cube that takes its texels is tested after resampling; a larger one starts empty), which
+        // after a cold frame is most of the test's work (every cube shrinks from its first size).
+        const std::vector<Resize> resizes = plan_resizes();
+        std::vector<char> replaced(entries_.size(), 0);
+        for (const Resize& r : resizes) replaced[r.entry] = 1;
+        mark_doubtful_edges_of_frame(parallel_for, replaced);
         std::vector<CubeStatistics> frames(entries_.size());
         const std::function<void(std::size_t)> end_cube = [&](std::size_t i) {
             Entry& e = entries_[i];
@@ -643,7 +649,7 @@ public:
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
         for (Entry& e : entries_)
             if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
-        total.resized_cubes = adapt(frames, parallel_for);
+        total.resized_cubes = adapt(resizes, parallel_for);
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
@@ -912,10 +918,11 @@ private:
     // alone held the other threads up (5 to 13 ms of a 1024 x 1024 frame, on 4 threads as on 16). The budget
     // must be settled first (begin_frame() does).
     template <class ParallelFor>
-    void mark_doubtful_edges_of_frame(ParallelFor&& parallel_for) {
+    void mark_doubtful_edges_of_frame(ParallelFor&& parallel_for, const std::vector<char>& replaced) {
         if (!shared::raycache_edge_test_enabled(edge_threshold_)) return;
         std::vector<std::pair<std::size_t, int>> bands; // (entry, band)
         for (std::size_t i = 0; i < entries_.size(); ++i) {
+            if (replaced[i]) continue;
             const int count = with_cube(entries_[i], [](const auto& cube) { return cube.tile_bands(); });
             for (int b = 0; b < count; ++b) bands.emplace_back(i, b);
         }
@@ -927,32 +934,41 @@ private:
         parallel_for(bands.size(), mark);
     }
 
-    // After a frame, each adaptive entry takes the face size its object's rays (frames[i].lookups) call for.
-    // Choosing the sizes is cheap and serial; the resizes (each a new cube, for a smaller one filled from the
-    // old: resampling, records, confidence test, pyramid) run on the caller's threads when the budget has
-    // room for every new cube with all its tiles allocated: then no allocation can be refused, whatever the
-    // order, and the result is the serial one. Otherwise one after the other in attach order, so which
-    // allocation a full budget refuses does not depend on timing. Returns how many cubes changed size.
-    template <class ParallelFor>
-    std::size_t adapt(const std::vector<CubeStatistics>& frames, ParallelFor&& parallel_for) {
-        struct Resize {
-            std::size_t entry;
-            int face_size;
-        };
+    // An adaptive entry's new face size after a frame.
+    struct Resize {
+        std::size_t entry;
+        int face_size;
+    };
+    // The face sizes the adaptive entries' rays of this frame (their cubes' lookups so far) call for, for
+    // the entries whose size changes. Choosing them is cheap and serial; the frame must have ended (no
+    // lookups after this). Resets the entries' direction coverage.
+    std::vector<Resize> plan_resizes() {
         std::vector<Resize> resizes;
-        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
-        std::size_t worst = 0; // bytes, if every smaller new cube filled all its tiles (a larger one starts empty)
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
             if (!e.coverage) continue;
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-            const std::uint64_t rays = frames[i].lookups;
+            const std::uint64_t rays = with_cube(e, [](const auto& cube) { return cube.statistics().lookups; });
             const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
-            if (next == current) continue;
-            resizes.push_back(Resize{i, next});
-            worst += full_cube_bytes(next, next < current ? tile : 0, sizeof(void*));
+            if (next != current) resizes.push_back(Resize{i, next});
+        }
+        return resizes;
+    }
+
+    // Gives each entry of `resizes` (plan_resizes()) its new cube: a smaller one filled from the old (resampling,
+    // records, confidence test, pyramid), a larger one empty. The resizes run on the caller's threads when the
+    // budget has room for every new cube with all its tiles allocated: then no allocation can be refused,
+    // whatever the order, and the result is the serial one. Otherwise one after the other in attach order,
+    // so which allocation a full budget refuses does not depend on timing. Returns how many cubes changed size.
+    template <class ParallelFor>
+    std::size_t adapt(const std::vector<Resize>& resizes, ParallelFor&& parallel_for) {
+        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
+        std::size_t worst = 0; // bytes, if every smaller new cube filled all its tiles (a larger one starts empty)
+        for (const Resize& r : resizes) {
+            const int current = with_cube(entries_[r.entry], [](const auto& cube) { return cube.face_size(); });
+            worst += full_cube_bytes(r.face_size, r.face_size < current ? tile : 0, sizeof(void*));
         }
         const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
         const std::size_t used = budget_->used(), limit = budget_->limit();
