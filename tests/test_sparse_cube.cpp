@@ -26,14 +26,15 @@ const glm::vec3 grey(0.5f);
 // written masks and the four unrecorded masks (stores) on a line of their own; the four 64-bit doubtful masks, the visible origin box (6
 // four-byte values), nearest hit distance (4 bytes) and has-box flag (1 byte), which lookups read, on the
 // next (61 bytes, padded to 64); then what stores write: the pending origin box (6 four-byte values), the
-// pending nearest distance, the stale mark and the valid-texel count (4 bytes each), padded to 8; the path
-// records of raycache/invalidation.hpp: four 64-bit recorded masks, and for each of the sixteen 4 x 4 record
+// pending nearest distance, the stale mark and the valid-texel count (4 bytes each), padded to 8; four 64-bit
+// recorded masks (raycache/invalidation.hpp), four 64-bit masks of the texels holding a value from earlier
+// frames, and the path records: for each of the sixteen 4 x 4 record
 // blocks a 64-bit Bloom mask of objects, the hit-point box and the escape-direction box (6 + 6 four-byte
 // values) and the path flags (4 bytes), padded to 64; the whole padded to a multiple of 64.
 constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
 constexpr std::size_t written_line = round_up(4 * 8 + 4 * 8, 64);
 constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
-constexpr std::size_t store_part = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
+constexpr std::size_t store_part = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 4 * 8 + 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
 constexpr std::size_t cct_tile = round_up(16 * 16 * 4 + written_line + lookup_line + store_part, 64);
 constexpr std::size_t cdct_tile = round_up(16 * 16 * 8 + written_line + lookup_line + store_part, 64);
 static_assert(cct_tile == 2304 && cdct_tile == 3328, "the sizes the test's name gives");
@@ -166,12 +167,17 @@ TEST_CASE("for_each_written_texel (whole, and band by band) and for_each_valid_t
         CctCube cube(n);
         std::uint32_t seed = 12345u;
         auto next = [&seed] { return seed = seed * 1664525u + 1013904223u; };
-        // Texels stored in an earlier frame (valid, not written) and this frame (valid and written), scattered.
-        for (int i = 0; i < 3 * n; ++i) {
-            const TexelAddress t{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)};
-            cube.store_at(t, grey);
+        // Texels stored in earlier frames (valid, not written), some of them emptied between frames, and this
+        // frame (valid and written), scattered.
+        for (int frame = 0; frame < 2; ++frame) {
+            for (int i = 0; i < 3 * n; ++i) {
+                const TexelAddress t{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)};
+                cube.store_at(t, grey);
+            }
+            cube.begin_frame();
+            for (int i = 0; i < n; ++i)
+                cube.invalidate(TexelAddress{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)});
         }
-        cube.begin_frame();
         for (int i = 0; i < 2 * n; ++i) {
             const TexelAddress t{static_cast<int>(next() % 6u), static_cast<int>(next() % n), static_cast<int>(next() % n)};
             cube.store_at(t, grey);

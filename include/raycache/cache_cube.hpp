@@ -679,9 +679,13 @@ public:
     // order. Between frames only.
     template <class F>
     void for_each_valid_texel(F&& f) const {
-        for_each_texel_where([](const Tile& tile, int) { return tile.valid.load(std::memory_order_relaxed) ? 0xFFFFu : 0u; },
-                             [](const Tile& tile, int slot) { return Texel::is_valid(tile.texels[slot].load(std::memory_order_relaxed)); },
-                             f);
+        // A tile row's 16 held or written bits at once, as for_each_written_texel_in_bands().
+        for_each_texel_where(
+            [](const Tile& tile, int row) {
+                const std::uint64_t bits = tile.held_bits[row / 4].load(std::memory_order_relaxed) | tile.written_bits[row / 4].load(std::memory_order_relaxed);
+                return static_cast<std::uint32_t>(bits >> (row % 4 * 16)) & 0xFFFFu;
+            },
+            [](const Tile& tile, int slot) { return Texel::is_valid(tile.texels[slot].load(std::memory_order_relaxed)); }, f);
     }
 
     // Texels holding a value, visible or written this frame.
@@ -742,6 +746,7 @@ private:
             }
             for (auto& w : recorded_bits) w.store(0, std::memory_order_relaxed);
             for (auto& w : unrecorded_bits) w.store(0, std::memory_order_relaxed);
+            for (auto& w : held_bits) w.store(0, std::memory_order_relaxed);
             pending_nearest.store(ordered(std::numeric_limits<float>::infinity()), std::memory_order_relaxed);
         }
         // Lowers the pending nearest hit distance to `d` (d >= 0; infinity changes nothing).
@@ -799,13 +804,17 @@ private:
         // Written by this frame's stores (and stale by lookups), read between frames: the pending origin box
         // and nearest distance, which begin_frame() makes visible, and the texels holding a value (so passes
         // over tiles need not read them).
-        alignas(64) std::atomic<std::uint32_t> pending_min[3], pending_max[3];
+        alignas(64) std::atomic<std::uint32_t> pending_min[3]; // (alignas on a declaration aligns each declarator)
+        std::atomic<std::uint32_t> pending_max[3];
         std::atomic<std::uint32_t> pending_nearest;
         std::atomic<std::uint32_t> stale{0}; // a lookup met an origin outside the box: drop at begin_frame()
         std::atomic<std::uint32_t> valid{0};
         // What the paths stored into this tile saw (store() with a PathRecord): per record block, their
         // union, kept until the tile is dropped; read between frames only (raycache/invalidation.hpp).
         std::atomic<std::uint64_t> recorded_bits[bit_words]; // texels whose store brought a record
+        // Texels holding a value stored before this frame (with written_bits: every texel holding one), so
+        // passes over a sparse tile visit its few values, not its 256 words. Written between frames only.
+        std::atomic<std::uint64_t> held_bits[bit_words];
         PathUnion records[record_blocks];
     };
 
@@ -1043,7 +1052,12 @@ private:
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
             if (any_written) {
-                for (auto& w : tile->written_bits) w.store(0, std::memory_order_relaxed);
+                for (int w = 0; w < bit_words; ++w) { // a written texel holds a value: its own or a rival's
+                    const std::uint64_t written = tile->written_bits[w].load(std::memory_order_relaxed);
+                    if (!written) continue;
+                    tile->held_bits[w].store(tile->held_bits[w].load(std::memory_order_relaxed) | written, std::memory_order_relaxed);
+                    tile->written_bits[w].store(0, std::memory_order_relaxed);
+                }
                 for (int w = 0; w < bit_words; ++w) { // a same-frame rival without a record: unrecorded
                     const std::uint64_t rivals = tile->unrecorded_bits[w].exchange(0, std::memory_order_relaxed);
                     if (rivals) tile->recorded_bits[w].fetch_and(~rivals, std::memory_order_relaxed);
@@ -1096,6 +1110,7 @@ private:
             for (std::uint64_t d = tile.doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]; d; d &= d - 1)
                 ++doubtful_gone;
             tile.recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
+            tile.held_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
         }
         if (values) {
             state_->valid_texels.fetch_sub(static_cast<std::int64_t>(values), std::memory_order_relaxed);
