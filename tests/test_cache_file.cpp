@@ -429,6 +429,29 @@ TEST_CASE("a record a file cannot hold (hit points not finite) is saved as none,
     CHECK(unrecorded == 1);
 }
 
+TEST_CASE("a file's path records are left out when it is loaded into cubes that keep none") {
+    CctCube cube(16);
+    raycache::PathRecord saw;
+    saw.hit(3, glm::vec3(0.0f, 5.0f, 0.0f));
+    REQUIRE(cube.store(glm::vec3(1, 0, 0), glm::vec3(0.5f), saw));
+    cube.begin_frame();
+    const std::vector<std::uint8_t> bytes = encode_one(cube);
+    for (const bool records : {true, false}) {
+        CAPTURE(records);
+        const auto loaded = raycache::decode_cache<CctTexel>(bytes.data(), bytes.size(), scene, nullptr, "cache data", records);
+        REQUIRE(loaded.size() == 1u);
+        CHECK(loaded[0].cube->keeps_path_records() == records);
+        int unrecorded = 0;
+        std::uint64_t objects = 0;
+        loaded[0].cube->for_each_block_state([&](const auto& b) {
+            unrecorded += b.unrecorded_texels;
+            objects |= b.objects;
+        });
+        CHECK(unrecorded == (records ? 0 : 1));
+        CHECK(objects == (records ? raycache::object_bits(3) : 0u));
+    }
+}
+
 TEST_CASE("every truncation of a small cache file is refused") {
     const std::vector<std::uint8_t> bytes = small_file();
     REQUIRE(decode<CdctTexel>(bytes).size() == 1u);

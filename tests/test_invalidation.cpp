@@ -281,6 +281,38 @@ TEST_CASE("texels stored without a path record are dropped by any move; recorded
     CHECK(!cube.peek(down).has_value());
 }
 
+TEST_CASE("a cube without path records counts every store as unrecorded: any move drops it, resampling carries nothing") {
+    CctCube cube(16, nullptr, false);
+    const glm::vec3 up(0.0f, 1.0f, 0.0f), down(0.0f, -1.0f, 0.0f);
+    PathRecord saw;
+    saw.hit(7, glm::vec3(0.0f, 5.0f, 0.0f));
+    CHECK(cube.store(up, glm::vec3(0.5f), saw));
+    CHECK(cube.store(down, glm::vec3(0.5f)));
+    cube.begin_frame();
+    int blocks_with_values = 0;
+    cube.for_each_block_state([&](const CctCube::BlockState& b) {
+        CHECK(b.objects == 0u); // no union kept
+        CHECK(b.unrecorded_texels == b.valid_texels);
+        blocks_with_values += b.valid_texels > 0;
+    });
+    CHECK(blocks_with_values == 2);
+    // A finer cube's recorded texels resampled into it stay unrecorded.
+    CctCube fine(32);
+    CHECK(fine.store(up, glm::vec3(0.5f), saw));
+    fine.begin_frame();
+    CctCube coarse(8, nullptr, false);
+    REQUIRE(raycache::resample_into(fine, coarse) == 1);
+    raycache::carry_path_records(fine, coarse);
+    coarse.for_each_block_state([&](const CctCube::BlockState& b) { CHECK(b.unrecorded_texels == b.valid_texels); });
+    // A move this far keeps a recorded texel (the test above); here both go, as unrecorded.
+    raycache::SceneChanges changes;
+    changes.moved.push_back({99, {glm::vec3(20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(counts.dropped == 2);
+    CHECK(counts.dropped_unrecorded == 2);
+    CHECK(cube.valid_texels() == 0u);
+}
+
 TEST_CASE("a texel a store without a record reached in the same frame counts as unrecorded, whichever store's value it keeps") {
     // Same-frame rivals: the smaller RGB9E5 word wins (a dimmer colour here). With a recording store and a
     // plain one into one texel in one frame, in either order and with either winning, the texel's value may

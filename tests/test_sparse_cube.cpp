@@ -35,15 +35,42 @@ constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to -
 constexpr std::size_t written_line = round_up(4 * 8 + 4 * 8, 64);
 constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
 constexpr std::size_t store_part = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 4 * 8 + 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
-constexpr std::size_t cct_tile = round_up(16 * 16 * 4 + written_line + lookup_line + store_part, 64);
-constexpr std::size_t cdct_tile = round_up(16 * 16 * 8 + written_line + lookup_line + store_part, 64);
+// The records live after the tile, in its allocation; the tile itself ends with the pointer to them.
+constexpr std::size_t records = 16 * round_up(8 + 6 * 4 + 6 * 4 + 4, 8);
+constexpr std::size_t store_part_alone = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 4 * 8 + sizeof(void*);
+constexpr std::size_t cct_tile_alone = round_up(16 * 16 * 4 + written_line + lookup_line + store_part_alone, 64);
+constexpr std::size_t cdct_tile_alone = round_up(16 * 16 * 8 + written_line + lookup_line + store_part_alone, 64);
+constexpr std::size_t cct_tile = cct_tile_alone + records;
+constexpr std::size_t cdct_tile = cdct_tile_alone + records;
 static_assert(cct_tile == 2304 && cdct_tile == 3328, "the sizes the test's name gives");
+static_assert(cct_tile_alone == 1280 && cdct_tile_alone == 2304, "the sizes without records the test's name gives");
 
 } // namespace
 
 TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 4 x 4 block, on cache lines by writer: 2304 bytes for the CCT, 3328 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
+}
+
+TEST_CASE("without path records a tile is 1280 bytes (CCT) or 2304 (CDCT), and the budget is charged that") {
+    CHECK(CctCube::tile_bytes(false) == cct_tile_alone);
+    CHECK(CdctCube::tile_bytes(false) == cdct_tile_alone);
+    auto budget = std::make_shared<MemoryBudget>(1u << 20);
+    CctCube cct(32, budget, false);
+    CdctCube cdct(32, budget, false);
+    CHECK_FALSE(cct.keeps_path_records());
+    CHECK(cct.bytes_per_tile() == cct_tile_alone);
+    const std::size_t tables = budget->used();
+    for (int face = 0; face < 6; ++face) {
+        CHECK(cct.store_at(TexelAddress{face, 0, 0}, grey));
+        CHECK(cdct.store_at(TexelAddress{face, 20, 20}, raycache::DepthSample{grey, 2.0f}));
+    }
+    CHECK(cct.allocated_bytes() == 6 * cct_tile_alone);
+    CHECK(cdct.allocated_bytes() == 6 * cdct_tile_alone);
+    CHECK(budget->used() == tables + 6 * (cct_tile_alone + cdct_tile_alone));
+    cct.clear();
+    cdct.clear();
+    CHECK(budget->used() == tables);
 }
 
 TEST_CASE("a new cube holds no tile, and a store allocates exactly the tile of its texel") {

@@ -517,13 +517,13 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     return c;
 }
 
-// A fresh cube holding the record's texels as this frame's stores. Throws CacheFileError when the budget
-// refuses a tile.
+// A fresh cube holding the record's texels as this frame's stores (with path records or without: CacheCube's
+// path_records). Throws CacheFileError when the budget refuses a tile.
 template <class Texel>
 std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::shared_ptr<MemoryBudget>& budget,
-                                             const ByteReader& messages) {
+                                             const ByteReader& messages, bool path_records) {
     using Word = typename Texel::Word;
-    auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget);
+    auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget, path_records);
     ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(Word)), "tiles"); // checked
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
         const TileHeader h = read_tile_header(tiles, c.version);
@@ -645,12 +645,13 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
 // The cubes of a cache file's bytes (see LoadedCube), checked whole before any cube is made: the prelude, every chunk's
 // size and checksum, the format version (newer: refused), the technique (Texel's), the scene (`expected`,
 // hash and name), every face size, placement, tile index and texel word. `source` names the bytes in
-// messages (a file name). The cubes draw their tiles from `budget` (may be null).
+// messages (a file name). The cubes draw their tiles from `budget` (may be null); path_records as
+// CacheCube's (false: the file's path records are not kept, and its texels count as stored without one).
 // Throws CacheFileError saying what is wrong; then nothing was made.
 template <class Texel>
 std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_t size, const SceneIdentity& expected,
                                             const std::shared_ptr<MemoryBudget>& budget = nullptr,
-                                            const std::string& source = "cache data") {
+                                            const std::string& source = "cache data", bool path_records = true) {
     using Word = typename Texel::Word;
     using File = CacheFileTexel<Texel>;
     detail::ByteReader r(data, size, source);
@@ -709,7 +710,7 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     std::vector<LoadedCube<Texel>> cubes;
     cubes.reserve(records.size());
     for (const detail::CubeRecord& c : records)
-        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r), c.part, c.origins_seen,
+        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r, path_records), c.part, c.origins_seen,
                                           c.origins_limit});
     return cubes;
 }
@@ -779,9 +780,9 @@ void save_cache_file(const std::string& path, const SceneIdentity& scene, const 
 // decode_cache of the file at `path`. Throws CacheFileError naming the file and what is wrong.
 template <class Texel>
 std::vector<LoadedCube<Texel>> load_cache_file(const std::string& path, const SceneIdentity& expected,
-                                               const std::shared_ptr<MemoryBudget>& budget = nullptr) {
+                                               const std::shared_ptr<MemoryBudget>& budget = nullptr, bool path_records = true) {
     const std::vector<std::uint8_t> bytes = read_whole_file(path);
-    return decode_cache<Texel>(bytes.data(), bytes.size(), expected, budget, "cache file '" + path + "'");
+    return decode_cache<Texel>(bytes.data(), bytes.size(), expected, budget, "cache file '" + path + "'", path_records);
 }
 
 // One cube alone: saves `cube`, placed at `bounds`, as object `object` of `scene`. Between frames.
