@@ -114,6 +114,15 @@ struct Outputs {
     std::string exact_why;    // per scenario and technique: what exact emptied, by reason
 };
 
+// A SceneCache of `technique` for a scene whose objects move from the first frame on: the tracer's search,
+// and path records kept from the start (as the tracer keeps them for dynamic scenes).
+std::unique_ptr<SceneCache> dynamic_scene_cache(raycache::embree::Technique technique) {
+    raycache::embree::SceneCacheSettings settings;
+    settings.relief = rcx::bench::our_relief;
+    settings.path_records = raycache::embree::PathRecords::always;
+    return std::make_unique<SceneCache>(technique, settings);
+}
+
 // What each move of `scene` really changed, per technique: the stale-texel oracle's fraction of the valid
 // texels, mean over frames 1.., on caches under `none` (every texel kept). A pass of its own, after the
 // timed one, so that the retracing cannot slow what is timed; frames are deterministic, so its caches hold
@@ -125,7 +134,7 @@ std::vector<double> changed_by_moves(const Options& o, const rcx::Scene& scene) 
     for (std::size_t i = 0; i < std::size(techniques); ++i) {
         variants[i].label = techniques[i].label;
         variants[i].mode = techniques[i].mode;
-        variants[i].caches = std::make_unique<SceneCache>(techniques[i].technique, rcx::bench::our_relief);
+        variants[i].caches = dynamic_scene_cache(techniques[i].technique);
         tracer.attach_caches(*variants[i].caches, 0);
         order.push_back(&variants[i]);
     }
@@ -164,7 +173,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.variant.mode = techniques[i].mode;
             t.technique_index = i;
             t.policy = &policies[k];
-            t.variant.caches = std::make_unique<SceneCache>(techniques[i].technique, rcx::bench::our_relief); // the tracer's search
+            t.variant.caches = dynamic_scene_cache(techniques[i].technique); // the tracer's search
             tracer.attach_caches(*t.variant.caches, 0);
         }
     std::vector<rcx::bench::Variant*> order;

@@ -276,7 +276,8 @@ TEST_CASE("adaptive cubes start small enough that every cube sharing the budget 
     // By hand, with t = tile + table entry bytes: a full cube of N has 6 ceil(N/16)^2 tiles, so 181 takes
     // 864 t, 128 384 t, 91 216 t, 64 96 t, 45 54 t. A budget of 960 t: one cube's share fits 181 (not
     // 256: 1536 t); two cubes 128; three and four 91; five to ten 64; eleven 45.
-    const std::size_t t = raycache::CctCube::tile_bytes() + sizeof(void*);
+    // (Tiles without path records: a cache keeps none before its first move.)
+    const std::size_t t = raycache::CctCube::tile_bytes(false) + sizeof(void*);
     raycache::embree::SceneCacheSettings settings;
     settings.budget_bytes = 960 * t;
     SceneCache caches(Technique::cct, settings);

@@ -152,7 +152,9 @@ auto threads_for(int threads) {
 TEST_CASE("scene_changed over 4 threads empties exactly the texels the serial pass empties, CCT and CDCT") {
     for (const Technique technique : {Technique::cct, Technique::cdct}) {
         CAPTURE(technique == Technique::cct ? "CCT" : "CDCT");
-        SceneCache serial(technique), parallel(technique);
+        raycache::embree::SceneCacheSettings moving; // a scene that moves: path records from the first store
+        moving.path_records = raycache::embree::PathRecords::always;
+        SceneCache serial(technique, moving), parallel(technique, moving);
         fill(serial);
         fill(parallel);
         REQUIRE(contents(serial) == contents(parallel));
@@ -256,6 +258,7 @@ TEST_CASE("how far out a cube's rays left is the furthest origin of any thread's
     auto reach_after = [&](int threads) {
         raycache::embree::SceneCacheSettings settings;
         settings.origin_drift = -1.0f;
+        settings.path_records = raycache::embree::PathRecords::always;
         SceneCache caches(Technique::cct, settings);
         caches.attach(ObjectId{0}, 64, raycache::CubeBounds{glm::vec3(0.0f), 1.5f});
         std::vector<std::thread> pool;

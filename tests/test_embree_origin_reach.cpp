@@ -19,6 +19,7 @@ using raycache::PathRecord;
 using raycache::TracedRay;
 using raycache::embree::Invalidation;
 using raycache::embree::ObjectId;
+using raycache::embree::PathRecords;
 using raycache::embree::SceneCache;
 using raycache::embree::SceneCacheSettings;
 using raycache::embree::Technique;
@@ -44,11 +45,13 @@ struct World {
     }
 };
 
-// CCT caches keyed by direction alone (no origin test), so only the origin reach decides what answers.
-SceneCache direction_keyed_cct() {
+// CCT caches keyed by direction alone (no origin test), so only the origin reach decides what answers;
+// path records kept from the first store (a scene that moves), unless told otherwise.
+SceneCache direction_keyed_cct(PathRecords records = PathRecords::always) {
     SceneCacheSettings s;
     s.origin_drift = -1.0f;
     s.edge_threshold = -1.0f;
+    s.path_records = records;
     return SceneCache(Technique::cct, s);
 }
 
@@ -152,6 +155,7 @@ TEST_CASE("CDCT: a texel's segments start from the mirror's own rays once a move
     SceneCacheSettings s;
     s.edge_threshold = -1.0f;
     s.relief.max_gap = 0.5f;
+    s.path_records = PathRecords::always;
     SceneCache caches(Technique::cdct, s);
     caches.attach(w.scene, {w.mirror}, 64);
     auto up = [&] {
@@ -231,4 +235,56 @@ TEST_CASE("an emptied cube forgets how far out its rays left; the limit never ex
     // clear() forgets too.
     caches.clear();
     CHECK(*caches.answered_origin_radius({w.mirror}) == infinity);
+}
+
+TEST_CASE("a scene cache without path records charges smaller tiles, and its exact invalidation drops what a recording one keeps") {
+    // The same recorded store, far from the move, with path records (kept) and without (dropped as a store
+    // without a record); each cache's one tile costs CctCube::tile_bytes(path_records), beside the same
+    // tile table.
+    World w;
+    std::size_t bytes[2] = {};
+    for (const bool records : {true, false}) {
+        CAPTURE(records);
+        SceneCacheSettings s;
+        s.origin_drift = -1.0f;
+        s.edge_threshold = -1.0f;
+        s.path_records = records ? PathRecords::always : PathRecords::never;
+        SceneCache caches(Technique::cct, s);
+        caches.attach(w.scene, {w.mirror}, 64);
+        caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                           [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+        const auto frame = caches.begin_frame();
+        bytes[records] = frame.allocated_bytes;
+        const auto moved = caches.scene_changed(far_move(w), Invalidation::exact);
+        CHECK(moved.dropped == (records ? 0u : 1u));
+        CHECK(moved.dropped_unrecorded == (records ? 0u : 1u));
+    }
+    CHECK(bytes[true] - bytes[false] == raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false));
+    CHECK(raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false) == 1024u); // 16 records of 64 bytes
+}
+
+TEST_CASE("by default a scene cache keeps path records from its first exact move on, which empties its cubes once") {
+    World w;
+    SceneCache caches = direction_keyed_cct(PathRecords::from_first_move); // the default
+    caches.attach(w.scene, {w.mirror}, 64);
+    auto store_up = [&] {
+        caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                           [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+        return caches.begin_frame();
+    };
+    const std::size_t before = store_up().allocated_bytes; // one tile without records
+    // Policies other than exact, and an exact call that moves nothing, keep the cubes as they are.
+    caches.scene_changed({}, Invalidation::exact);
+    CHECK(caches.begin_frame().allocated_bytes == before);
+    // The first move: the record-less texel goes (far as the move is), and the cube is replaced, empty.
+    const auto first = caches.scene_changed(far_move(w), Invalidation::exact);
+    CHECK(first.dropped == 1u);
+    CHECK(first.dropped_unrecorded == 1u);
+    CHECK(caches.begin_frame().valid_texels == 0u);
+    // From then on the stores keep records: the same far move keeps the texel, whose tile holds them.
+    const std::size_t after = store_up().allocated_bytes;
+    CHECK(after - before == raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false));
+    const auto second = caches.scene_changed(far_move(w), Invalidation::exact);
+    CHECK(second.dropped == 0u);
+    CHECK(caches.begin_frame().valid_texels == 1u);
 }

@@ -35,9 +35,10 @@ struct Run {
 // Caches as the Embree tracer makes them: crossings over 0.5 behind a surface miss (so a CDCT texel's rays
 // end there, and farther moves keep it).
 SceneCache tracer_caches(raycache::embree::Technique technique) {
-    raycache::ReliefParameters search;
-    search.max_gap = 0.5f;
-    return SceneCache(technique, search);
+    raycache::embree::SceneCacheSettings settings;
+    settings.relief.max_gap = 0.5f;
+    settings.path_records = raycache::embree::PathRecords::always; // as the tracer's for dynamic scenes
+    return SceneCache(technique, settings);
 }
 
 // 96 x 96 frames on two threads through `caches`.

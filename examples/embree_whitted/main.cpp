@@ -112,6 +112,9 @@ int run(const rcx::Options& o) {
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
             cache_settings.origin_parallax = o.origin_parallax;
+            // Objects of a dynamic scene move from the first frame on: keep what the paths saw from the start,
+            // so the first move keeps what it can (a static scene keeps no records unless something moves).
+            if (scene.dynamic()) cache_settings.path_records = raycache::embree::PathRecords::always;
             caches = std::make_unique<raycache::embree::SceneCache>(
                 o.cache == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct,
                 cache_settings);

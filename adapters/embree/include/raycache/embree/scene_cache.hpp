@@ -117,6 +117,19 @@ enum class Technique { cct, cdct };
 inline constexpr int adaptive_face_size = 0;
 
 // Everything a SceneCache can be tuned by; the defaults need no tuning.
+// Whether a SceneCache's cubes keep what their stores' paths saw (leaving_ray's recording form, a record
+// per 4 x 4 block of texels), which exact invalidation (scene_changed) needs to keep the texels a move
+// cannot have changed. A static scene never reads them; without them a tile takes 44% (CCT) or 31% (CDCT)
+// less memory, and a cold frame, which allocates most tiles, costs less.
+enum class PathRecords {
+    // None until the first scene_changed() under Invalidation::exact that moves an object or a light:
+    // that call empties every cube (its texels were stored without records, so the move drops them
+    // anyway) and from then on the cubes keep records. For caches that may or may not see moves.
+    from_first_move,
+    always, // from the first frame: a scene known to move keeps the texels of its first frames too
+    never,  // exact invalidation then empties every texel at any move, as for stores without a record
+};
+
 struct SceneCacheSettings {
     ReliefParameters relief{};          // the CDCT's search (relief.search: secant, the default, or relief)
     bool depth_pyramid = true;          // CDCT relief search: over a min-depth pyramid (false: the thesis's walk)
@@ -139,6 +152,8 @@ struct SceneCacheSettings {
     // the reflection long before the far walls do). Applies with origin_drift; infinity: off.
     float origin_parallax = 0.01f;
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
+    // When the cubes keep what their stores' paths saw (PathRecords).
+    PathRecords path_records = PathRecords::from_first_move;
 };
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
@@ -373,7 +388,8 @@ public:
     SceneCache(Technique technique, const SceneCacheSettings& settings)
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
-          origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax),
+          origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax), path_records_(settings.path_records == PathRecords::always),
+          record_policy_(settings.path_records),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
         validate(adaptive_);
@@ -602,6 +618,20 @@ public:
                 for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
                 next.clear();
                 pass(seen, true);
+            }
+            const bool geometric = !changes.moved.empty() || changes.light_moved;
+            if (geometric && !path_records_ && record_policy_ == PathRecords::from_first_move) {
+                // The first move: the cubes, stored without records, lost every texel to it; from now on their
+                // replacements keep records (anything left is counted as dropped for want of one).
+                path_records_ = true;
+                for (std::size_t i = 0; i < entries_.size(); ++i) {
+                    Entry& e = entries_[i];
+                    const std::size_t left = empty_cube(e);
+                    stats.dropped += left;
+                    stats.dropped_unrecorded += left;
+                    changed[i] = changed[i] || left > 0;
+                    make_cube(e, with_cube(e, [](const auto& cube) { return cube.face_size(); }));
+                }
             }
         }
         for (char c : changed) stats.cubes_changed += c ? 1 : 0;
@@ -845,12 +875,16 @@ private:
         return static_cast<int>(entries_.size() - 1);
     }
 
+    // The bytes of one of the cubes' tiles.
+    std::size_t tile_bytes() const noexcept {
+        return technique_ == Technique::cct ? CctCube::tile_bytes(path_records_) : CdctCube::tile_bytes(path_records_);
+    }
+
     // With `cubes` cubes on the budget, adaptive cubes start at the largest step at which each could fill
     // all its tiles within its share (first_face_size_within), so a cold frame fits however its rays spread.
     // Adaptive cubes that are larger and still empty, never sized by a frame, start over at that size.
     void shrink_first_face_size(std::size_t cubes) {
-        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
-        const int size = first_face_size_within(adaptive_, cubes, budget_->limit(), tile, sizeof(void*));
+        const int size = first_face_size_within(adaptive_, cubes, budget_->limit(), tile_bytes(), sizeof(void*));
         if (size >= first_face_size_) return;
         first_face_size_ = size;
         for (Entry& e : entries_) {
@@ -906,9 +940,9 @@ private:
     // Gives `e` a new, empty cube (and pyramid) of `face_size` drawing on the budget.
     void make_cube(Entry& e, int face_size) {
         if (technique_ == Technique::cct) {
-            e.cct = std::make_unique<CctCube>(face_size, budget_);
+            e.cct = std::make_unique<CctCube>(face_size, budget_, path_records_);
         } else {
-            e.cdct = std::make_unique<CdctCache>(face_size, e.bounds, relief_, use_pyramid_, budget_);
+            e.cdct = std::make_unique<CdctCache>(std::make_unique<CdctCube>(face_size, budget_, path_records_), e.bounds, relief_, use_pyramid_);
         }
     }
 
@@ -964,7 +998,7 @@ private:
     // so which allocation a full budget refuses does not depend on timing. Returns how many cubes changed size.
     template <class ParallelFor>
     std::size_t adapt(const std::vector<Resize>& resizes, ParallelFor&& parallel_for) {
-        const std::size_t tile = technique_ == Technique::cct ? CctCube::tile_bytes() : CdctCube::tile_bytes();
+        const std::size_t tile = tile_bytes();
         std::size_t worst = 0; // bytes, if every smaller new cube filled all its tiles (a larger one starts empty)
         for (const Resize& r : resizes) {
             const int current = with_cube(entries_[r.entry], [](const auto& cube) { return cube.face_size(); });
@@ -1042,7 +1076,7 @@ private:
     template <class Texel>
     void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene) {
         const std::string source = "cache file '" + path + "'";
-        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source);
+        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source, path_records_);
         auto fail = [&](const std::string& what) {
             throw CacheFileError("RayCache: " + source + ": " + what + "; nothing was loaded");
         };
@@ -1112,6 +1146,8 @@ private:
     float edge_threshold_;
     float origin_drift_;
     float origin_parallax_;
+    bool path_records_;          // the cubes keep path records now (SceneCacheSettings::path_records)
+    PathRecords record_policy_;
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     int first_face_size_;                  // adaptive cubes start here (shrink_first_face_size)
     std::vector<Entry> entries_;
