@@ -444,9 +444,11 @@ InvalidationCounts invalidate_changes(CdctCache& cache, float origin_radius, con
 // After a cube was resampled into another (raycache/adaptive_resolution.hpp, resample_into: each texel of
 // `to` took a texel of `from` within its own rectangle of the face), gives every valid texel of `to` the
 // union of the path records of the blocks of `from` whose rectangles overlap its block's, so the resampled
-// texels stay known to exact invalidation. Between frames.
+// texels stay known to exact invalidation. Nothing when either cube keeps no path records. Between frames.
 template <class Texel>
 void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
+    // Nothing known to carry (the texels came without records), or nowhere to keep it: they stay unrecorded.
+    if (!from.keeps_path_records() || !to.keeps_path_records()) return;
     using Block = typename CacheCube<Texel>::BlockState;
     constexpr int edge = CacheCube<Texel>::record_edge;
     // One pass over the old blocks, each merged into the few new blocks its rectangle overlaps (a coarser
