@@ -322,18 +322,22 @@ TEST_CASE("a texel a store without a record reached in the same frame counts as 
     REQUIRE(raycache::CctTexel::encode(dim) < raycache::CctTexel::encode(bright));
     raycache::SceneChanges far;
     far.moved.push_back({99, {glm::vec3(20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(20.0f, 0.5f, 0.0f), 0.5f}});
-    auto dropped_after = [&](auto&& stores) {
-        CctCube cube(16);
-        stores(cube);
-        cube.begin_frame();
-        const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, far);
-        CHECK(counts.valid_before == 1u);
-        return counts.dropped_unrecorded;
-    };
-    CHECK(dropped_after([&](CctCube& c) { c.store(up, dim, PathRecord{}); }) == 0u); // recorded alone: kept
-    CHECK(dropped_after([&](CctCube& c) { c.store(up, bright); c.store(up, dim, PathRecord{}); }) == 1u);   // recorded wins
-    CHECK(dropped_after([&](CctCube& c) { c.store(up, dim); c.store(up, bright, PathRecord{}); }) == 1u);   // plain wins, first
-    CHECK(dropped_after([&](CctCube& c) { c.store(up, bright, PathRecord{}); c.store(up, dim); }) == 1u);   // plain wins, second
+    // Invalidation may run after begin_frame() or before it (the frame's stores still pending): the same.
+    for (const bool ended : {true, false}) {
+        CAPTURE(ended);
+        auto dropped_after = [&](auto&& stores) {
+            CctCube cube(16);
+            stores(cube);
+            if (ended) cube.begin_frame();
+            const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, far);
+            CHECK(counts.valid_before == 1u);
+            return counts.dropped_unrecorded;
+        };
+        CHECK(dropped_after([&](CctCube& c) { c.store(up, dim, PathRecord{}); }) == 0u); // recorded alone: kept
+        CHECK(dropped_after([&](CctCube& c) { c.store(up, bright); c.store(up, dim, PathRecord{}); }) == 1u);   // recorded wins
+        CHECK(dropped_after([&](CctCube& c) { c.store(up, dim); c.store(up, bright, PathRecord{}); }) == 1u);   // plain wins, first
+        CHECK(dropped_after([&](CctCube& c) { c.store(up, bright, PathRecord{}); c.store(up, dim); }) == 1u);   // plain wins, second
+    }
     // A later frame's recording store into an empty neighbour does not bring the rivalry back.
     CctCube cube(16);
     cube.store(up, dim, PathRecord{});

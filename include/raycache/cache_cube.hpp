@@ -395,7 +395,10 @@ public:
         const TexelAddress first = first_texel_of_tile(i);
         // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
         // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
-        const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != count_bits(tile->recorded_bits);
+        int recorded_count = 0;
+        for (int w = 0; w < bit_words; ++w)
+            for (std::uint64_t bits = recorded_word(*tile, w); bits; bits &= bits - 1) ++recorded_count;
+        const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != recorded_count;
         BlockState t{};
         t.tile = i;
         t.face = first.face;
@@ -427,7 +430,7 @@ public:
             t.unrecorded_texels = 0;
             if (any_unrecorded)
                 for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
-                    if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !bit_set(tile->recorded_bits, slot))
+                    if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !recorded(*tile, slot))
                         ++t.unrecorded_texels;
                 });
             // The recorded texels hold values; a row of the block is a run of bits within one word.
@@ -435,7 +438,7 @@ public:
             const std::uint64_t row_mask = (std::uint64_t{1} << (t.column1 - t.column0)) - 1u;
             for (int row = t.row0; row < t.row1; ++row) {
                 const int slot = slot_of(TexelAddress{t.face, t.column0, row});
-                for (std::uint64_t w = (tile->recorded_bits[slot / 64].load(std::memory_order_relaxed) >> (slot % 64)) & row_mask; w; w &= w - 1)
+                for (std::uint64_t w = (recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask; w; w &= w - 1)
                     ++t.valid_texels;
             }
             f(static_cast<const BlockState&>(t));
@@ -457,7 +460,7 @@ public:
         std::uint64_t gone[bit_words] = {};
         for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
             if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return;
-            if (!drop(t, bit_set(tile->recorded_bits, slot))) return void(++kept);
+            if (!drop(t, recorded(*tile, slot))) return void(++kept);
             tile->texels[slot].store(Texel::invalid, std::memory_order_relaxed);
             gone[slot / 64] |= std::uint64_t{1} << (slot % 64);
             ++dropped;
@@ -1012,6 +1015,12 @@ private:
 
     static bool written(const Tile& tile, int slot) noexcept { return bit_set(tile.written_bits, slot); }
     static bool doubtful(const Tile& tile, int slot) noexcept { return bit_set(tile.doubtful_bits, slot); }
+    // Word w of the texels whose value is known with its path record: recorded, and not reached this frame
+    // by a store without one (begin_frame() takes those recorded bits away; until then they count here).
+    static std::uint64_t recorded_word(const Tile& tile, int w) noexcept {
+        return tile.recorded_bits[w].load(std::memory_order_relaxed) & ~tile.unrecorded_bits[w].load(std::memory_order_relaxed);
+    }
+    static bool recorded(const Tile& tile, int slot) noexcept { return (recorded_word(tile, slot / 64) >> (slot % 64)) & 1u; }
 
     // f(address) for each texel of an allocated tile that candidates(tile, row within the tile) names (a
     // mask of the row's 16 columns) and keep(tile, slot) accepts, in linear-index order. Tile rows whose
