@@ -132,7 +132,7 @@ TEST_CASE("direction coverage counts the 16 x 16 cells per face that rays took, 
     CHECK(coverage.fraction() == 1.0);
 }
 
-TEST_CASE("direction coverage marked by texel: a texel of a face of 16 or more marks the cell its centre falls in; smaller faces' texels mark every cell they span") {
+TEST_CASE("direction coverage marked by texel: a texel of a face of 16 or more marks the cell its centre falls in, smaller faces' texels mark every cell they span") {
     for (int n : {1, 2, 3, 5, 8, 16, 17, 20, 48, 64, 100}) {
         CAPTURE(n);
         for (int face = 0; face < 6; face += 5)

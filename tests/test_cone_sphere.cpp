@@ -219,7 +219,7 @@ TEST_CASE("sphere against box: inside, touching a face, past a corner") {
     CHECK(raycache::shared::raycache_box_meets_sphere(lo, hi, {2, 2, 2}, 1.75f));
 }
 
-TEST_CASE("the cone of a box of unit directions holds every direction in the box; a box around zero is every direction") {
+TEST_CASE("the cone of a box of unit directions holds every direction in the box, a box around zero is every direction") {
     using raycache::shared::raycache_cone_of_direction_box;
     // Box [-0.2, 0.2] x [-0.2, 0.2] x [0.9, 1]: axis +z; the widest corners (+-0.2, +-0.2, 0.9) lie at
     // cos = 0.9 / sqrt(0.89) = 0.95400 (17.45 degrees); (+-0.2, +-0.2, 1) only at 1 / sqrt(1.08) = 0.96225.

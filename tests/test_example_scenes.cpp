@@ -408,7 +408,7 @@ TEST_CASE("a UV sphere mesh has outward windings, its vertices on the sphere and
     CHECK_THROWS_AS(rcx::make_sphere(0.0f, 8, 4), std::invalid_argument);
 }
 
-TEST_CASE("tessellating a scene's moving spheres makes them meshes that move the same way; the rest stays") {
+TEST_CASE("tessellating a scene's moving spheres makes them meshes that move the same way, the rest stays") {
     rcx::Scene s;
     s.meshes.push_back(rcx::checkerboard_floor());
     rcx::Material red;

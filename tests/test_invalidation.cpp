@@ -77,7 +77,7 @@ std::size_t stale_texels(const CctCube& cube, const World& before, const World& 
 
 } // namespace
 
-TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
+TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel, without it the oracle finds them") {
     const World before = make_world();
     for (const auto& [moved, after] : test_moves(before)) {
         CAPTURE(moved);
@@ -263,7 +263,7 @@ TEST_CASE("a moved light drops every texel whose path hit something and keeps th
     CHECK(counts.dropped + cube.valid_texels() == counts.valid_before);
 }
 
-TEST_CASE("texels stored without a path record are dropped by any move; recorded ones far from it are kept") {
+TEST_CASE("texels stored without a path record are dropped by any move, recorded ones far from it are kept") {
     const World w = make_world();
     CctCube cube(16);
     // A recorded store and an unrecorded one, on opposite sides, far from every ball's path (sky upwards).
@@ -396,7 +396,7 @@ TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the ligh
     CHECK(stale() == 0);
 }
 
-TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflections drops the texels it now blocks; the "
+TEST_CASE("bounces that escaped: a ball moved into a mirror's escaped reflections drops the texels it now blocks, the "
           "escape cone keeps more than treating escapes as unbounded") {
     World before = make_world();
     before.balls[2].mirror = true;

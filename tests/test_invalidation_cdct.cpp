@@ -101,7 +101,7 @@ bool in_any(const std::vector<CdctCube::BlockState>& blocks, const TexelAddress&
 
 } // namespace
 
-TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel; without it the oracle finds them") {
+TEST_CASE("CDCT: after a sphere moves, exact invalidation leaves no stale texel, without it the oracle finds them") {
     const World before = make_world();
     for (const auto& [moved, after] : test_moves(before)) {
         CAPTURE(moved);
@@ -170,7 +170,7 @@ TEST_CASE("CDCT: a sphere moving where no stored path went drops exactly the tex
     CHECK(counts.blocks_by_path == 0);
 }
 
-TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the texel; the escapes it blocks go") {
+TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the texel, the escapes it blocks go") {
     // Ball 3 seen from the centre; a new sphere moves further out in the same direction, behind it. Texels
     // holding ball 3's surface end their rays within distance + 0.5 of the centre, short of the sphere; the
     // texels whose rays escaped past ball 3 toward the sphere now meet it.
@@ -211,7 +211,7 @@ TEST_CASE("CDCT: a sphere moving behind the surfaces a texel holds keeps the tex
     CHECK(escapes_kept == 0);
 }
 
-TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path; exact invalidation of a CdctCache keeps its searches valid") {
+TEST_CASE("CDCT: cdct_cached_trace stores a recording trace's path, exact invalidation of a CdctCache keeps its searches valid") {
     // Through the cache's own path: misses traced with their records, then a move of one ball; afterwards
     // every search that still answers gives the colour the moved world shows (within the CDCT's own
     // error: compared with the unmoved cache's answers, which must equal them where the move changed nothing).
@@ -270,7 +270,7 @@ std::unique_ptr<CdctCube> one_texel_ten_ahead() {
 }
 } // namespace
 
-TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from the box to it, keeps the texel; one on such a segment drops it") {
+TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from the box to it, keeps the texel, one on such a segment drops it") {
     // One texel, holding a point 10 along +z from the centre of the unit box (the segments it answers run
     // from the box's ball, radius sqrt(3), to the shell of its directions at 10 - 0.5 .. 10 + 0.5). Its
     // path hit one object (key 5) there, and nothing else: no light, no further bounce.

@@ -133,7 +133,7 @@ TEST_CASE("clear gives every tile back to the cube and to its budget") {
     CHECK_FALSE(cube.load(TexelAddress{0, 0, 0}));
 }
 
-TEST_CASE("a budget that holds one tile refuses the second tile's stores; the frame's first tile comes back empty, and fills") {
+TEST_CASE("a budget that holds one tile refuses the second tile's stores, the frame's first tile comes back empty, and fills") {
     auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + cct_tile);
     {
         CctCube cube(32, budget);
