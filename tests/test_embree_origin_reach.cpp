@@ -209,7 +209,7 @@ TEST_CASE("a saved cube keeps its limit: loaded into a fresh cache, it still tra
     CHECK(traces == 2); // from further out than the move was checked for: traced, as in the saved cache
 }
 
-TEST_CASE("an emptied cube forgets how far out its rays left; the limit never exceeds the box's ball") {
+TEST_CASE("an emptied cube forgets how far out its rays left, the limit never exceeds the box's ball") {
     World w;
     SceneCache caches = direction_keyed_cct();
     caches.attach(w.scene, {w.mirror}, 64);
@@ -287,4 +287,66 @@ TEST_CASE("by default a scene cache keeps path records from its first exact move
     const auto second = caches.scene_changed(far_move(w), Invalidation::exact);
     CHECK(second.dropped == 0u);
     CHECK(caches.begin_frame().valid_texels == 1u);
+}
+
+TEST_CASE("by default a cache loads a file's path records when it holds any, and keeps records from then on") {
+    // A default cache after its first move (records kept) saves a texel; a fresh default cache loads it and
+    // keeps it through a far move, as the saving cache would. A default cache that never moved saves a file
+    // without records, which loads into record-less tiles.
+    World w;
+    const raycache::SceneIdentity scene{43, "records in files"};
+    const std::string moved_file = "/tmp/raycache-records-moved-" + std::to_string(::getpid()) + ".rcc";
+    const std::string static_file = "/tmp/raycache-records-static-" + std::to_string(::getpid()) + ".rcc";
+    auto store_up = [&](SceneCache& caches) {
+        caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                           [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+        return caches.begin_frame();
+    };
+    SceneCache moved = direction_keyed_cct(PathRecords::from_first_move);
+    moved.attach(w.scene, {w.mirror}, 64);
+    moved.scene_changed(far_move(w), Invalidation::exact); // the first move: records from now on
+    store_up(moved);
+    moved.save(moved_file, scene);
+    SceneCache still = direction_keyed_cct(PathRecords::from_first_move);
+    still.attach(w.scene, {w.mirror}, 64);
+    const std::size_t static_bytes = store_up(still).allocated_bytes;
+    still.save(static_file, scene);
+
+    SceneCache loaded = direction_keyed_cct(PathRecords::from_first_move);
+    loaded.attach(w.scene, {w.mirror}, 64);
+    loaded.load(moved_file, scene);
+    CHECK(moved.scene_changed(far_move(w), Invalidation::exact).dropped == 0u);
+    const auto after_load = loaded.scene_changed(far_move(w), Invalidation::exact);
+    CHECK(after_load.dropped == 0u);
+    CHECK(loaded.begin_frame().valid_texels == 1u);
+
+    SceneCache loaded_static = direction_keyed_cct(PathRecords::from_first_move);
+    loaded_static.attach(w.scene, {w.mirror}, 64);
+    loaded_static.load(static_file, scene);
+    CHECK(loaded_static.begin_frame().allocated_bytes == static_bytes); // no records allocated
+    std::remove(moved_file.c_str());
+    std::remove(static_file.c_str());
+}
+
+TEST_CASE("a moved light is a first move too, afterwards unsized adaptive cubes start where tiles with records fit the budget") {
+    // As the adapter's budget test derives by hand, with t = tile + table entry: a budget of 960 t lets one
+    // cube start at 181 texels (864 t). With 1288-byte t (no records) that is 181; once records are kept
+    // (2312-byte tiles), the same bytes hold 534 of them: 128 (384 t) and not 181.
+    World w;
+    const std::size_t alone = raycache::CctCube::tile_bytes(false) + sizeof(void*);
+    SceneCacheSettings s;
+    s.budget_bytes = 960 * alone;
+    SceneCache caches(Technique::cct, s);
+    caches.attach(w.scene, {w.mirror}); // adaptive
+    CHECK(caches.face_size({w.mirror}) == 181);
+    raycache::embree::SceneChange light;
+    light.light_moved = true;
+    light.lights = {glm::vec3(0.0f, 10.0f, 0.0f)};
+    caches.scene_changed(light, Invalidation::exact);
+    CHECK(caches.face_size({w.mirror}) == 128);
+    // The cube keeps records now: a far move keeps what it stores.
+    caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
+                       [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });
+    caches.begin_frame();
+    CHECK(caches.scene_changed(far_move(w), Invalidation::exact).dropped == 0u);
 }

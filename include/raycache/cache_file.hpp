@@ -48,6 +48,7 @@
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstddef>
@@ -59,6 +60,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -517,6 +519,21 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     return c;
 }
 
+// Whether any block of the record's tiles holds a path record (checked: read_cube_record() read them).
+template <class Texel>
+bool holds_path_records(const CubeRecord& c) {
+    using Word = typename Texel::Word;
+    if (c.version < 3) return false; // formats 1 and 2 keep none
+    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(Word)), "tiles");
+    for (std::uint32_t i = 0; i < c.tiles; ++i) {
+        const TileHeader h = read_tile_header(tiles, c.version);
+        for (const BlockRecord& b : h.blocks)
+            if (b.recorded) return true;
+        tiles.skip(file_tile_texels * sizeof(Word), "a tile's texels");
+    }
+    return false;
+}
+
 // A fresh cube holding the record's texels as this frame's stores (with path records or without: CacheCube's
 // path_records). Throws CacheFileError when the budget refuses a tile.
 template <class Texel>
@@ -614,10 +631,11 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             }
             for (std::uint64_t bits : doubtful) w.u64(bits);
             // Each block's record when every texel of it holding a value carries it (else none: those
-            // texels count as having seen everything, as unrecorded texels do).
+            // texels count as having seen everything, as unrecorded texels do); none for a block without
+            // values, so a file holds records only where they describe texels (holds_path_records()).
             detail::BlockRecord blocks[detail::file_record_blocks];
             c.cube->for_each_block_state_of_tile(index, [&](const typename CacheCube<Texel>::BlockState& b) {
-                if (b.unrecorded_texels != 0) return;
+                if (b.unrecorded_texels != 0 || b.valid_texels == 0) return;
                 const PathRecord record = b.record();
                 if (detail::is_file_record(record)) blocks[b.block] = detail::BlockRecord{true, record};
             });
@@ -646,12 +664,13 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
 // size and checksum, the format version (newer: refused), the technique (Texel's), the scene (`expected`,
 // hash and name), every face size, placement, tile index and texel word. `source` names the bytes in
 // messages (a file name). The cubes draw their tiles from `budget` (may be null); path_records as
-// CacheCube's (false: the file's path records are not kept, and its texels count as stored without one).
+// CacheCube's (false: the file's path records are not kept, and its texels count as stored without one;
+// std::nullopt: every cube keeps them when any block of the file holds one, none does otherwise).
 // Throws CacheFileError saying what is wrong; then nothing was made.
 template <class Texel>
 std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_t size, const SceneIdentity& expected,
                                             const std::shared_ptr<MemoryBudget>& budget = nullptr,
-                                            const std::string& source = "cache data", bool path_records = true) {
+                                            const std::string& source = "cache data", std::optional<bool> path_records = true) {
     using Word = typename Texel::Word;
     using File = CacheFileTexel<Texel>;
     detail::ByteReader r(data, size, source);
@@ -707,10 +726,12 @@ std::vector<LoadedCube<Texel>> decode_cache(const std::uint8_t* data, std::size_
     end.expect_end("the END chunk");
     if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " bytes follow the END chunk");
 
+    if (!path_records)
+        path_records = std::any_of(records.begin(), records.end(), [](const detail::CubeRecord& c) { return detail::holds_path_records<Texel>(c); });
     std::vector<LoadedCube<Texel>> cubes;
     cubes.reserve(records.size());
     for (const detail::CubeRecord& c : records)
-        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r, path_records), c.part, c.origins_seen,
+        cubes.push_back(LoadedCube<Texel>{c.object, c.bounds, detail::build_cube<Texel>(c, budget, r, *path_records), c.part, c.origins_seen,
                                           c.origins_limit});
     return cubes;
 }
@@ -780,7 +801,8 @@ void save_cache_file(const std::string& path, const SceneIdentity& scene, const 
 // decode_cache of the file at `path`. Throws CacheFileError naming the file and what is wrong.
 template <class Texel>
 std::vector<LoadedCube<Texel>> load_cache_file(const std::string& path, const SceneIdentity& expected,
-                                               const std::shared_ptr<MemoryBudget>& budget = nullptr, bool path_records = true) {
+                                               const std::shared_ptr<MemoryBudget>& budget = nullptr,
+                                               std::optional<bool> path_records = true) {
     const std::vector<std::uint8_t> bytes = read_whole_file(path);
     return decode_cache<Texel>(bytes.data(), bytes.size(), expected, budget, "cache file '" + path + "'", path_records);
 }

@@ -622,16 +622,20 @@ public:
             const bool geometric = !changes.moved.empty() || changes.light_moved;
             if (geometric && !path_records_ && record_policy_ == PathRecords::from_first_move) {
                 // The first move: the cubes, stored without records, lost every texel to it; from now on their
-                // replacements keep records (anything left is counted as dropped for want of one).
+                // replacements keep records (anything left is counted as dropped for want of one). Their
+                // counts of this frame start over. Tiles with records are larger: adaptive cubes not sized by
+                // a frame yet start where a cold frame's tiles fit the budget again.
                 path_records_ = true;
                 for (std::size_t i = 0; i < entries_.size(); ++i) {
                     Entry& e = entries_[i];
-                    const std::size_t left = empty_cube(e);
+                    const std::size_t left = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
                     stats.dropped += left;
                     stats.dropped_unrecorded += left;
                     changed[i] = changed[i] || left > 0;
+                    e.origins->forget(); // an empty cube, as empty_cube() leaves it
                     make_cube(e, with_cube(e, [](const auto& cube) { return cube.face_size(); }));
                 }
+                shrink_first_face_size(entries_.size());
             }
         }
         for (char c : changed) stats.cubes_changed += c ? 1 : 0;
@@ -723,7 +727,8 @@ public:
 
     // How far from its cube's centre a ray of object `id` may leave and still be answered: infinity (from
     // anywhere in the box) until an exact scene_changed(), then the furthest origin met before it (see
-    // leaving_ray). std::nullopt when it has no cube. Between frames.
+    // leaving_ray); infinity again after a move that emptied the cube (a moved object's, or every cube at
+    // the first move of PathRecords::from_first_move). std::nullopt when it has no cube. Between frames.
     std::optional<float> answered_origin_radius(ObjectId id) const {
         const int index = find(id);
         if (index < 0) return std::nullopt;
@@ -873,6 +878,15 @@ private:
         if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         entries_.push_back(std::move(entry));
         return static_cast<int>(entries_.size() - 1);
+    }
+
+    // Whether cubes loaded from a cache file keep path records: as the cache's own, or (before the first move
+    // of PathRecords::from_first_move) when the file holds any, and then the cache keeps them from then on
+    // (load_cubes()): a loaded cube's next move keeps what the saved one's would.
+    std::optional<bool> records_to_load() const noexcept {
+        if (path_records_ || record_policy_ == PathRecords::always) return true;
+        if (record_policy_ == PathRecords::never) return false;
+        return std::nullopt;
     }
 
     // The bytes of one of the cubes' tiles.
@@ -1076,7 +1090,7 @@ private:
     template <class Texel>
     void load_cubes(const std::vector<std::uint8_t>& bytes, const std::string& path, const SceneIdentity& scene) {
         const std::string source = "cache file '" + path + "'";
-        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source, path_records_);
+        std::vector<LoadedCube<Texel>> loaded = decode_cache<Texel>(bytes.data(), bytes.size(), scene, budget_, source, records_to_load());
         auto fail = [&](const std::string& what) {
             throw CacheFileError("RayCache: " + source + ": " + what + "; nothing was loaded");
         };
@@ -1126,6 +1140,8 @@ private:
             // A cube that holds texels received rays, so its face size came from counting them: later
             // moves take the hysteresis, as in the cache that saved it (the file keeps no flag for that).
             e.sized = with_cube(e, [](const auto& cube) { return cube.valid_texels() > 0; });
+            // A file with path records makes the cache keep them from now on (records_to_load()).
+            path_records_ = path_records_ || with_cube(e, [](const auto& cube) { return cube.keeps_path_records(); });
         }
     }
 
