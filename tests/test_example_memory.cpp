@@ -35,6 +35,13 @@ TEST_CASE("cpu_cubes counts the tiles, tile tables and depth pyramids of full cu
     CHECK(colour <= 3 * cct.bytes());
     CHECK(rcx::cpu_cubes(rcx::CacheMode::off, 3, 64, true).bytes == 0);
     CHECK(rcx::cpu_cubes(rcx::CacheMode::ceiling, 3, 64, true).bytes == 0);
+    // Without path records (a static scene's caches) the same full cubes, filled, hold what they count.
+    raycache::CctCube static_cct(64, nullptr, false);
+    fill(static_cct, glm::vec3(0.5f));
+    const std::uint64_t static_colour = rcx::cpu_cubes(rcx::CacheMode::cct, 3, 64, true, false).bytes;
+    CHECK(static_colour >= 3 * static_cct.texel_bytes());
+    CHECK(static_colour <= 3 * static_cct.bytes());
+    CHECK(static_colour < colour);
 }
 
 TEST_CASE("a run that needs more memory than is available is refused, naming the need and what is available") {

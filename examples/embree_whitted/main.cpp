@@ -80,7 +80,7 @@ int run(const rcx::Options& o) {
         throw InputError(e.what());
     }
     try {
-        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid && !o.secant), rcx::frame_images(o)});
+        rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid && !o.secant, scene.dynamic()), rcx::frame_images(o)});
     } catch (const std::runtime_error& e) {
         throw InputError(e.what());
     }

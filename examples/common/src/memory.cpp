@@ -84,13 +84,13 @@ std::optional<AvailableMemory> available_memory() {
     return best;
 }
 
-MemoryNeed cpu_cubes(CacheMode mode, int count, int face_size, bool pyramid) {
+MemoryNeed cpu_cubes(CacheMode mode, int count, int face_size, bool pyramid, bool path_records) {
     if (!uses_caches(mode) || count <= 0 || face_size <= 0) return {};
     const bool cdct = mode == CacheMode::cdct;
-    // Every tile allocated (texels, written and doubtful bits) and the tile table: a full cube.
+    // Every tile allocated (texels, their bits, origins, path records when kept) and the tile table: a full cube.
     const std::uint64_t per_edge = static_cast<std::uint64_t>((face_size + raycache::CctCube::tile_edge - 1) / raycache::CctCube::tile_edge);
     const std::uint64_t tiles = 6ull * per_edge * per_edge;
-    const std::uint64_t tile = cdct ? raycache::CdctCube::tile_bytes() : raycache::CctCube::tile_bytes();
+    const std::uint64_t tile = cdct ? raycache::CdctCube::tile_bytes(path_records) : raycache::CctCube::tile_bytes(path_records);
     std::uint64_t one = tiles * (tile + sizeof(void*));
     if (cdct && pyramid) one += raycache::DepthPyramid::bytes_for(face_size);
     const std::string n = std::to_string(face_size);

@@ -29,10 +29,11 @@ struct AvailableMemory {
 // RCX_AVAILABLE_MEMORY (a number of bytes) overrides it, for tests and to keep a run below a budget.
 std::optional<AvailableMemory> available_memory();
 
-// Host bytes of `count` RayCache cubes of face_size as the Embree tracer holds them: CacheCube texels
-// (4 bytes CCT, 8 bytes CDCT) and written-texel bits, plus a DepthPyramid each for CDCT with `pyramid`.
-// 0 for modes without cubes.
-MemoryNeed cpu_cubes(CacheMode mode, int count, int face_size, bool pyramid);
+// Host bytes of `count` RayCache cubes of face_size as the Embree tracer holds them: every CacheCube
+// tile (CacheCube::tile_bytes(path_records): texels, their bits and origins, path records when the cache
+// keeps them, as it does for dynamic scenes) and the tile table, plus a DepthPyramid each for CDCT with
+// `pyramid`. 0 for modes without cubes.
+MemoryNeed cpu_cubes(CacheMode mode, int count, int face_size, bool pyramid, bool path_records = true);
 
 // The frame images a tracer holds at once: the frame, with --compare also the uncached frame and the
 // difference image (linear RGB floats), and the 8-bit copy a PNG is written from.
