@@ -51,11 +51,11 @@
 #include <limits>
 #include <memory>
 #include <new>
-#include <type_traits>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -396,8 +396,7 @@ public:
         // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
         // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
         int recorded_count = 0;
-        for (int w = 0; w < bit_words; ++w)
-            for (std::uint64_t bits = recorded_word(*tile, w); bits; bits &= bits - 1) ++recorded_count;
+        for (int w = 0; w < bit_words; ++w) recorded_count += bit_count(recorded_word(*tile, w));
         const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != recorded_count;
         BlockState t{};
         t.tile = i;
@@ -438,8 +437,7 @@ public:
             const std::uint64_t row_mask = (std::uint64_t{1} << (t.column1 - t.column0)) - 1u;
             for (int row = t.row0; row < t.row1; ++row) {
                 const int slot = slot_of(TexelAddress{t.face, t.column0, row});
-                for (std::uint64_t w = (recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask; w; w &= w - 1)
-                    ++t.valid_texels;
+                t.valid_texels += bit_count((recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask);
             }
             f(static_cast<const BlockState&>(t));
         }
@@ -999,11 +997,19 @@ private:
         return n;
 #endif
     }
+    static int bit_count(std::uint64_t bits) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        return __builtin_popcountll(bits);
+#else
+        int n = 0;
+        for (; bits; bits &= bits - 1) ++n;
+        return n;
+#endif
+    }
     // How many of a tile's bits are set.
     static int count_bits(const TileBits& bits) noexcept {
         int n = 0;
-        for (const auto& word : bits)
-            for (std::uint64_t w = word.load(std::memory_order_relaxed); w; w &= w - 1) ++n;
+        for (const auto& word : bits) n += bit_count(word.load(std::memory_order_relaxed));
         return n;
     }
     // The first texel (lowest column and row) of tile `index`.
@@ -1144,8 +1150,7 @@ private:
         std::size_t doubtful_gone = 0;
         for (int w = 0; w < bit_words; ++w) {
             if (!gone[w]) continue;
-            for (std::uint64_t d = tile.doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]; d; d &= d - 1)
-                ++doubtful_gone;
+            doubtful_gone += static_cast<std::size_t>(bit_count(tile.doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]));
             tile.recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
             tile.held_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
         }
