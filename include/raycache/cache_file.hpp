@@ -519,12 +519,18 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     return c;
 }
 
-// Whether any block of the record's tiles holds a path record (checked: read_cube_record() read them).
+// A reader over the record's tiles, each a header and 256 words (checked: read_cube_record() sized them).
+template <class Texel>
+ByteReader tiles_of(const CubeRecord& c) {
+    return ByteReader(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(typename Texel::Word)), "tiles");
+}
+
+// Whether any block of the record's tiles holds a path record.
 template <class Texel>
 bool holds_path_records(const CubeRecord& c) {
     using Word = typename Texel::Word;
     if (c.version < 3) return false; // formats 1 and 2 keep none
-    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(Word)), "tiles");
+    ByteReader tiles = tiles_of<Texel>(c);
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
         const TileHeader h = read_tile_header(tiles, c.version);
         for (const BlockRecord& b : h.blocks)
@@ -541,7 +547,7 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                                              const ByteReader& messages, bool path_records) {
     using Word = typename Texel::Word;
     auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget, path_records);
-    ByteReader tiles(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(Word)), "tiles"); // checked
+    ByteReader tiles = tiles_of<Texel>(c);
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
         const TileHeader h = read_tile_header(tiles, c.version);
         for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {

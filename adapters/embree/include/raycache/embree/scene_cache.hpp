@@ -884,7 +884,7 @@ private:
     // of PathRecords::from_first_move) when the file holds any, and then the cache keeps them from then on
     // (load_cubes()): a loaded cube's next move keeps what the saved one's would.
     std::optional<bool> records_to_load() const noexcept {
-        if (path_records_ || record_policy_ == PathRecords::always) return true;
+        if (path_records_) return true; // PathRecords::always included
         if (record_policy_ == PathRecords::never) return false;
         return std::nullopt;
     }
