@@ -143,6 +143,8 @@ TEST_CASE("a reflected ray traced with rtcIntersect1 is cached: traced in the co
     const auto frame0 = caches.begin_frame();
     CHECK(frame0.lookups == 1);
     CHECK(frame0.misses == 1);
+    CHECK(frame0.misses_by[static_cast<std::size_t>(raycache::MissReason::empty)] == 1); // nothing stored yet
+    CHECK(frame0.miss_share(raycache::MissReason::empty) == 1.0);
     CHECK(frame0.stores == 1);
     const glm::vec3 warm = caches.leaving_ray({w.mirror}, p, r, trace);
     CHECK(traces == 1);
@@ -252,6 +254,8 @@ TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the nex
     };
     const auto first = frame();
     CHECK(first.misses == 6144u);
+    // One ray a texel of the 256-texel cube: each found its texel empty; none met one stored that frame.
+    CHECK(first.misses_by[static_cast<std::size_t>(raycache::MissReason::empty)] == 6144u);
     CHECK(first.resized_cubes == 1u);
     CHECK(caches.face_size({w.mirror}) == 32);
     traced = 0;

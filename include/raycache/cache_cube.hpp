@@ -189,13 +189,16 @@ public:
 #endif
     }
 
-    // The value cached for `direction`, counted as a hit or a miss. std::nullopt (a miss) when the
-    // texel is empty, was written this frame, or `direction` is not a direction. Thread-safe, wait-free.
+    // The value cached for `direction`, counted as a hit or a miss (with its MissReason). std::nullopt (a
+    // miss) when the texel is empty, was written this frame, is doubtful, or `direction` is not a direction.
+    // Thread-safe, wait-free.
     std::optional<Value> lookup(const glm::vec3& direction) noexcept {
-        const InFrame use = in_frame();
-        std::optional<Value> value = peek(direction);
-        record_lookup(value.has_value());
-        return value;
+        const std::optional<TexelAddress> t = texel_of(direction);
+        if (!t) {
+            record_miss(MissReason::outside);
+            return std::nullopt;
+        }
+        return lookup_at(*t);
     }
 
     // lookup() for a ray leaving from `origin`: a miss also when `origin` lies more than `drift` outside the
@@ -211,7 +214,7 @@ public:
     std::optional<Value> lookup(const glm::vec3& direction, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
         const std::optional<TexelAddress> t = texel_of(direction);
         if (!t) {
-            record_lookup(false);
+            record_miss(MissReason::outside);
             return std::nullopt;
         }
         return lookup_at(*t, origin, tolerance);
@@ -219,7 +222,7 @@ public:
 
     // The texel `direction` falls in (the face table of cube_face.hpp); std::nullopt when it is not a
     // direction. With lookup_at() and store_at(), a ray that looks up and then stores computes it once.
-    std::optional<TexelAddress> texel_of(const glm::vec3& direction) const noexcept {
+    RAYCACHE_HOT_FN std::optional<TexelAddress> texel_of(const glm::vec3& direction) const noexcept {
         const shared::raycache_texel_address a = shared::raycache_texel_of(direction, face_size_);
         if (a.face == RAYCACHE_NO_FACE) return std::nullopt;
         return TexelAddress{a.face, a.column, a.row};
@@ -228,8 +231,11 @@ public:
     // lookup(direction) of texel `t` (from texel_of(); must lie on the cube, asserted): counted, no origin test.
     std::optional<Value> lookup_at(const TexelAddress& t) noexcept {
         const InFrame use = in_frame();
-        std::optional<Value> value = peek_at(t);
-        record_lookup(value.has_value());
+        RAYCACHE_ASSERT(contains(t));
+        const Tile* tile = contains(t) ? tile_of(t) : nullptr;
+        std::optional<Value> value = visible_value(tile, t);
+        if (value) record_hit();
+        else record_miss(why_invisible(tile, t));
         return value;
     }
 
@@ -239,18 +245,21 @@ public:
         RAYCACHE_ASSERT(contains(t));
         Tile* tile = contains(t) ? tile_of(t) : nullptr;
         std::optional<Value> value = visible_value(tile, t);
-        if (value) {
-            if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
-                if (!tile->stale.load(std::memory_order_relaxed)) tile->stale.store(1u, std::memory_order_relaxed);
-                value.reset();
-            }
+        if (!value) {
+            record_miss(why_invisible(tile, t));
+        } else if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
+            if (!tile->stale.load(std::memory_order_relaxed)) tile->stale.store(1u, std::memory_order_relaxed);
+            value.reset();
+            record_miss(MissReason::origin);
+        } else {
+            record_hit();
         }
-        record_lookup(value.has_value());
         return value;
     }
 
-    // lookup() without counting, for searches that read many texels per ray (count them with record_lookup()).
-    std::optional<Value> peek(const glm::vec3& direction) const noexcept {
+    // lookup() without counting, for searches that read many texels per ray (count them with record_hit() and
+    // record_miss()).
+    RAYCACHE_HOT_FN std::optional<Value> peek(const glm::vec3& direction) const noexcept {
         const std::optional<TexelAddress> t = texel_of(direction);
         return t ? visible_value(*t) : std::nullopt;
     }
@@ -263,9 +272,29 @@ public:
         return visible_value(texel);
     }
 
-    // Counts one lookup made of peek() calls as a hit or a miss.
+    // Count one lookup made of peek() calls: a hit, or a miss and why (why_missed() names the state of a
+    // texel whose read found nothing).
+    void record_hit() noexcept { state_->counters.add(hits); }
+    void record_miss(MissReason why) noexcept { state_->counters.add(first_miss + static_cast<std::size_t>(why)); }
+    // record_hit() or record_miss(MissReason::search).
     void record_lookup(bool hit) noexcept {
-        state_->counters.add(hit ? hits : misses);
+        if (hit) record_hit();
+        else record_miss(MissReason::search);
+    }
+
+    // Why peek_at(texel) finds nothing: empty (no value, or no tile), fresh (stored this frame) or doubtful.
+    // For a texel whose peek finds a value, empty. Between frames or during one, as peek_at().
+    MissReason why_missed(const TexelAddress& texel) const noexcept {
+        RAYCACHE_ASSERT(contains(texel));
+        return contains(texel) ? why_invisible(tile_of(texel), texel) : MissReason::outside;
+    }
+    // The same for the texel of `direction`; outside when it is not a direction. Out of line: misses only.
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((noinline, cold))
+#endif
+    MissReason why_missed(const glm::vec3& direction) const noexcept {
+        const std::optional<TexelAddress> t = texel_of(direction);
+        return t ? why_invisible(tile_of(*t), *t) : MissReason::outside;
     }
 
     // Caches `value` in the texel of `direction`; returns whether it was written. Refused (false) when
@@ -649,7 +678,10 @@ public:
     CubeStatistics statistics() const noexcept {
         CubeStatistics s;
         s.hits = state_->counters.sum(hits);
-        s.misses = state_->counters.sum(misses);
+        for (std::size_t k = 0; k < miss_reason_count; ++k) {
+            s.misses_by[k] = state_->counters.sum(first_miss + k);
+            s.misses += s.misses_by[k];
+        }
         s.lookups = s.hits + s.misses;
         s.stores = state_->counters.sum(stores);
         s.refused_stores = state_->counters.sum(refused_stores);
@@ -715,7 +747,9 @@ public:
     bool contains(const TexelAddress& t) const noexcept { return is_on_cube(t, face_size_); }
 
 private:
-    enum Counter : std::size_t { hits, misses, stores, refused_stores, new_values, counter_count };
+    // A miss is counted under its reason: counter first_miss + MissReason.
+    enum Counter : std::size_t { hits, stores, refused_stores, new_values, first_miss,
+                                 counter_count = first_miss + miss_reason_count };
 
     // Zeroes the counters, the texels stores gave a value kept in valid_texels. Not concurrent with stores.
     void reset_counters() noexcept {
@@ -1126,8 +1160,20 @@ private:
     }
 
     std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
-    // The same, for `t`'s tile already loaded (null: none).
-    std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t) const noexcept {
+    // Why visible_value(tile, t) is empty (empty also when it is not). Out of line: misses only.
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((noinline, cold))
+#endif
+    MissReason why_invisible(const Tile* tile, const TexelAddress& t) const noexcept {
+        if (!tile) return MissReason::empty;
+        const int slot = slot_of(t);
+        if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return MissReason::empty;
+        if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return MissReason::fresh;
+        if (doubtful(*tile, slot)) return MissReason::doubtful;
+        return MissReason::empty;
+    }
+    // The same, for `t`'s tile already loaded (null: none). On every lookup's path: inlined.
+    RAYCACHE_HOT_FN std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t) const noexcept {
         if (!tile) return std::nullopt;
         // Acquire pairs with the store's release: a word written this frame comes with its written bit,
         // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.

@@ -50,8 +50,11 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace
                   "RayCache filtered_cached_trace: trace must be callable as `glm::vec3 trace()`");
     const auto use = cube.in_frame();
     const bool hit = cube.peek(direction).has_value();
-    cube.record_lookup(hit);
-    if (hit) return detail::filtered_answer(cube, direction);
+    if (hit) {
+        cube.record_hit();
+        return detail::filtered_answer(cube, direction);
+    }
+    cube.record_miss(cube.why_missed(direction));
     glm::vec3 traced = std::forward<Trace>(trace)();
     cube.store(direction, traced);
     return traced;
@@ -71,8 +74,8 @@ glm::vec3 cct_cached_trace_at(CctCube& cube, const std::optional<TexelAddress>& 
         if constexpr (records) return trace(path);
         else return trace();
     };
-    if (!texel) { // not a direction: a miss, nothing stored
-        cube.record_lookup(false);
+    if (!texel) { // not a direction, or a ray the caller cannot let the cube answer: a miss, nothing stored
+        cube.record_miss(MissReason::outside);
         return run().color;
     }
     const std::optional<glm::vec3> cached = tolerance ? cube.lookup_at(*texel, origin, *tolerance) : cube.lookup_at(*texel);

@@ -100,19 +100,28 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
 // p.epsilon ends at most p.max_gap behind it). A miss for an empty or not-yet-visible texel, after
 // p.max_reads reads without such an answer, and for bad input (no texel read). A texel marked doubtful
 // (raycache/edge_confidence.hpp) reads as empty: its colour, and often its distance, lie at an edge. Reads at most
-// min(p.max_reads, RAYCACHE_SECANT_MAX_READS) texels. Counts one lookup. Thread-safe as CacheCube::lookup.
+// min(p.max_reads, RAYCACHE_SECANT_MAX_READS) texels. Counts one lookup: a miss under the state of the texel
+// whose read ended it (MissReason empty, fresh or doubtful), else search; outside for bad input.
+// Thread-safe as CacheCube::lookup.
 inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p) noexcept {
     const auto use = cube.in_frame();
     shared::raycache_secant_search s = shared::raycache_secant_start(origin, direction, bounds.centre, bounds.half_size,
                                                                      p.epsilon, p.max_gap, p.max_reads);
+    MissReason why = MissReason::search; // a miss on a texel read that found nothing: that texel's state
     while (s.status == RAYCACHE_SECANT_READ) {
-        const std::optional<DepthSample> texel = cube.peek(shared::raycache_secant_point(s, s.t));
-        if (texel) shared::raycache_secant_advance(s, true, texel->distance, texel->color);
-        else shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
+        const glm::vec3 point = shared::raycache_secant_point(s, s.t);
+        const std::optional<DepthSample> texel = cube.peek(point);
+        if (texel) {
+            shared::raycache_secant_advance(s, true, texel->distance, texel->color);
+        } else {
+            shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
+            why = cube.why_missed(point);
+        }
     }
     const ReliefResult result = shared::raycache_secant_result(s, origin);
-    cube.record_lookup(result.hit);
+    if (result.hit) cube.record_hit();
+    else cube.record_miss(s.reads == 0 ? MissReason::outside : why);
     return result;
 }
 

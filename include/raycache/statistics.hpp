@@ -11,11 +11,26 @@
 
 namespace raycache {
 
+// Why a lookup missed, so that a cache that pays less than expected says what to change. The CCT's miss
+// is its texel's state; a CDCT search's, that of the texel whose read ended it, or `search` when it read
+// only usable texels and still found no consistent crossing.
+enum class MissReason : std::uint8_t {
+    empty,     // the texel holds no value: never stored, dropped (a stale tile, a move), or refused by the budget
+    fresh,     // the texel was stored this frame: stores are visible from the next frame on
+    doubtful,  // the texel lies at a colour edge (the confidence test): traced rather than answered
+    origin,    // CCT: the ray left from further than the allowed drift from its tile's origins (it refills)
+    search,    // CDCT: no consistent crossing within the read limit, or a gap behind an edge
+    outside,   // not a direction, or a ray from outside what the last exact invalidation checked
+};
+inline constexpr std::size_t miss_reason_count = 6;
+
 // A snapshot of one cube's counters since they were last reset (begin_frame() resets them).
 struct CubeStatistics {
     std::uint64_t lookups = 0;          // hits + misses
     std::uint64_t hits = 0;             // lookups answered by a visible, valid texel
     std::uint64_t misses = 0;           // lookups that found nothing usable (the caller traced the ray)
+    // misses by MissReason (their sum is `misses` for C++ cubes; GPU frames count misses without reasons)
+    std::array<std::uint64_t, miss_reason_count> misses_by{};
     std::uint64_t stores = 0;           // stores that wrote a texel
     std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie
     std::size_t valid_texels = 0;       // texels holding a value now (including this frame's stores)
@@ -27,7 +42,24 @@ struct CubeStatistics {
     double hit_rate() const noexcept {
         return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
     }
+    // The share of the lookups that missed for `why`, 0..1.
+    double miss_share(MissReason why) const noexcept {
+        return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;
+    }
 };
+
+// A lower-case name of a miss reason ("empty", "fresh", "doubtful", "origin", "search", "outside").
+inline const char* to_string(MissReason why) noexcept {
+    switch (why) {
+    case MissReason::empty: return "empty";
+    case MissReason::fresh: return "fresh";
+    case MissReason::doubtful: return "doubtful";
+    case MissReason::origin: return "origin";
+    case MissReason::search: return "search";
+    case MissReason::outside: return "outside";
+    }
+    return "?";
+}
 
 namespace detail {
 

@@ -29,6 +29,7 @@
 #include "raycache/requires_cpp17.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstddef>
@@ -216,6 +217,7 @@ struct SceneCacheStatistics {
     std::uint64_t lookups = 0;
     std::uint64_t hits = 0;
     std::uint64_t misses = 0;
+    std::array<std::uint64_t, miss_reason_count> misses_by{}; // misses by MissReason (CubeStatistics)
     std::uint64_t stores = 0;
     std::uint64_t texels_read = 0;     // CDCT searches only
     std::uint64_t max_texels_read = 0; // the most one CDCT search read
@@ -229,6 +231,10 @@ struct SceneCacheStatistics {
     std::size_t emptied_for_origins = 0; // cubes emptied: rays left further out than an invalidation checked
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
+    // The share of the lookups that missed for `why`, 0..1.
+    double miss_share(MissReason why) const noexcept {
+        return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;
+    }
     double valid_fraction() const noexcept {
         return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
     }
@@ -519,7 +525,7 @@ public:
         }
         if (e.coverage) e.coverage->mark(direction);
         if (!answerable) {
-            e.cdct->cube().record_lookup(false);
+            e.cdct->cube().record_miss(MissReason::outside);
             return trace_alone();
         }
         int read = 0;
@@ -1149,6 +1155,7 @@ private:
         total.lookups += s.lookups;
         total.hits += s.hits;
         total.misses += s.misses;
+        for (std::size_t k = 0; k < miss_reason_count; ++k) total.misses_by[k] += s.misses_by[k];
         total.stores += s.stores;
         total.valid_texels += s.valid_texels;
         total.texel_count += s.texel_count;
