@@ -16,6 +16,7 @@
 // Usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST]
 //        [--paths LIST] [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N] [--warm-start LIST]
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -153,12 +154,22 @@ struct PathSummary {
     double hit_rate = 0.0;             // mean over the warm frames
     double texels_per_lookup = 0.0;    // texels read / lookups, summed over the warm frames
     std::size_t cube_bytes = 0;
+    // Misses by raycache::MissReason as shares of the lookups, summed over the warm frames.
+    std::array<double, raycache::miss_reason_count> miss_shares{};
 };
+
+// A frame's misses by reason as shares of its lookups (zeros without lookups).
+std::array<double, raycache::miss_reason_count> miss_shares(const SceneCacheStatistics& s) {
+    std::array<double, raycache::miss_reason_count> shares{};
+    for (std::size_t k = 0; k < shares.size(); ++k) shares[k] = s.miss_share(static_cast<raycache::MissReason>(k));
+    return shares;
+}
 
 PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
     PathSummary s;
     std::vector<double> off_ms, ms, ratios, psnrs, hits;
     std::uint64_t texels = 0, lookups = 0;
+    std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
     s.psnr_min = std::numeric_limits<double>::infinity();
     for (std::size_t f : warm_frames(m.frames.size())) {
         const FrameRecord& r = m.frames[f];
@@ -171,6 +182,7 @@ PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
         hits.push_back(r.stats.hit_rate());
         texels += r.stats.texels_read;
         lookups += r.stats.lookups;
+        for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += r.stats.misses_by[k];
         s.cube_bytes = cube_bytes(r.stats);
     }
     s.off_ms = mean_of(off_ms);
@@ -180,6 +192,8 @@ PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
     s.psnr_mean = psnrs.empty() ? std::numeric_limits<double>::infinity() : mean_of(psnrs);
     s.hit_rate = mean_of(hits);
     s.texels_per_lookup = lookups ? static_cast<double>(texels) / static_cast<double>(lookups) : 0.0;
+    for (std::size_t k = 0; k < misses_by.size(); ++k)
+        s.miss_shares[k] = lookups ? static_cast<double>(misses_by[k]) / static_cast<double>(lookups) : 0.0;
     return s;
 }
 
@@ -193,7 +207,7 @@ std::string or_dash(bool present, const std::string& text) { return present ? te
 struct Outputs {
     Report report;
     std::ofstream frames_csv, paths_csv;
-    std::vector<std::vector<std::string>> path_rows;
+    std::vector<std::vector<std::string>> path_rows, miss_rows;
 };
 
 // Walks one path through a scene in every mode and writes its rows.
@@ -231,8 +245,9 @@ void walk(const Options& o, const rcx::embree::Tracer& tracer, PathKind kind, Ou
                            << r.diff.max_abs_error << "," << (cached ? fmt(r.stats.hit_rate(), 6) : "") << ","
                            << (t.variant.mode == CacheMode::cdct ? fmt(r.stats.texels_per_lookup(), 3) : "") << ","
                            << (cached ? std::to_string(r.stats.max_texels_read) : "") << ","
-                           << (cached ? fmt(r.stats.valid_fraction(), 6) : "") << "," << cube_bytes(r.stats) << "," << r.rays
-                           << "\n";
+                           << (cached ? fmt(r.stats.valid_fraction(), 6) : "") << "," << cube_bytes(r.stats) << "," << r.rays;
+            for (double share : miss_shares(r.stats)) out.frames_csv << "," << (cached ? fmt(share, 6) : "");
+            out.frames_csv << "\n";
             t.frames.push_back(r);
         }
         if ((f + 1) % 10 == 0 && f + 1 < o.frames)
@@ -254,10 +269,26 @@ void walk(const Options& o, const rcx::embree::Tracer& tracer, PathKind kind, Ou
                       << s.off_ms << "," << s.ms << "," << s.speedup << "," << s.median_ratio_speedup << ","
                       << (std::isnan(share) ? "" : fmt(share, 4)) << "," << s.psnr_mean << "," << s.psnr_min << ","
                       << s.identical_frames << "," << (cached ? fmt(s.hit_rate, 6) : "") << ","
-                      << (cdct ? fmt(s.texels_per_lookup, 3) : "") << "," << s.cube_bytes << "\n";
+                      << (cdct ? fmt(s.texels_per_lookup, 3) : "") << "," << s.cube_bytes;
+        for (double share : s.miss_shares) out.paths_csv << "," << (cached ? fmt(share, 6) : "");
+        out.paths_csv << "\n";
         out.path_rows.push_back({scene.name, path, t.variant.label, fmt(s.off_ms, 1), fmt(s.ms, 1), fmt(s.speedup) + "x",
                                  std::isnan(share) ? "-" : fmt(100.0 * share, 0) + "%", fmt(s.psnr_mean, 1), fmt(s.psnr_min, 1), or_dash(cached, fmt(100.0 * s.hit_rate, 1) + "%"),
                                  or_dash(cdct, fmt(s.texels_per_lookup, 1)), or_dash(cached, fmt(s.cube_bytes / mib, 1))});
+        if (!cached) continue;
+        // What the hit rate alone would give if lookups and stores cost nothing and a miss cost what an average
+        // leaving ray costs: the ceiling's time plus the missed share of what the ceiling saves.
+        std::vector<std::string> row{scene.name, path, t.variant.label, fmt(100.0 * s.hit_rate, 1) + "%"};
+        for (double share : s.miss_shares) row.push_back(fmt(100.0 * share, 1) + "%");
+        if (ceiling) {
+            const double free_ms = ceiling->ms + (1.0 - s.hit_rate) * (s.off_ms - ceiling->ms);
+            row.push_back(fmt(s.off_ms / free_ms) + "x");
+            row.push_back(fmt(s.ms - free_ms, 1));
+        } else {
+            row.push_back("-");
+            row.push_back("-");
+        }
+        out.miss_rows.push_back(row);
     }
 }
 
@@ -529,10 +560,12 @@ int main(int argc, char** argv) {
         out.report.dir = o.out;
         out.frames_csv = out.report.csv("walkthrough_frames.csv",
                                         "scene,path,frame,mode,ms,speedup,psnr,mean_abs_error,max_abs_error,hit_rate,"
-                                        "texels_per_lookup,max_texels,valid_fraction,cube_bytes,rays");
+                                        "texels_per_lookup,max_texels,valid_fraction,cube_bytes,rays,miss_empty,miss_fresh,"
+                                        "miss_doubtful,miss_origin,miss_search,miss_outside");
         out.paths_csv = out.report.csv("walkthrough_paths.csv",
                                        "scene,path,mode,frames,off_ms,ms,speedup,median_ratio_speedup,ceiling_share,"
-                                       "psnr_mean,psnr_min,identical_frames,hit_rate,texels_per_lookup,cube_bytes");
+                                       "psnr_mean,psnr_min,identical_frames,hit_rate,texels_per_lookup,cube_bytes,miss_empty,"
+                                       "miss_fresh,miss_doubtful,miss_origin,miss_search,miss_outside");
         for (const std::string& name : o.scenes) {
             progress("walkthrough: " + name + " (" + std::to_string(o.frames) + " frames x " + std::to_string(o.modes.size()) +
                      " modes per path)");
@@ -566,6 +599,18 @@ int main(int argc, char** argv) {
            << rcx::bench::markdown_table({"scene", "path", "mode", "off ms", "ms", "speed-up", "of ceiling's gain",
                                           "PSNR mean dB", "PSNR min dB", "hit rate", "texels/lookup", "cube MiB"},
                                          out.path_rows)
+           << "\n### Why lookups miss, and what they cost\n\n"
+           << "Over the same frames, each miss counted under what caused it, as a share of the lookups: *empty* (the "
+           << "texel held nothing: never stored, or dropped with a stale tile), *fresh* (stored this frame, visible from "
+           << "the next), *doubtful* (at a colour edge: the confidence test traces it), *origin* (CCT: the ray left too far "
+           << "from its tile's origins; the tile is dropped and refills), *search* (CDCT: no consistent crossing within "
+           << "the reads), *outside* (not answerable). *Free lookups* is the speed-up the hit rate alone would give if "
+           << "lookups and stores cost nothing and a missed ray cost what an average leaving ray costs (the ceiling's ms "
+           << "plus the missed share of what the ceiling saves); *ms beyond* is the mode's mean ms minus that time: what "
+           << "looking up, storing and ending frames cost, and what the missed rays cost above the average.\n\n"
+           << rcx::bench::markdown_table({"scene", "path", "mode", "hit rate", "empty", "fresh", "doubtful", "origin",
+                                          "search", "outside", "free lookups", "ms beyond"},
+                                         out.miss_rows)
            << "\n"
            << startup_md << "\n" << single_md << (warm_start_md.empty() ? "" : "\n") << warm_start_md;
         std::ofstream file(o.out + "/walkthrough.md");

@@ -8,6 +8,7 @@
 // --save-cache FILE keeps the warm cubes after the last frame; --load-cache FILE starts the next run with them.
 //
 // This file is only the command line; the tracer is tracer.hpp/.cpp.
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -41,6 +42,8 @@ struct FrameRecord {
     double hit_rate = -1.0;
     double kept = -1.0;        // dynamic scenes: fraction of the cached texels kept when objects moved
     double invalidate_ms = 0.0;
+    std::uint64_t lookups = 0;
+    std::array<std::uint64_t, raycache::miss_reason_count> misses_by{}; // by raycache::MissReason
 };
 
 raycache::embree::Invalidation invalidation_of(rcx::InvalidationPolicy p) {
@@ -196,6 +199,8 @@ int run(const rcx::Options& o) {
             // Ending the frame is part of a cached frame's cost.
             r.cached_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - end_start).count();
             r.hit_rate = s.hit_rate();
+            r.lookups = s.lookups;
+            r.misses_by = s.misses_by;
             filled = s.valid_fraction();
             cache_bytes = s.allocated_bytes + s.pyramid_bytes;
         }
@@ -260,6 +265,22 @@ int run(const rcx::Options& o) {
                 records.size() > 1 ? cached_warm / warm : cached_all / n);
     if (cache_bytes) std::printf(", cubes %.1f MiB", static_cast<double>(cache_bytes) / (1024.0 * 1024.0));
     std::printf("\n");
+    // Why the lookups of the frames after the first missed (all frames' when there is one): what to change.
+    std::uint64_t lookups = 0;
+    std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
+    for (std::size_t i = records.size() > 1 ? 1 : 0; i < records.size(); ++i) {
+        lookups += records[i].lookups;
+        for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += records[i].misses_by[k];
+    }
+    if (lookups) {
+        std::printf("summary misses, share of lookups:");
+        for (std::size_t k = 0; k < misses_by.size(); ++k)
+            std::printf("%s %s %.1f%%", k ? "," : "", raycache::to_string(static_cast<raycache::MissReason>(k)),
+                        100.0 * static_cast<double>(misses_by[k]) / static_cast<double>(lookups));
+        std::printf(" (empty: not stored or dropped; fresh: stored this frame; doubtful: a colour edge;"
+                    " origin: left too far from the tile's origins; search: no consistent CDCT crossing;"
+                    " outside: not answerable)\n");
+    }
     if (o.compare) {
         const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame;"
