@@ -143,7 +143,8 @@ public:
     // Every byte the cube holds now: its allocated tiles, its tile table and two bits a tile (settle_budget()),
     // counters. (The budget is charged the tiles and the table.)
     std::size_t bytes() const noexcept {
-        return sizeof(*this) + sizeof(State) + table_bytes() + state_->fresh.bytes() + state_->wanted.bytes() + allocated_bytes();
+        return sizeof(*this) + sizeof(State) + state_->counters.bytes() + table_bytes() + state_->fresh.bytes() +
+               state_->wanted.bytes() + allocated_bytes();
     }
     // Bytes of the tiles allocated so far (each bytes_per_tile()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * bytes_per_tile(); }

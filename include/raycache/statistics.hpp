@@ -8,6 +8,8 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <thread>
 
 namespace raycache {
 
@@ -63,45 +65,55 @@ inline const char* to_string(MissReason why) noexcept {
 
 namespace detail {
 
-// CounterCount counters spread over cache-line-sized slots. The first `owned_slots` threads that count
-// get a slot of their own and bump it with a plain load and store (no locked instruction on the lookup
-// path); later threads share one slot and bump it with fetch_add. Sums are exact; a snapshot taken
-// while other threads count is a moment's approximation.
+// CounterCount counters spread over cache-line-sized slots: one a hardware thread, one more (a renderer's
+// main thread beside its workers), and one shared. The first threads of the process that count get a
+// slot of their own and bump it with a plain load and store (no locked instruction on the lookup path);
+// later threads share the last slot and bump it with fetch_add. Sums are exact; a snapshot taken while
+// other threads count is a moment's approximation. The slots are sized to the machine, not to the most
+// threads any machine has, since a scene may hold a counter set per cube for a thousand cubes.
 template <std::size_t CounterCount>
 class StripedCounters {
 public:
+    StripedCounters() : owned_(owned_slot_count()), slots_(new Slot[owned_ + 1]) {}
+
     void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
-        const std::size_t slot = this_thread_slot();
+        const std::size_t slot = std::min(this_thread_index(), owned_);
         std::atomic<std::uint64_t>& value = slots_[slot].values[counter];
-        if (slot < owned_slots)
+        if (slot < owned_)
             value.store(value.load(std::memory_order_relaxed) + amount, std::memory_order_relaxed); // only writer
         else
             value.fetch_add(amount, std::memory_order_relaxed);
     }
     std::uint64_t sum(std::size_t counter) const noexcept {
         std::uint64_t total = 0;
-        for (const Slot& slot : slots_) total += slot.values[counter].load(std::memory_order_relaxed);
+        for (std::size_t i = 0; i <= owned_; ++i) total += slots_[i].values[counter].load(std::memory_order_relaxed);
         return total;
     }
     // Not concurrent with add().
     void reset() noexcept {
-        for (Slot& slot : slots_)
-            for (auto& value : slot.values) value.store(0, std::memory_order_relaxed);
+        for (std::size_t i = 0; i <= owned_; ++i)
+            for (auto& value : slots_[i].values) value.store(0, std::memory_order_relaxed);
     }
+    // Heap bytes of the slots.
+    std::size_t bytes() const noexcept { return (owned_ + 1) * sizeof(Slot); }
 
 private:
-    static constexpr std::size_t owned_slots = 32;
     struct alignas(64) Slot {
         std::array<std::atomic<std::uint64_t>, CounterCount> values{};
     };
-    // This thread's slot: its own for the first owned_slots threads of the process, else the shared one.
-    static std::size_t this_thread_slot() noexcept {
-        static std::atomic<std::size_t> next_thread{0};
-        thread_local const std::size_t slot =
-            std::min(next_thread.fetch_add(1, std::memory_order_relaxed), owned_slots);
-        return slot;
+    // Slots of their own: the hardware threads and one more (at most 256; 2 when the count is unknown).
+    static std::size_t owned_slot_count() noexcept {
+        static const std::size_t count = std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()) + 1, 256);
+        return count;
     }
-    std::array<Slot, owned_slots + 1> slots_{};
+    // This thread's number among the threads of the process that counted, from 0.
+    static std::size_t this_thread_index() noexcept {
+        static std::atomic<std::size_t> next_thread{0};
+        thread_local const std::size_t index = next_thread.fetch_add(1, std::memory_order_relaxed);
+        return index;
+    }
+    std::size_t owned_;
+    std::unique_ptr<Slot[]> slots_;
 };
 
 } // namespace detail
