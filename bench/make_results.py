@@ -139,7 +139,43 @@ def plot_walkthrough(results, out):
         fig.tight_layout()
         fig.savefig(os.path.join(out, f"walkthrough_{scene}.png"), dpi=100)
         plt.close(fig)
+        plot_walkthrough_misses(scene, [r for r in part if r.get("miss_empty")], out)
     return scenes
+
+
+MISS_REASONS = [("empty", "tab:red"), ("fresh", "tab:orange"), ("doubtful", "tab:purple"),
+                ("origin", "tab:brown"), ("search", "tab:gray"), ("outside", "black")]
+
+
+def plot_walkthrough_misses(scene, data, out):
+    """Per caching mode (rows) and path (columns), each frame's lookups stacked: hits, then misses by cause."""
+    if not data:
+        return
+    modes = list(dict.fromkeys(r["mode"] for r in data))
+    walks = list(dict.fromkeys(r["path"] for r in data))
+    fig, axes = plt.subplots(len(modes), len(walks), figsize=(3.2 * len(walks), 2.6 * len(modes)),
+                             sharex=True, sharey=True, squeeze=False)
+    for i, mode in enumerate(modes):
+        for j, walk in enumerate(walks):
+            ax = axes[i][j]
+            line = sorted((r for r in data if r["mode"] == mode and r["path"] == walk), key=lambda r: int(r["frame"]))
+            frames = [int(r["frame"]) for r in line]
+            layers = [[100 * float(r["hit_rate"]) for r in line]]
+            layers += [[100 * float(r["miss_" + name]) for r in line] for name, _ in MISS_REASONS]
+            ax.stackplot(frames, layers, colors=["tab:green"] + [c for _, c in MISS_REASONS],
+                         labels=["hit"] + [name for name, _ in MISS_REASONS], lw=0)
+            ax.set_title(f"{mode}, {walk}", fontsize=9)
+            ax.set_ylim(0, 100)
+            if j == 0:
+                ax.set_ylabel("lookups (%)")
+            if i == len(modes) - 1:
+                ax.set_xlabel("frame")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="center right")
+    fig.suptitle(f"{scene}: where the lookups went, frame by frame (frame 0 cold)", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 0.89, 1))
+    fig.savefig(os.path.join(out, f"walkthrough_{scene}_misses.png"), dpi=100)
+    plt.close(fig)
 
 
 def walkthrough_section(results, rel, scenes):
@@ -150,7 +186,13 @@ def walkthrough_section(results, rel, scenes):
     with open(path) as f:
         text = f.read()
     plots = "".join(f"![walkthrough {s}]({rel}/walkthrough_{s}.png)\n" for s in scenes) + "\n"
+    miss_plots = "".join(f"![where the lookups went, {s}]({rel}/walkthrough_{s}_misses.png)\n" for s in scenes
+                         if os.path.exists(os.path.join(results, f"walkthrough_{s}_misses.png")))
     head, sep, startup = text.partition("### Start-up")
+    paths, why_sep, why = head.partition("### Why lookups miss")
+    if why_sep:
+        head = paths.rstrip() + "\n\n" + plots + why_sep + why.rstrip() + "\n\n" + miss_plots
+        return [head.rstrip() + "\n\n" + sep + startup]
     return [head.rstrip() + "\n\n" + plots + sep + startup]
 
 
