@@ -15,6 +15,9 @@ using raycache::TracedRay;
 using raycache::embree::ObjectId;
 using raycache::embree::SceneCache;
 using raycache::embree::Technique;
+using raycache::embree::Invalidation;
+using raycache::embree::SceneChange;
+using raycache::BoundingSphere;
 
 namespace {
 
@@ -264,6 +267,40 @@ TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the nex
     CHECK(second.hits == 6144u);
     CHECK(second.resized_cubes == 0u);
     CHECK(caches.face_size({w.mirror}) == 32);
+}
+
+TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the statistics and the adaptive size still see its rays") {
+    // As the test above: 6144 rays, one through each texel centre of a 32 x 32 cube, call for N = 32. Here
+    // the ball moves between the frame and its begin_frame(), which empties (Invalidation::all) or replaces
+    // (the first move of PathRecords::from_first_move, under exact) the mirror's cube.
+    for (const Invalidation policy : {Invalidation::all, Invalidation::exact}) {
+        CAPTURE(static_cast<int>(policy));
+        World w;
+        SceneCache caches(Technique::cct);
+        caches.attach(w.scene, {w.mirror});
+        int traced = 0;
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < 32; ++row)
+                for (int column = 0; column < 32; ++column) {
+                    const glm::vec3 d = glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32));
+                    caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] {
+                        ++traced;
+                        return TracedRay{glm::vec3(0.5f), 1.0f};
+                    });
+                }
+        REQUIRE(traced == 6144);
+        SceneChange change;
+        change.moved.push_back({{w.ball}, BoundingSphere{{-3, 0, 0}, 1.0f}, BoundingSphere{{-3, 0.5f, 0}, 1.0f}, std::nullopt});
+        caches.scene_changed(change, policy);
+        CHECK(caches.statistics().lookups == 6144u); // still the frame's, before it ends
+        const auto frame = caches.begin_frame();
+        CHECK(frame.lookups == 6144u);
+        CHECK(frame.misses == 6144u);
+        CHECK(frame.misses_by[static_cast<std::size_t>(raycache::MissReason::empty)] == 6144u);
+        CHECK(frame.stores == 6144u);
+        CHECK(caches.face_size({w.mirror}) == 32);
+        CHECK(caches.begin_frame().lookups == 0u); // counted once
+    }
 }
 
 TEST_CASE("a cube attached with an explicit face size keeps it whatever the rays") {

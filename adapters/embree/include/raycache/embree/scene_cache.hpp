@@ -361,6 +361,9 @@ class SceneCache {
         std::unique_ptr<DirectionCoverage> coverage; // adaptive cubes only: directions of this frame's rays
         bool sized = false; // adaptive: sized once from counted rays (later moves need the hysteresis)
         std::unique_ptr<OriginReach> origins = std::make_unique<OriginReach>();
+        // The counters of cubes this entry's emptied or replaced since the last begin_frame() (scene_changed()
+        // may run between a frame and its begin_frame()): that frame's statistics and sizing still count them.
+        CubeStatistics carried{};
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -683,6 +686,8 @@ public:
         const std::function<void(std::size_t)> end_cube = [&](std::size_t i) {
             Entry& e = entries_[i];
             frames[i] = e.cct ? e.cct->begin_frame() : e.cdct->begin_frame(); // the CDCT's: pyramid too
+            add_counts(frames[i], e.carried);
+            e.carried = CubeStatistics{};
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
@@ -703,7 +708,7 @@ public:
     // The current frame's totals so far, without ending it.
     SceneCacheStatistics statistics() const {
         SceneCacheStatistics total;
-        for (const Entry& e : entries_) add(total, with_cube(e, [](const auto& cube) { return cube.statistics(); }));
+        for (const Entry& e : entries_) add(total, counts_of(e));
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.load(std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
@@ -716,7 +721,7 @@ public:
     std::optional<CubeStatistics> object_statistics(ObjectId id) const {
         const int index = find(id);
         if (index < 0) return std::nullopt;
-        return with_cube(entries_[static_cast<std::size_t>(index)], [](const auto& cube) { return cube.statistics(); });
+        return counts_of(entries_[static_cast<std::size_t>(index)]);
     }
 
     // f(ObjectId, const CubeBounds&, const CctCube*) for every attached object in attach order; the cube is
@@ -748,9 +753,9 @@ public:
         return entries_[static_cast<std::size_t>(index)].bounds;
     }
 
-    // Empties every cube (the objects keep their cubes).
+    // Empties every cube (the objects keep their cubes) and resets the counters.
     void clear() {
-        for (Entry& e : entries_) empty_cube(e);
+        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{};
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
@@ -808,6 +813,7 @@ private:
     // Empties an entry's cube (and rebuilds its pyramid); the texels it held. Holding nothing that a move
     // was checked for, it may answer rays from anywhere again.
     std::size_t empty_cube(Entry& e) {
+        carry_counts(e);
         e.origins->forget();
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         if (e.cct) e.cct->clear();
@@ -959,6 +965,7 @@ private:
 
     // Gives `e` a new, empty cube (and pyramid) of `face_size` drawing on the budget.
     void make_cube(Entry& e, int face_size) {
+        if (e.cct || e.cdct) carry_counts(e); // a cube replaced within a frame: its counts stay the frame's
         if (technique_ == Technique::cct) {
             e.cct = std::make_unique<CctCube>(face_size, budget_, path_records_);
         } else {
@@ -1002,7 +1009,7 @@ private:
             Entry& e = entries_[i];
             if (!e.coverage) continue;
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-            const std::uint64_t rays = with_cube(e, [](const auto& cube) { return cube.statistics().lookups; });
+            const std::uint64_t rays = with_cube(e, [](const auto& cube) { return cube.statistics().lookups; }) + e.carried.lookups;
             const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
@@ -1150,6 +1157,23 @@ private:
             path_records_ = path_records_ || with_cube(e, [](const auto& cube) { return cube.keeps_path_records(); });
         }
     }
+
+    // A cube's counters with those its entry carried over from cubes replaced this frame.
+    static CubeStatistics counts_of(const Entry& e) {
+        CubeStatistics s = with_cube(e, [](const auto& cube) { return cube.statistics(); });
+        add_counts(s, e.carried);
+        return s;
+    }
+    // Adds the counters (not the texel counts) of `from` to `to`.
+    static void add_counts(CubeStatistics& to, const CubeStatistics& from) {
+        to.lookups += from.lookups;
+        to.hits += from.hits;
+        to.misses += from.misses;
+        for (std::size_t k = 0; k < miss_reason_count; ++k) to.misses_by[k] += from.misses_by[k];
+        to.stores += from.stores;
+        to.refused_stores += from.refused_stores;
+    }
+    void carry_counts(Entry& e) { add_counts(e.carried, with_cube(e, [](const auto& cube) { return cube.statistics(); })); }
 
     static void add(SceneCacheStatistics& total, const CubeStatistics& s) {
         total.lookups += s.lookups;
