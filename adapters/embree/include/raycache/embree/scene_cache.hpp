@@ -631,9 +631,9 @@ public:
             const bool geometric = !changes.moved.empty() || changes.light_moved;
             if (geometric && !path_records_ && record_policy_ == PathRecords::from_first_move) {
                 // The first move: the cubes, stored without records, lost every texel to it; from now on their
-                // replacements keep records (anything left is counted as dropped for want of one). Their
-                // counts of this frame start over. Tiles with records are larger: adaptive cubes not sized by
-                // a frame yet start where a cold frame's tiles fit the budget again.
+                // replacements keep records (anything left is counted as dropped for want of one); this
+                // frame's counts carry over (make_cube). Tiles with records are larger: adaptive cubes not
+                // sized by a frame yet start where a cold frame's tiles fit the budget again.
                 path_records_ = true;
                 for (std::size_t i = 0; i < entries_.size(); ++i) {
                     Entry& e = entries_[i];
