@@ -517,21 +517,25 @@ TEST_CASE("the confidence test spread over bands on 4 threads marks exactly the 
 TEST_CASE("the counters add up exactly when more threads count than the machine has slots for") {
     // A slot a hardware thread, one more, and one shared by every later thread: this many threads (each
     // new to the process, so numbered after every thread that counted before) make most of them share.
+    // Three rounds of threads made and joined: a thread's number is given back when it ends, and two
+    // living threads must never share a slot of their own (counts would be lost; TSan would see a race).
     const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) + 6;
-    const int each = 20000;
+    const int each = 20000, rounds = 3;
     CctCube cube(8);
-    run_threads(threads, [&](int t) {
-        for (int k = 0; k < each; ++k) {
-            cube.record_hit();
-            cube.record_miss(static_cast<raycache::MissReason>(t % static_cast<int>(raycache::miss_reason_count)));
-        }
-    });
+    for (int round = 0; round < rounds; ++round)
+        run_threads(threads, [&](int t) {
+            for (int k = 0; k < each; ++k) {
+                cube.record_hit();
+                cube.record_miss(static_cast<raycache::MissReason>(t % static_cast<int>(raycache::miss_reason_count)));
+            }
+        });
     const CubeStatistics s = cube.statistics();
-    CHECK(s.hits == static_cast<std::uint64_t>(threads) * each);
-    CHECK(s.misses == static_cast<std::uint64_t>(threads) * each);
+    CHECK(s.hits == static_cast<std::uint64_t>(rounds) * threads * each);
+    CHECK(s.misses == static_cast<std::uint64_t>(rounds) * threads * each);
     for (std::size_t r = 0; r < raycache::miss_reason_count; ++r) {
         std::uint64_t expected = 0;
-        for (int t = 0; t < threads; ++t) expected += static_cast<std::size_t>(t) % raycache::miss_reason_count == r ? each : 0;
+        for (int t = 0; t < threads; ++t)
+            expected += static_cast<std::size_t>(t) % raycache::miss_reason_count == r ? static_cast<std::uint64_t>(rounds) * each : 0;
         CHECK(s.misses_by[r] == expected);
     }
 }

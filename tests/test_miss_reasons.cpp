@@ -66,6 +66,8 @@ TEST_CASE("a CCT lookup's miss is counted as empty, fresh, doubtful or outside b
 
     // why_missed names the same states without counting.
     CHECK(cube.why_missed(a) == MissReason::doubtful);
+    CHECK(cube.why_missed_at(*cube.texel_of(a)) == MissReason::doubtful);
+    CHECK(cube.why_missed_at(TexelAddress{6, 0, 0}) == MissReason::outside); // no such face
     CHECK(cube.why_missed(towards(0, 0, 0, n)) == MissReason::empty);
     CHECK(cube.why_missed(glm::vec3(0.0f)) == MissReason::outside);
     CHECK(cube.statistics().lookups == 0u);
@@ -117,4 +119,62 @@ TEST_CASE("a CDCT secant search's miss is counted by the texel whose read ended 
     p.max_reads = 8;
     CHECK_FALSE(secant_search(cube, bounds, origin, along_x, p).hit);
     check_misses(cube.begin_frame(), 0, Misses{0, 0, 1, 0, 0, 0});
+}
+
+TEST_CASE("a CDCT secant search whose second read finds nothing is counted by that texel") {
+    // From (0, 0.5, 0) along +X (bounds of half-size 1 at the origin, every texel at distance 5): the first
+    // read is at the box exit (1, 0.5, 0), the second where the ray reaches distance 5, (sqrt(24.75), 0.5,
+    // 0). On 8-texel faces those lie in rows 2 and 3 of +X. Leaving the second's texel empty makes the
+    // search read it and miss there.
+    const CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    const glm::vec3 origin(0.0f, 0.5f, 0.0f), along_x(1.0f, 0.0f, 0.0f);
+    const int n = 8;
+    CdctCube cube(n);
+    const TexelAddress first = *cube.texel_of(glm::vec3(1.0f, 0.5f, 0.0f));
+    const TexelAddress second = *cube.texel_of(glm::vec3(std::sqrt(24.75f), 0.5f, 0.0f));
+    REQUIRE(first.row != second.row);
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column) {
+                const TexelAddress t{face, column, row};
+                if (t.face == second.face && t.column == second.column && t.row == second.row) continue;
+                REQUIRE(cube.store_at(t, DepthSample{glm::vec3(0.25f), 5.0f}));
+            }
+    cube.begin_frame();
+    ReliefParameters p;
+    p.search = DepthSearch::secant;
+    const ReliefResult r = secant_search(cube, bounds, origin, along_x, p);
+    CHECK_FALSE(r.hit);
+    CHECK(r.texels_read == 2);
+    check_misses(cube.begin_frame(), 0, Misses{1, 0, 0, 0, 0, 0});
+}
+
+TEST_CASE("a CDCT relief walk's miss is counted by the texel whose read ended it, outside for bad input") {
+    // The thesis's walk (no pyramid) from the centre along +X reads first at the box exit, +X's centre.
+    const CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    const glm::vec3 origin(0.0f), along_x(1.0f, 0.0f, 0.0f);
+    ReliefParameters p;
+    p.search = DepthSearch::relief;
+    const int n = 8;
+    CdctCube cube(n);
+    CHECK_FALSE(relief_search(cube, bounds, origin, along_x, p).hit);          // no tile yet: empty
+    CHECK_FALSE(relief_search(cube, bounds, origin, glm::vec3(0.0f), p).hit);  // not a direction: outside
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column)
+                REQUIRE(cube.store_at(TexelAddress{face, column, row}, DepthSample{glm::vec3(0.25f), 5.0f}));
+    CHECK_FALSE(relief_search(cube, bounds, origin, along_x, p).hit);          // stored this frame: fresh
+    check_misses(cube.begin_frame(), 0, Misses{1, 1, 0, 0, 0, 1});
+
+    CHECK(relief_search(cube, bounds, origin, along_x, p).hit);
+    REQUIRE(cube.set_doubtful(*cube.texel_of(along_x)));
+    check_misses(cube.begin_frame(), 1, Misses{0, 0, 0, 0, 0, 0});
+    CHECK_FALSE(relief_search(cube, bounds, origin, along_x, p).hit);          // the box exit's texel: doubtful
+    check_misses(cube.begin_frame(), 0, Misses{0, 0, 1, 0, 0, 0});
+}
+
+TEST_CASE("a lookup of a texel off the cube counts as outside") {
+    CctCube cube(4);
+    CHECK(cube.why_missed_at(TexelAddress{0, 4, 0}) == MissReason::outside); // column 4 of a 4-texel face
+    CHECK(cube.why_missed_at(TexelAddress{0, 3, 0}) == MissReason::empty);
 }

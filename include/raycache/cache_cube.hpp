@@ -233,10 +233,14 @@ public:
     std::optional<Value> lookup_at(const TexelAddress& t) noexcept {
         const InFrame use = in_frame();
         RAYCACHE_ASSERT(contains(t));
-        const Tile* tile = contains(t) ? tile_of(t) : nullptr;
-        std::optional<Value> value = visible_value(tile, t);
+        if (!contains(t)) {
+            record_miss(MissReason::outside);
+            return std::nullopt;
+        }
+        MissReason why = MissReason::empty;
+        std::optional<Value> value = visible_value(tile_of(t), t, &why);
         if (value) record_hit();
-        else record_miss(why_invisible(tile, t));
+        else record_miss(why);
         return value;
     }
 
@@ -244,10 +248,15 @@ public:
     std::optional<Value> lookup_at(const TexelAddress& t, const glm::vec3& origin, const OriginTolerance& tolerance) noexcept {
         const InFrame use = in_frame();
         RAYCACHE_ASSERT(contains(t));
-        Tile* tile = contains(t) ? tile_of(t) : nullptr;
-        std::optional<Value> value = visible_value(tile, t);
+        if (!contains(t)) {
+            record_miss(MissReason::outside);
+            return std::nullopt;
+        }
+        Tile* tile = tile_of(t);
+        MissReason why = MissReason::empty;
+        std::optional<Value> value = visible_value(tile, t, &why);
         if (!value) {
-            record_miss(why_invisible(tile, t));
+            record_miss(why);
         } else if (!tile->origins_cover(origin, tile->allowed_drift(tolerance, tile->nearest))) {
             if (!tile->stale.load(std::memory_order_relaxed)) tile->stale.store(1u, std::memory_order_relaxed);
             value.reset();
@@ -267,29 +276,32 @@ public:
 
     // The value of `texel` as a lookup would see it (empty, or written this frame: std::nullopt), without
     // counting: for filters and searches that read texels by address. `texel` must lie on the cube (asserted).
-    std::optional<Value> peek_at(const TexelAddress& texel) const noexcept {
+    RAYCACHE_HOT_FN std::optional<Value> peek_at(const TexelAddress& texel) const noexcept {
         RAYCACHE_ASSERT(contains(texel));
         if (!contains(texel)) return std::nullopt;
         return visible_value(texel);
     }
 
     // Count one lookup made of peek() calls: a hit, or a miss and why (why_missed() names the state of a
-    // texel whose read found nothing).
+    // texel whose read found nothing). Thread-safe, wait-free.
     void record_hit() noexcept { state_->counters.add(hits); }
     void record_miss(MissReason why) noexcept { state_->counters.add(first_miss + static_cast<std::size_t>(why)); }
-    // record_hit() or record_miss(MissReason::search).
+    // record_hit(), or record_miss(MissReason::search): a miss with no cause given counts as a search's.
     void record_lookup(bool hit) noexcept {
         if (hit) record_hit();
         else record_miss(MissReason::search);
     }
 
-    // Why peek_at(texel) finds nothing: empty (no value, or no tile), fresh (stored this frame) or doubtful.
-    // For a texel whose peek finds a value, empty. Between frames or during one, as peek_at().
-    MissReason why_missed(const TexelAddress& texel) const noexcept {
-        RAYCACHE_ASSERT(contains(texel));
+    // Why peek_at(texel) finds nothing: empty (no value, or no tile), fresh (stored this frame) or doubtful;
+    // outside for a texel off the cube. For a texel whose peek finds a value, empty. Between frames or
+    // during one, as peek_at(). Out of line: misses only.
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((noinline, cold))
+#endif
+    MissReason why_missed_at(const TexelAddress& texel) const noexcept {
         return contains(texel) ? why_invisible(tile_of(texel), texel) : MissReason::outside;
     }
-    // The same for the texel of `direction`; outside when it is not a direction. Out of line: misses only.
+    // why_missed_at() for the texel of `direction`; outside when it is not a direction. Out of line: misses only.
 #if defined(__GNUC__) || defined(__clang__)
     __attribute__((noinline, cold))
 #endif
@@ -904,15 +916,15 @@ private:
         TileBitmap fresh, wanted;
         std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
         std::atomic<bool> written_this_frame{false}; // set by the frame's first store; read by lookups
+        // Per thread (their slots on the heap); new_values counts the texels stores gave a value since the
+        // counters were last reset (added to valid_texels then), so that no store writes a cube-wide atomic.
+        detail::StripedCounters<counter_count> counters;
         // Above: what lookups read. Below, on lines of their own: what threads write during a frame.
         alignas(64) std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<std::int64_t> valid_texels{0}; // up to the last begin_frame() and changes between frames
         std::atomic<std::size_t> doubtful_texels{0};
         std::atomic<int> users{0}; // threads inside in_frame() scopes (debug builds)
         std::atomic<std::size_t> dropped_tiles{0};
-        // Per thread; new_values counts the texels stores gave a value since the counters were last reset
-        // (added to valid_texels then), so that no store writes a cube-wide atomic.
-        detail::StripedCounters<counter_count> counters;
     };
 
     static int checked_face_size(int face_size) {
@@ -1161,28 +1173,28 @@ private:
     }
 
     std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
-    // Why visible_value(tile, t) is empty (empty also when it is not). Out of line: misses only.
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((noinline, cold))
-#endif
+    // Why visible_value(tile, t) is empty (empty also when it is not).
     MissReason why_invisible(const Tile* tile, const TexelAddress& t) const noexcept {
-        if (!tile) return MissReason::empty;
-        const int slot = slot_of(t);
-        if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return MissReason::empty;
-        if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return MissReason::fresh;
-        if (doubtful(*tile, slot)) return MissReason::doubtful;
-        return MissReason::empty;
+        MissReason why = MissReason::empty;
+        (void)visible_value(tile, t, &why);
+        return why;
     }
-    // The same, for `t`'s tile already loaded (null: none). On every lookup's path: inlined.
-    RAYCACHE_HOT_FN std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t) const noexcept {
-        if (!tile) return std::nullopt;
+    // The same, for `t`'s tile already loaded (null: none). On every lookup's path: inlined. With `why`, a
+    // miss also says its cause there: empty, fresh or doubtful.
+    RAYCACHE_HOT_FN std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t,
+                                                       MissReason* why = nullptr) const noexcept {
+        const auto miss = [why](MissReason cause) -> std::optional<Value> {
+            if (why) *why = cause;
+            return std::nullopt;
+        };
+        if (!tile) return miss(MissReason::empty);
         // Acquire pairs with the store's release: a word written this frame comes with its written bit,
         // and the cube's written_this_frame flag, set. The flag spares frames without stores the bit load.
         const int slot = slot_of(t);
         const Word word = tile->texels[slot].load(std::memory_order_acquire);
-        if (!Texel::is_valid(word)) return std::nullopt;
-        if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return std::nullopt;
-        if (doubtful(*tile, slot)) return std::nullopt;
+        if (!Texel::is_valid(word)) return miss(MissReason::empty);
+        if (state_->written_this_frame.load(std::memory_order_relaxed) && written(*tile, slot)) return miss(MissReason::fresh);
+        if (doubtful(*tile, slot)) return miss(MissReason::doubtful);
         return Texel::decode(word);
     }
 

@@ -56,12 +56,18 @@ namespace detail {
 inline bool is_usable(const CubeBounds& b) noexcept { return shared::raycache_box_is_usable(b.centre, b.half_size); }
 
 // Reads the texels a relief walk asks for (visible ones, through CacheCube::peek) until it ends or hands
-// the walk to its caller.
-inline shared::raycache_relief_walk read_relief_walk(const CdctCube& cube, shared::raycache_relief_walk w) noexcept {
+// the walk to its caller. A read that finds nothing ends the walk as a miss, its texel's state in `why`.
+inline shared::raycache_relief_walk read_relief_walk(const CdctCube& cube, shared::raycache_relief_walk w,
+                                                     MissReason& why) noexcept {
     while (w.status == RAYCACHE_RELIEF_READ) {
-        const std::optional<DepthSample> texel = cube.peek(shared::raycache_relief_point(w, w.t));
-        w = texel ? shared::raycache_relief_step(w, true, texel->distance, texel->color)
-                  : shared::raycache_relief_step(w, false, 0.0f, glm::vec3(0.0f));
+        const glm::vec3 point = shared::raycache_relief_point(w, w.t);
+        const std::optional<DepthSample> texel = cube.peek(point);
+        if (texel) {
+            w = shared::raycache_relief_step(w, true, texel->distance, texel->color);
+        } else {
+            w = shared::raycache_relief_step(w, false, 0.0f, glm::vec3(0.0f));
+            why = cube.why_missed(point);
+        }
     }
     return w;
 }
@@ -78,7 +84,8 @@ inline shared::raycache_relief_walk read_relief_walk(const CdctCube& cube, share
 // behind the surface, a bad origin, direction or box, and parameters no search can run with (step or
 // epsilon not > 0, max_steps above RAYCACHE_MAX_RELIEF_STEPS: no texel read). Reads at most
 // 1 + min(p.max_steps, RAYCACHE_MAX_RELIEF_STEPS) + 64 texels or pyramid nodes. Counts one lookup on the
-// cube (hit or miss); texels_read counts pyramid nodes too. Thread-safe as CacheCube::lookup.
+// cube: a miss under the state of the texel whose read ended it, outside for a point without a face or
+// nothing read, else search; texels_read counts pyramid nodes too. Thread-safe as CacheCube::lookup.
 inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                                   const glm::vec3& direction, const ReliefParameters& p,
                                   const DepthPyramid* pyramid = nullptr) noexcept {
@@ -87,10 +94,12 @@ inline ReliefResult relief_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
     shared::raycache_relief_walk w =
         shared::raycache_relief_start(origin, direction, bounds.centre, bounds.half_size, p, over_pyramid);
     RAYCACHE_ASSERT(w.status == RAYCACHE_RELIEF_MISS || !pyramid || over_pyramid);
-    w = detail::read_relief_walk(cube, w);
-    if (w.status == RAYCACHE_RELIEF_CALLER_WALK) w = detail::read_relief_walk(cube, detail::pyramid_walk(cube, *pyramid, w));
+    MissReason why = MissReason::search; // a miss on a read that found nothing: that texel's state
+    w = detail::read_relief_walk(cube, w, why);
+    if (w.status == RAYCACHE_RELIEF_CALLER_WALK) w = detail::read_relief_walk(cube, detail::pyramid_walk(cube, *pyramid, w, why), why);
     const ReliefResult result = shared::raycache_relief_walk_result(w);
-    cube.record_lookup(result.hit);
+    if (result.hit) cube.record_hit();
+    else cube.record_miss(w.reads == 0 ? MissReason::outside : why);
     return result;
 }
 
@@ -110,13 +119,13 @@ inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
                                                                      p.epsilon, p.max_gap, p.max_reads);
     MissReason why = MissReason::search; // a miss on a texel read that found nothing: that texel's state
     while (s.status == RAYCACHE_SECANT_READ) {
-        const glm::vec3 point = shared::raycache_secant_point(s, s.t);
-        const std::optional<DepthSample> texel = cube.peek(point);
+        const std::optional<TexelAddress> t = cube.texel_of(shared::raycache_secant_point(s, s.t));
+        const std::optional<DepthSample> texel = t ? cube.peek_at(*t) : std::nullopt;
         if (texel) {
             shared::raycache_secant_advance(s, true, texel->distance, texel->color);
         } else {
             shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
-            why = cube.why_missed(point);
+            why = t ? cube.why_missed_at(*t) : MissReason::outside;
         }
     }
     const ReliefResult result = shared::raycache_secant_result(s, origin);

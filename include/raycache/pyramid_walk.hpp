@@ -72,10 +72,10 @@ inline float block_exit(const shared::raycache_relief_walk& w, float t, const sh
 // point, look at the block around its texel at some level; when the whole block lies beyond the point, jump
 // to where the ray leaves the block or reaches the block's nearest distance and go up a level; otherwise go
 // down one. A crossing read at level 0 is bracketed (raycache_relief_bracket: the walk reads on from there);
-// an empty texel, a point without a face or w.max_steps nodes read without a crossing make a miss. Every
-// texel and node read counts in w.reads.
+// an empty texel, a point without a face or w.max_steps nodes read without a crossing make a miss (the
+// first two say why in `why`: the texel's state, or outside). Every texel and node read counts in w.reads.
 inline shared::raycache_relief_walk pyramid_walk(const CdctCube& cube, const DepthPyramid& pyramid,
-                                                 shared::raycache_relief_walk w) noexcept {
+                                                 shared::raycache_relief_walk w, MissReason& why) noexcept {
     auto miss = [&w] {
         w.status = RAYCACHE_RELIEF_MISS;
         return w;
@@ -87,12 +87,18 @@ inline shared::raycache_relief_walk pyramid_walk(const CdctCube& cube, const Dep
     for (int visits = 0; visits < w.max_steps; ++visits) {
         const glm::vec3 v = shared::raycache_relief_point(w, t);
         const shared::raycache_texel_address a = shared::raycache_texel_of(v, n);
-        if (a.face == RAYCACHE_NO_FACE) return miss();
+        if (a.face == RAYCACHE_NO_FACE) {
+            why = MissReason::outside;
+            return miss();
+        }
         ++w.reads;
         float nearest;
         if (level == 0) {
             const std::optional<DepthSample> texel = cube.peek(v);
-            if (!texel) return miss();
+            if (!texel) {
+                why = cube.why_missed(v);
+                return miss();
+            }
             if (shared::raycache_relief_crosses(w, t, texel->distance))
                 return shared::raycache_relief_bracket(w, safe, t, texel->distance, texel->color);
             nearest = texel->distance;

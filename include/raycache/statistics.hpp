@@ -2,14 +2,18 @@
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
+#include "raycache/shared/language.h"
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <mutex>
 #include <thread>
+#include <vector>
 
 namespace raycache {
 
@@ -21,8 +25,10 @@ enum class MissReason : std::uint8_t {
     fresh,     // the texel was stored this frame: stores are visible from the next frame on
     doubtful,  // the texel lies at a colour edge (the confidence test): traced rather than answered
     origin,    // CCT: the ray left from further than the allowed drift from its tile's origins (it refills)
-    search,    // CDCT: no consistent crossing within the read limit, or a gap behind an edge
-    outside,   // not a direction, or a ray from outside what the last exact invalidation checked
+    search,    // CDCT (secant or relief search): no consistent crossing within its reads, or a gap behind an
+               // edge; also a caller's record_lookup(false), which gives no cause
+    outside,   // not a direction, bad input (a texel off the cube, a box no search can use), or a ray from
+               // outside what the last exact invalidation checked
 };
 inline constexpr std::size_t miss_reason_count = 6;
 
@@ -44,7 +50,7 @@ struct CubeStatistics {
     double hit_rate() const noexcept {
         return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
     }
-    // The share of the lookups that missed for `why`, 0..1.
+    // The share of the lookups that missed for `why`, 0..1 (0 for every cause on GPU statistics).
     double miss_share(MissReason why) const noexcept {
         return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;
     }
@@ -66,17 +72,21 @@ inline const char* to_string(MissReason why) noexcept {
 namespace detail {
 
 // CounterCount counters spread over cache-line-sized slots: one a hardware thread, one more (a renderer's
-// main thread beside its workers), and one shared. The first threads of the process that count get a
-// slot of their own and bump it with a plain load and store (no locked instruction on the lookup path);
-// later threads share the last slot and bump it with fetch_add. Sums are exact; a snapshot taken while
-// other threads count is a moment's approximation. The slots are sized to the machine, not to the most
-// threads any machine has, since a scene may hold a counter set per cube for a thousand cubes.
+// main thread beside its workers), and one shared. A thread that counts takes the smallest number no
+// living counting thread holds and gives it back when it ends, so a pool, or threads made and joined
+// frame after frame, keep to the first numbers. Threads numbered below the slot count own a slot and bump
+// it with a plain load and store (no locked instruction on the lookup path); the rest (more threads alive
+// at once than the machine has) share the last slot and bump it with fetch_add. Sums are exact; a
+// snapshot taken while other threads count is a moment's approximation. Slots follow the machine, not
+// the most threads any machine has: a scene may hold a counter set per cube for a thousand cubes.
 template <std::size_t CounterCount>
 class StripedCounters {
 public:
     StripedCounters() : owned_(owned_slot_count()), slots_(new Slot[owned_ + 1]) {}
+    StripedCounters(const StripedCounters&) = delete;
+    StripedCounters& operator=(const StripedCounters&) = delete;
 
-    void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
+    RAYCACHE_HOT_FN void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
         const std::size_t slot = std::min(this_thread_index(), owned_);
         std::atomic<std::uint64_t>& value = slots_[slot].values[counter];
         if (slot < owned_)
@@ -106,11 +116,49 @@ private:
         static const std::size_t count = std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()) + 1, 256);
         return count;
     }
-    // This thread's number among the threads of the process that counted, from 0.
+    // The numbers living threads hold, and those given back. Never destroyed: threads may end after the
+    // process's statics are gone.
+    struct Numbers {
+        std::mutex lock;
+        std::vector<std::size_t> free;
+        std::size_t next = 0;
+    };
+    static Numbers& numbers() noexcept {
+        static Numbers* const n = new Numbers;
+        return *n;
+    }
+    // A thread's number, held while it lives (the shared slot's if the numbers cannot be kept).
+    struct Ticket {
+        std::size_t index = std::numeric_limits<std::size_t>::max();
+        Ticket() noexcept {
+            try {
+                Numbers& n = numbers();
+                const std::lock_guard<std::mutex> hold(n.lock);
+                if (n.free.empty()) {
+                    index = n.next++;
+                } else {
+                    const auto smallest = std::min_element(n.free.begin(), n.free.end());
+                    index = *smallest;
+                    n.free.erase(smallest);
+                }
+            } catch (...) {
+            }
+        }
+        ~Ticket() {
+            if (index == std::numeric_limits<std::size_t>::max()) return;
+            try {
+                Numbers& n = numbers();
+                const std::lock_guard<std::mutex> hold(n.lock);
+                n.free.push_back(index);
+            } catch (...) {
+            }
+        }
+        Ticket(const Ticket&) = delete;
+        Ticket& operator=(const Ticket&) = delete;
+    };
     static std::size_t this_thread_index() noexcept {
-        static std::atomic<std::size_t> next_thread{0};
-        thread_local const std::size_t index = next_thread.fetch_add(1, std::memory_order_relaxed);
-        return index;
+        thread_local const Ticket ticket;
+        return ticket.index;
     }
     std::size_t owned_;
     std::unique_ptr<Slot[]> slots_;
