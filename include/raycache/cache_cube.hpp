@@ -143,8 +143,7 @@ public:
     // Every byte the cube holds now: its allocated tiles, its tile table and two bits a tile (settle_budget()),
     // counters. (The budget is charged the tiles and the table.)
     std::size_t bytes() const noexcept {
-        return sizeof(*this) + sizeof(State) + state_->counters.bytes() + table_bytes() + state_->fresh.bytes() +
-               state_->wanted.bytes() + allocated_bytes();
+        return sizeof(*this) + sizeof(State) + table_bytes() + state_->fresh.bytes() + state_->wanted.bytes() + allocated_bytes();
     }
     // Bytes of the tiles allocated so far (each bytes_per_tile()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * bytes_per_tile(); }
@@ -269,9 +268,14 @@ public:
 
     // lookup() without counting, for searches that read many texels per ray (count them with record_hit() and
     // record_miss()).
-    RAYCACHE_HOT_FN std::optional<Value> peek(const glm::vec3& direction) const noexcept {
+    // With `why`, a miss also says its cause there (why_missed()'s answer, without finding the texel again).
+    RAYCACHE_HOT_FN std::optional<Value> peek(const glm::vec3& direction, MissReason* why = nullptr) const noexcept {
         const std::optional<TexelAddress> t = texel_of(direction);
-        return t ? visible_value(*t) : std::nullopt;
+        if (!t) {
+            if (why) *why = MissReason::outside;
+            return std::nullopt;
+        }
+        return visible_value(tile_of(*t), *t, why);
     }
 
     // The value of `texel` as a lookup would see it (empty, or written this frame: std::nullopt), without
@@ -916,15 +920,15 @@ private:
         TileBitmap fresh, wanted;
         std::uint64_t refusals_seen = 0; // the budget's refusals() at the last settle_budget()
         std::atomic<bool> written_this_frame{false}; // set by the frame's first store; read by lookups
-        // Per thread (their slots on the heap); new_values counts the texels stores gave a value since the
-        // counters were last reset (added to valid_texels then), so that no store writes a cube-wide atomic.
-        detail::StripedCounters<counter_count> counters;
         // Above: what lookups read. Below, on lines of their own: what threads write during a frame.
         alignas(64) std::atomic<std::size_t> allocated_tiles{0};
         std::atomic<std::int64_t> valid_texels{0}; // up to the last begin_frame() and changes between frames
         std::atomic<std::size_t> doubtful_texels{0};
         std::atomic<int> users{0}; // threads inside in_frame() scopes (debug builds)
         std::atomic<std::size_t> dropped_tiles{0};
+        // Per thread, each slot on lines of its own; new_values counts the texels stores gave a value since the
+        // counters were last reset (added to valid_texels then), so that no store writes a cube-wide atomic.
+        detail::StripedCounters<counter_count> counters;
     };
 
     static int checked_face_size(int face_size) {
@@ -1172,7 +1176,7 @@ private:
         }
     }
 
-    std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
+    RAYCACHE_HOT_FN std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
     // Why visible_value(tile, t) is empty (empty also when it is not).
     MissReason why_invisible(const Tile* tile, const TexelAddress& t) const noexcept {
         MissReason why = MissReason::empty;

@@ -60,14 +60,9 @@ inline bool is_usable(const CubeBounds& b) noexcept { return shared::raycache_bo
 inline shared::raycache_relief_walk read_relief_walk(const CdctCube& cube, shared::raycache_relief_walk w,
                                                      MissReason& why) noexcept {
     while (w.status == RAYCACHE_RELIEF_READ) {
-        const glm::vec3 point = shared::raycache_relief_point(w, w.t);
-        const std::optional<DepthSample> texel = cube.peek(point);
-        if (texel) {
-            w = shared::raycache_relief_step(w, true, texel->distance, texel->color);
-        } else {
-            w = shared::raycache_relief_step(w, false, 0.0f, glm::vec3(0.0f));
-            why = cube.why_missed(point);
-        }
+        const std::optional<DepthSample> texel = cube.peek(shared::raycache_relief_point(w, w.t), &why);
+        w = texel ? shared::raycache_relief_step(w, true, texel->distance, texel->color)
+                  : shared::raycache_relief_step(w, false, 0.0f, glm::vec3(0.0f));
     }
     return w;
 }
@@ -117,16 +112,12 @@ inline ReliefResult secant_search(CacheCube<CdctTexel>& cube, const CubeBounds& 
     const auto use = cube.in_frame();
     shared::raycache_secant_search s = shared::raycache_secant_start(origin, direction, bounds.centre, bounds.half_size,
                                                                      p.epsilon, p.max_gap, p.max_reads);
-    MissReason why = MissReason::search; // a miss on a texel read that found nothing: that texel's state
+    // A read that finds nothing ends the search: the cause is that texel's (peek sets it only then).
+    MissReason why = MissReason::search;
     while (s.status == RAYCACHE_SECANT_READ) {
-        const std::optional<TexelAddress> t = cube.texel_of(shared::raycache_secant_point(s, s.t));
-        const std::optional<DepthSample> texel = t ? cube.peek_at(*t) : std::nullopt;
-        if (texel) {
-            shared::raycache_secant_advance(s, true, texel->distance, texel->color);
-        } else {
-            shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
-            why = t ? cube.why_missed_at(*t) : MissReason::outside;
-        }
+        const std::optional<DepthSample> texel = cube.peek(shared::raycache_secant_point(s, s.t), &why);
+        if (texel) shared::raycache_secant_advance(s, true, texel->distance, texel->color);
+        else shared::raycache_secant_advance(s, false, 0.0f, glm::vec3(0.0f));
     }
     const ReliefResult result = shared::raycache_secant_result(s, origin);
     if (result.hit) cube.record_hit();

@@ -94,11 +94,8 @@ inline shared::raycache_relief_walk pyramid_walk(const CdctCube& cube, const Dep
         ++w.reads;
         float nearest;
         if (level == 0) {
-            const std::optional<DepthSample> texel = cube.peek(v);
-            if (!texel) {
-                why = cube.why_missed(v);
-                return miss();
-            }
+            const std::optional<DepthSample> texel = cube.peek(v, &why);
+            if (!texel) return miss();
             if (shared::raycache_relief_crosses(w, t, texel->distance))
                 return shared::raycache_relief_bracket(w, safe, t, texel->distance, texel->color);
             nearest = texel->distance;

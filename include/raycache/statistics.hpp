@@ -10,9 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <mutex>
-#include <thread>
 #include <vector>
 
 namespace raycache {
@@ -71,51 +69,46 @@ inline const char* to_string(MissReason why) noexcept {
 
 namespace detail {
 
-// CounterCount counters spread over cache-line-sized slots: one a hardware thread, one more (a renderer's
-// main thread beside its workers), and one shared. A thread that counts takes the smallest number no
-// living counting thread holds and gives it back when it ends, so a pool, or threads made and joined
-// frame after frame, keep to the first numbers. Threads numbered below the slot count own a slot and bump
-// it with a plain load and store (no locked instruction on the lookup path); the rest (more threads alive
-// at once than the machine has) share the last slot and bump it with fetch_add. Sums are exact; a
-// snapshot taken while other threads count is a moment's approximation. Slots follow the machine, not
-// the most threads any machine has: a scene may hold a counter set per cube for a thousand cubes.
+// CounterCount counters spread over cache-line-sized slots, owned_slots of them owned and one shared. A
+// thread that counts takes the smallest number no living counting thread holds and gives it back when it
+// ends, so a pool, or threads made and joined frame after frame, keep to the first numbers. Threads
+// numbered below owned_slots own a slot and bump it with a plain load and store (no locked instruction on
+// the lookup path); the rest (more counting threads alive at once) share the last slot and bump it with
+// fetch_add. Sums are exact; a snapshot taken while other threads count is a moment's approximation. The
+// slots sit inside the counters (no pointer to follow on every count): 17 x 128 bytes for a cube's ten
+// counters, which a scene holds once per cube.
 template <std::size_t CounterCount>
 class StripedCounters {
 public:
-    StripedCounters() : owned_(owned_slot_count()), slots_(new Slot[owned_ + 1]) {}
+    StripedCounters() = default;
     StripedCounters(const StripedCounters&) = delete;
     StripedCounters& operator=(const StripedCounters&) = delete;
 
     RAYCACHE_HOT_FN void add(std::size_t counter, std::uint64_t amount = 1) noexcept {
-        const std::size_t slot = std::min(this_thread_index(), owned_);
+        const std::size_t slot = std::min(this_thread_index(), owned_slots);
         std::atomic<std::uint64_t>& value = slots_[slot].values[counter];
-        if (slot < owned_)
+        if (slot < owned_slots)
             value.store(value.load(std::memory_order_relaxed) + amount, std::memory_order_relaxed); // only writer
         else
             value.fetch_add(amount, std::memory_order_relaxed);
     }
     std::uint64_t sum(std::size_t counter) const noexcept {
         std::uint64_t total = 0;
-        for (std::size_t i = 0; i <= owned_; ++i) total += slots_[i].values[counter].load(std::memory_order_relaxed);
+        for (const Slot& slot : slots_) total += slot.values[counter].load(std::memory_order_relaxed);
         return total;
     }
     // Not concurrent with add().
     void reset() noexcept {
-        for (std::size_t i = 0; i <= owned_; ++i)
-            for (auto& value : slots_[i].values) value.store(0, std::memory_order_relaxed);
+        for (Slot& slot : slots_)
+            for (auto& value : slot.values) value.store(0, std::memory_order_relaxed);
     }
-    // Heap bytes of the slots.
-    std::size_t bytes() const noexcept { return (owned_ + 1) * sizeof(Slot); }
+    // Threads with a slot of their own at once.
+    static constexpr std::size_t owned_slots = 16;
 
 private:
     struct alignas(64) Slot {
         std::array<std::atomic<std::uint64_t>, CounterCount> values{};
     };
-    // Slots of their own: the hardware threads and one more (at most 256; 2 when the count is unknown).
-    static std::size_t owned_slot_count() noexcept {
-        static const std::size_t count = std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()) + 1, 256);
-        return count;
-    }
     // The numbers living threads hold, and those given back. Never destroyed: threads may end after the
     // process's statics are gone.
     struct Numbers {
@@ -156,12 +149,19 @@ private:
         Ticket(const Ticket&) = delete;
         Ticket& operator=(const Ticket&) = delete;
     };
+    // A constant-initialized thread_local on the counting path (no guard to test); the ticket, whose
+    // destructor gives the number back, is made on a thread's first count only.
     static std::size_t this_thread_index() noexcept {
+        thread_local std::size_t index = unnumbered;
+        if (index == unnumbered) index = take_number();
+        return index;
+    }
+    static constexpr std::size_t unnumbered = std::numeric_limits<std::size_t>::max() - 1;
+    static std::size_t take_number() noexcept {
         thread_local const Ticket ticket;
         return ticket.index;
     }
-    std::size_t owned_;
-    std::unique_ptr<Slot[]> slots_;
+    std::array<Slot, owned_slots + 1> slots_{};
 };
 
 } // namespace detail
