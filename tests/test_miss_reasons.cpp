@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <raycache/raycache.hpp>
 
@@ -32,6 +33,22 @@ void check_misses(const CubeStatistics& s, std::uint64_t hits, const Misses& m) 
 
 // The centre direction of texel (face, column, row) of an n-texel face.
 glm::vec3 towards(int face, int column, int row, int n) { return texel_direction(TexelAddress{face, column, row}, n); }
+
+// The CDCT cases: a cube of bounds of half-size 1 at the origin, rays along +X.
+const CubeBounds unit_bounds{glm::vec3(0.0f), 1.0f};
+const glm::vec3 along_x(1.0f, 0.0f, 0.0f);
+
+// Stores a surface at `distance` from the centre into every texel of `cube` but `skip` (this frame's).
+void store_everywhere(CdctCube& cube, float distance, std::optional<TexelAddress> skip = std::nullopt) {
+    const int n = cube.face_size();
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column) {
+                const TexelAddress t{face, column, row};
+                if (skip && t.face == skip->face && t.column == skip->column && t.row == skip->row) continue;
+                REQUIRE(cube.store_at(t, DepthSample{glm::vec3(0.25f), distance}));
+            }
+}
 
 } // namespace
 
@@ -92,18 +109,14 @@ TEST_CASE("a CDCT secant search's miss is counted by the texel whose read ended 
     // Bounds of half-size 1 at the origin; a ray from the centre along +X reads first at the box exit
     // (1, 0, 0), the texel of +X's centre. Every texel at distance 5: f = 1 - 5 < 0 there, so the search
     // needs a second read (at distance 5, on the surface) to hit.
-    const CubeBounds bounds{glm::vec3(0.0f), 1.0f};
-    const glm::vec3 origin(0.0f), along_x(1.0f, 0.0f, 0.0f);
+    const CubeBounds& bounds = unit_bounds;
+    const glm::vec3 origin(0.0f);
     ReliefParameters p;
     p.search = DepthSearch::secant;
-    const int n = 8;
-    CdctCube cube(n);
+    CdctCube cube(8);
 
     CHECK_FALSE(secant_search(cube, bounds, origin, along_x, p).hit); // no tile yet
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < n; ++row)
-            for (int column = 0; column < n; ++column)
-                REQUIRE(cube.store_at(TexelAddress{face, column, row}, DepthSample{glm::vec3(0.25f), 5.0f}));
+    store_everywhere(cube, 5.0f);
     CHECK_FALSE(secant_search(cube, bounds, origin, along_x, p).hit); // stored this frame
     CHECK_FALSE(secant_search(cube, bounds, origin, glm::vec3(0.0f), p).hit); // not a direction: no read
     check_misses(cube.begin_frame(), 0, Misses{1, 1, 0, 0, 0, 1});
@@ -126,24 +139,16 @@ TEST_CASE("a CDCT secant search whose second read finds nothing is counted by th
     // read is at the box exit (1, 0.5, 0), the second where the ray reaches distance 5, (sqrt(24.75), 0.5,
     // 0). On 8-texel faces those lie in rows 2 and 3 of +X. Leaving the second's texel empty makes the
     // search read it and miss there.
-    const CubeBounds bounds{glm::vec3(0.0f), 1.0f};
-    const glm::vec3 origin(0.0f, 0.5f, 0.0f), along_x(1.0f, 0.0f, 0.0f);
-    const int n = 8;
-    CdctCube cube(n);
+    const glm::vec3 origin(0.0f, 0.5f, 0.0f);
+    CdctCube cube(8);
     const TexelAddress first = *cube.texel_of(glm::vec3(1.0f, 0.5f, 0.0f));
     const TexelAddress second = *cube.texel_of(glm::vec3(std::sqrt(24.75f), 0.5f, 0.0f));
     REQUIRE(first.row != second.row);
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < n; ++row)
-            for (int column = 0; column < n; ++column) {
-                const TexelAddress t{face, column, row};
-                if (t.face == second.face && t.column == second.column && t.row == second.row) continue;
-                REQUIRE(cube.store_at(t, DepthSample{glm::vec3(0.25f), 5.0f}));
-            }
+    store_everywhere(cube, 5.0f, second);
     cube.begin_frame();
     ReliefParameters p;
     p.search = DepthSearch::secant;
-    const ReliefResult r = secant_search(cube, bounds, origin, along_x, p);
+    const ReliefResult r = secant_search(cube, unit_bounds, origin, along_x, p);
     CHECK_FALSE(r.hit);
     CHECK(r.texels_read == 2);
     check_misses(cube.begin_frame(), 0, Misses{1, 0, 0, 0, 0, 0});
@@ -151,18 +156,14 @@ TEST_CASE("a CDCT secant search whose second read finds nothing is counted by th
 
 TEST_CASE("a CDCT relief walk's miss is counted by the texel whose read ended it, outside for bad input") {
     // The thesis's walk (no pyramid) from the centre along +X reads first at the box exit, +X's centre.
-    const CubeBounds bounds{glm::vec3(0.0f), 1.0f};
-    const glm::vec3 origin(0.0f), along_x(1.0f, 0.0f, 0.0f);
+    const CubeBounds& bounds = unit_bounds;
+    const glm::vec3 origin(0.0f);
     ReliefParameters p;
     p.search = DepthSearch::relief;
-    const int n = 8;
-    CdctCube cube(n);
+    CdctCube cube(8);
     CHECK_FALSE(relief_search(cube, bounds, origin, along_x, p).hit);          // no tile yet: empty
     CHECK_FALSE(relief_search(cube, bounds, origin, glm::vec3(0.0f), p).hit);  // not a direction: outside
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < n; ++row)
-            for (int column = 0; column < n; ++column)
-                REQUIRE(cube.store_at(TexelAddress{face, column, row}, DepthSample{glm::vec3(0.25f), 5.0f}));
+    store_everywhere(cube, 5.0f);
     CHECK_FALSE(relief_search(cube, bounds, origin, along_x, p).hit);          // stored this frame: fresh
     check_misses(cube.begin_frame(), 0, Misses{1, 1, 0, 0, 0, 1});
 

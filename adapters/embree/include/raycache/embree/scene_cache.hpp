@@ -1164,23 +1164,20 @@ private:
         add_counts(s, e.carried);
         return s;
     }
-    // Adds the counters (not the texel counts) of `from` to `to`.
-    static void add_counts(CubeStatistics& to, const CubeStatistics& from) {
+    // Adds the counters (not the texel counts) of `from` to `to`, a CubeStatistics or SceneCacheStatistics.
+    template <class Totals>
+    static void add_counts(Totals& to, const CubeStatistics& from) {
         to.lookups += from.lookups;
         to.hits += from.hits;
         to.misses += from.misses;
         for (std::size_t k = 0; k < miss_reason_count; ++k) to.misses_by[k] += from.misses_by[k];
         to.stores += from.stores;
-        to.refused_stores += from.refused_stores;
+        if constexpr (std::is_same_v<Totals, CubeStatistics>) to.refused_stores += from.refused_stores;
     }
     void carry_counts(Entry& e) { add_counts(e.carried, with_cube(e, [](const auto& cube) { return cube.statistics(); })); }
 
     static void add(SceneCacheStatistics& total, const CubeStatistics& s) {
-        total.lookups += s.lookups;
-        total.hits += s.hits;
-        total.misses += s.misses;
-        for (std::size_t k = 0; k < miss_reason_count; ++k) total.misses_by[k] += s.misses_by[k];
-        total.stores += s.stores;
+        add_counts(total, s);
         total.valid_texels += s.valid_texels;
         total.texel_count += s.texel_count;
     }
