@@ -291,7 +291,9 @@ TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the st
         REQUIRE(traced == 6144);
         SceneChange change;
         change.moved.push_back({{w.ball}, BoundingSphere{{-3, 0, 0}, 1.0f}, BoundingSphere{{-3, 0.5f, 0}, 1.0f}, std::nullopt});
+        CHECK_FALSE(caches.keeps_path_records()); // PathRecords::from_first_move, before the first move
         caches.scene_changed(change, policy);
+        CHECK(caches.keeps_path_records() == (policy == Invalidation::exact)); // the switch comes with exact
         CHECK(caches.statistics().lookups == 6144u); // still the frame's, before it ends
         const auto frame = caches.begin_frame();
         CHECK(frame.lookups == 6144u);

@@ -107,6 +107,8 @@ struct Shader {
     // ray's depth: deeper rays are bounces after its first hit.
     raycache::PathRecord* record = nullptr;
     int record_depth = 0;
+    // Whether the caches keep path records this frame (read once, between frames, by the frame's setup).
+    bool records_kept = true;
 
     // The first hit along the ray, shaded; hits on geometry `pass_through` are skipped (pre-filling a
     // cube traces from inside its own object).
@@ -183,6 +185,8 @@ struct Shader {
         case CacheMode::ceiling: return t.scene.environment; // any constant: the cost of no tracing at all
         case CacheMode::cct:
         case CacheMode::cdct:
+            // Cubes that keep no path records (a scene that has not moved yet) need none built.
+            if (!records_kept) return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, trace_leaving);
             // The recording form: the cache learns what the traced path saw (for exact invalidation).
             return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, [&](raycache::PathRecord& path) {
                 raycache::PathRecord* const outer = record;
@@ -440,11 +444,13 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     const int tiles_y = (settings.height + tile_size - 1) / tile_size;
     std::vector<FrameStats> tile_stats(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
 
+    const bool records_kept = settings.caches && settings.caches->keeps_path_records();
     // One pass over the pixels whose x and y are multiples of `stride` (1: every pixel), tile by tile.
     auto pass = [&](int stride) {
         return [&, stride](const tbb::blocked_range<int>& range) {
             for (int tile = range.begin(); tile != range.end(); ++tile) {
                 Shader shader{*impl_, settings.mode, settings.caches};
+                shader.records_kept = records_kept;
                 const int x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
                 const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
                 for (int y = y0; y < y1; ++y) {

@@ -717,6 +717,11 @@ public:
         return total;
     }
 
+    // Whether the cubes keep what their stores' paths saw, now (SceneCacheSettings::path_records; under
+    // PathRecords::from_first_move, from the first move on). While they do not, leaving_ray's plain callback
+    // does what the recording one does, without the records nobody keeps. Between frames.
+    bool keeps_path_records() const noexcept { return path_records_; }
+
     // One object's cube counters; std::nullopt when it has none.
     std::optional<CubeStatistics> object_statistics(ObjectId id) const {
         const int index = find(id);
