@@ -179,3 +179,14 @@ TEST_CASE("a lookup of a texel off the cube counts as outside") {
     CHECK(cube.why_missed_at(TexelAddress{0, 4, 0}) == MissReason::outside); // column 4 of a 4-texel face
     CHECK(cube.why_missed_at(TexelAddress{0, 3, 0}) == MissReason::empty);
 }
+
+TEST_CASE("filtered_cached_trace counts its miss by the direction's own texel") {
+    CctCube cube(4);
+    const glm::vec3 d = towards(2, 1, 1, 4);
+    auto trace = [] { return glm::vec3(0.5f); };
+    (void)filtered_cached_trace(cube, d, trace); // no tile yet: empty, then stored
+    (void)filtered_cached_trace(cube, d, trace); // stored this frame: fresh
+    check_misses(cube.begin_frame(), 0, Misses{1, 1, 0, 0, 0, 0});
+    (void)filtered_cached_trace(cube, d, trace);
+    check_misses(cube.begin_frame(), 1, Misses{});
+}

@@ -303,7 +303,10 @@ public:
     __attribute__((noinline, cold))
 #endif
     MissReason why_missed_at(const TexelAddress& texel) const noexcept {
-        return contains(texel) ? why_invisible(tile_of(texel), texel) : MissReason::outside;
+        if (!contains(texel)) return MissReason::outside;
+        MissReason why = MissReason::empty;
+        (void)visible_value(tile_of(texel), texel, &why);
+        return why;
     }
     // why_missed_at() for the texel of `direction`; outside when it is not a direction. Out of line: misses only.
 #if defined(__GNUC__) || defined(__clang__)
@@ -311,7 +314,7 @@ public:
 #endif
     MissReason why_missed(const glm::vec3& direction) const noexcept {
         const std::optional<TexelAddress> t = texel_of(direction);
-        return t ? why_invisible(tile_of(*t), *t) : MissReason::outside;
+        return t ? why_missed_at(*t) : MissReason::outside;
     }
 
     // Caches `value` in the texel of `direction`; returns whether it was written. Refused (false) when
@@ -1177,12 +1180,6 @@ private:
     }
 
     RAYCACHE_HOT_FN std::optional<Value> visible_value(const TexelAddress& t) const noexcept { return visible_value(tile_of(t), t); }
-    // Why visible_value(tile, t) is empty (empty also when it is not).
-    MissReason why_invisible(const Tile* tile, const TexelAddress& t) const noexcept {
-        MissReason why = MissReason::empty;
-        (void)visible_value(tile, t, &why);
-        return why;
-    }
     // The same, for `t`'s tile already loaded (null: none). On every lookup's path: inlined. With `why`, a
     // miss also says its cause there: empty, fresh or doubtful.
     RAYCACHE_HOT_FN std::optional<Value> visible_value(const Tile* tile, const TexelAddress& t,

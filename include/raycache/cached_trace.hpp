@@ -49,12 +49,12 @@ glm::vec3 filtered_cached_trace(CctCube& cube, const glm::vec3& direction, Trace
     static_assert(std::is_invocable_r_v<glm::vec3, Trace&>,
                   "RayCache filtered_cached_trace: trace must be callable as `glm::vec3 trace()`");
     const auto use = cube.in_frame();
-    const bool hit = cube.peek(direction).has_value();
-    if (hit) {
+    MissReason why = MissReason::empty;
+    if (cube.peek(direction, &why)) {
         cube.record_hit();
         return detail::filtered_answer(cube, direction);
     }
-    cube.record_miss(cube.why_missed(direction));
+    cube.record_miss(why);
     glm::vec3 traced = std::forward<Trace>(trace)();
     cube.store(direction, traced);
     return traced;

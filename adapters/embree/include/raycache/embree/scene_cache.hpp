@@ -117,7 +117,6 @@ enum class Technique { cct, cdct };
 // The face size to pass to attach() for a cube whose face size follows its object's rays (the default).
 inline constexpr int adaptive_face_size = 0;
 
-// Everything a SceneCache can be tuned by; the defaults need no tuning.
 // Whether a SceneCache's cubes keep what their stores' paths saw (leaving_ray's recording form, a record
 // per 4 x 4 block of texels), which exact invalidation (scene_changed) needs to keep the texels a move
 // cannot have changed. A static scene never reads them; without them a tile takes 44% (CCT) or 31% (CDCT)
@@ -131,6 +130,7 @@ enum class PathRecords {
     never,  // exact invalidation then empties every texel at any move, as for stores without a record
 };
 
+// Everything a SceneCache can be tuned by; the defaults need no tuning.
 struct SceneCacheSettings {
     ReliefParameters relief{};          // the CDCT's search (relief.search: secant, the default, or relief)
     bool depth_pyramid = true;          // CDCT relief search: over a min-depth pyramid (false: the thesis's walk)
@@ -1014,7 +1014,7 @@ private:
             Entry& e = entries_[i];
             if (!e.coverage) continue;
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-            const std::uint64_t rays = with_cube(e, [](const auto& cube) { return cube.statistics().lookups; }) + e.carried.lookups;
+            const std::uint64_t rays = counts_of(e).lookups;
             const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
