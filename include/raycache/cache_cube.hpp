@@ -1304,8 +1304,12 @@ private:
         tile->written_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         if (!state_->written_this_frame.load(std::memory_order_relaxed))
             state_->written_this_frame.store(true, std::memory_order_relaxed);
-        if (path && tile->records) record_path(tile, t, *path);
-        else tile->unrecorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        // A tile without path records never marks a texel recorded, so it needs no unrecorded bits either
+        // (one atomic OR less a store in a static scene's cubes).
+        if (tile->records) {
+            if (path) record_path(tile, t, *path);
+            else tile->unrecorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
+        }
         for (;;) {
             if (Texel::is_valid(old) && !(word < old)) return refuse(); // same frame: the smaller word wins
             if (texel.compare_exchange_weak(old, word, std::memory_order_acq_rel, std::memory_order_acquire)) {
