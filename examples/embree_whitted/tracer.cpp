@@ -445,9 +445,10 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     std::vector<FrameStats> tile_stats(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
 
     const bool records_kept = settings.caches && settings.caches->keeps_path_records();
-    // One pass over the pixels whose x and y are multiples of `stride` (1: every pixel), tile by tile.
-    auto pass = [&](int stride) {
-        return [&, stride](const tbb::blocked_range<int>& range) {
+    // One pass over the pixels whose x and y are multiples of `stride` (1: every pixel), tile by tile, less
+    // those whose x and y are multiples of `done` (a warm-up's, already final; 0: none).
+    auto pass = [&](int stride, int done) {
+        return [&, stride, done](const tbb::blocked_range<int>& range) {
             for (int tile = range.begin(); tile != range.end(); ++tile) {
                 Shader shader{*impl_, settings.mode, settings.caches};
                 shader.records_kept = records_kept;
@@ -455,8 +456,10 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
                 const int x1 = std::min(x0 + tile_size, settings.width), y1 = std::min(y0 + tile_size, settings.height);
                 for (int y = y0; y < y1; ++y) {
                     if (y % stride) continue;
+                    const bool row_done = done > 1 && y % done == 0;
                     for (int x = x0; x < x1; ++x)
-                        if (x % stride == 0) image.at(x, y) = shader.trace(basis.eye, primary_direction(basis, x, y), 0).color;
+                        if (x % stride == 0 && !(row_done && x % done == 0))
+                            image.at(x, y) = shader.trace(basis.eye, primary_direction(basis, x, y), 0).color;
                 }
                 FrameStats& s = tile_stats[static_cast<std::size_t>(tile)];
                 s.rays += shader.stats.rays;
@@ -469,11 +472,13 @@ Image Tracer::render(const Camera& camera, const RenderSettings& settings, Frame
     tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
     const auto start = std::chrono::steady_clock::now();
     const int tiles = tiles_x * tiles_y;
-    if (settings.warm_up_stride > 1 && uses_caches(settings.mode)) {
-        arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(settings.warm_up_stride)); });
+    const bool warm_up = settings.warm_up_stride > 1 && uses_caches(settings.mode);
+    if (warm_up) {
+        arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(settings.warm_up_stride, 0)); });
         end_frame(*settings.caches, settings.threads); // the warm-up's stores become visible to the full pass
     }
-    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(1)); });
+    // After a warm-up its pixels are final: tracing them again would only read back what they just stored.
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, tiles), pass(1, warm_up ? settings.warm_up_stride : 0)); });
     const auto end = std::chrono::steady_clock::now();
 
     if (stats) {

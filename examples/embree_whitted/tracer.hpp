@@ -33,7 +33,9 @@ struct RenderSettings {
     int threads = 0;                                // 0 = every core (TBB's default)
     // cct/cdct: before the frame, a warm-up pass over every warm_up_stride-th pixel in x and y whose stores
     // the caches publish (SceneCache::begin_frame(); adaptive cubes take that pass's ray density) before the
-    // full pass, so a single image reuses what it traced. 0 or 1: no warm-up (a cold frame traces every ray).
+    // full pass, so a single image reuses what it traced; the warm-up's pixels are final (traced with the
+    // caches as they were before it), so the full pass does the others. 0 or 1: no warm-up (a cold frame
+    // traces every ray).
     int warm_up_stride = 0;
 };
 

@@ -431,8 +431,9 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     struct PassTimes {
         double trace_ms = 0.0, end_frame_ms = 0.0;
     };
-    auto trace_pass = [&](int stride, bool raster) {
-        p.relief_i[3] = stride;
+    // `done` > 1: the pixels whose x and y are multiples of it are final (a warm-up's) and left alone.
+    auto trace_pass = [&](int stride, bool raster, int done = 0) {
+        p.relief_i[3] = done > 1 ? -done : stride;
         t.params->upload(&p, sizeof p);
         const std::uint64_t columns = (static_cast<std::uint64_t>(width) + stride - 1) / stride;
         const std::uint64_t rows = (static_cast<std::uint64_t>(height) + stride - 1) / stride;
@@ -493,13 +494,14 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     // rays, as the Embree adapter's begin_frame() does), then the frame buffer is started again, so the full
     // pass reads what the warm-up stored, and its counters and cells are the full pass's alone.
     double warm_up_ms = 0.0;
-    std::uint64_t warm_up_stored = 0;
+    std::uint64_t warm_up_stored = 0, warm_up_lookups = 0;
     const bool warm_up = warm_up_stride > 1 && t.ends_frames();
     if (warm_up) {
         const auto warm_up_start = std::chrono::steady_clock::now();
         trace_pass(warm_up_stride, t.raster != nullptr);
         const raycache::GpuFrameStatistics warm_up_stats = frame_statistics();
         if (stats) warm_up_stored = warm_up_stats.listed - raycache::gpu_listed_tiles(t.frame->as<std::uint32_t>(), t.frame_layout);
+        warm_up_lookups = warm_up_stats.total.lookups;
         warm_up_ms = ms_since(warm_up_start);
         resize(warm_up_stats);
         start_frame_buffer(); // after the resize: the frame buffer it made, if any
@@ -520,7 +522,9 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         b.bvh_prims = t.bvh_prims.get();
         t.rsh->render(width, height, t.scene.max_depth, b, *t.output, stats ? &stats->rsh : nullptr);
     } else {
-        times = trace_pass(1, t.raster && !warm_up); // after a warm-up the G-buffer already holds this camera's primary hits
+        // After a warm-up the G-buffer already holds this camera's primary hits, and the warm-up's pixels are
+        // final: tracing them again would only read back what they just stored.
+        times = trace_pass(1, t.raster && !warm_up, warm_up ? warm_up_stride : 0);
     }
     const double ms = ms_since(start);
 
@@ -535,6 +539,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     if (stats) {
         stats->warm_up_milliseconds = warm_up_ms;
         stats->warm_up_stored_texels = warm_up_stored;
+        stats->warm_up_lookups = warm_up_lookups;
         stats->milliseconds = ms;
         stats->gpu_trace_milliseconds = times.trace_ms;
         stats->end_frame_milliseconds = times.end_frame_ms;

@@ -61,6 +61,8 @@ struct TracerSettings {
 struct FrameStats {
     double warm_up_milliseconds = 0.0;   // a warm-up pass (render's warm_up_stride): its submission, waited for
     std::uint64_t warm_up_stored_texels = 0; // ... the texels it stored, which the full pass can read
+    std::uint64_t warm_up_lookups = 0;   // ... and its own lookups (the full pass's are `lookups`: it traces the
+                                         // other pixels, the warm-up's being final)
     double milliseconds = 0.0;           // the frame's submission, waited for on the host: the tracing dispatch and
                                          // (cct, cdct) RayCache's end-of-frame passes after it (hybrid: with the raster
                                          // pass, which a warm-up records in its own submission instead)

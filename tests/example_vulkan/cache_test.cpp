@@ -260,10 +260,12 @@ void run_warm_up_case(rcx::vk::Context& context, const char* scene_name, rcx::Ca
     check(rcx::bit_identical(cold.render(scene.camera, size, size, &cold_stats, 0), uncached) && cold_stats.hits == 0 &&
               cold_stats.warm_up_stored_texels == 0,
           name + ": stride 0, no warm-up: the frame is the uncached one and hits nothing");
-    // Every leaving ray looks up once, hit or miss: the full pass's count is the cold frame's, so the
-    // warm-up's own lookups were not counted in it (the frame buffer was started again between the passes).
-    check(stats.lookups == cold_stats.lookups,
-          name + format(": the full pass counts its own %.0f lookups (cold frame: %.0f)", double(stats.lookups), double(cold_stats.lookups)));
+    // Every leaving ray looks up once, hit or miss, in the pass that traces its pixel: the warm-up's pixels
+    // are final, so the full pass traces the others, and the two passes' counts add up to the cold frame's
+    // (the frame buffer was started again between the passes, so neither counts the other's).
+    check(stats.warm_up_lookups > 0 && stats.lookups < cold_stats.lookups && stats.lookups + stats.warm_up_lookups == cold_stats.lookups,
+          name + format(": the full pass counts its own %.0f lookups and the warm-up ", double(stats.lookups)) +
+              format("%.0f (cold frame: %.0f)", double(stats.warm_up_lookups), double(cold_stats.lookups)));
 
     // Hybrid: the warm-up records the raster pass, the full pass reads the same G-buffer.
     rcx::gpu::TracerSettings hybrid = settings;
@@ -273,12 +275,13 @@ void run_warm_up_case(rcx::vk::Context& context, const char* scene_name, rcx::Ca
     const rcx::Image hybrid_image = h.render(scene.camera, size, size, &hybrid_stats, stride);
     h_cold.render(scene.camera, size, size, &hybrid_cold, 0);
     const double hybrid_psnr = rcx::compare(hybrid_image, image).psnr_db;
-    check(hybrid_psnr >= 40.0 && hybrid_stats.hits > 0 && hybrid_stats.lookups == hybrid_cold.lookups,
+    check(hybrid_psnr >= 40.0 && hybrid_stats.hits > 0 && hybrid_stats.lookups + hybrid_stats.warm_up_lookups == hybrid_cold.lookups,
           name + format(": hybrid, %.2f dB against compute (>= 40), %.0f hits", hybrid_psnr, double(hybrid_stats.hits)));
 
     // Adaptive cubes from 64-texel faces: resized to the warm-up's rays (tens a mirror), their texels
-    // answer more of the full pass's rays than 64-texel faces do (measured: CCT 0.122 against 0.064, CDCT 0.028
-    // against 0.007; the same rates and PSNR as fixed 16-texel faces).
+    // answer more of the full pass's rays than 64-texel faces do (measured: CCT 0.062 against 0.000, CDCT 0.017
+    // against 0.000; the same rates and PSNR as fixed 16-texel faces; at 64 texels a face a warm-up texel answers
+    // little more than the ray that filled it, whose pixel the full pass does not trace again).
     rcx::gpu::TracerSettings adaptive = settings, first = settings;
     adaptive.adaptive = true;
     adaptive.adaptive_resolution.first_face_size = first.face_size = 64;
@@ -440,8 +443,8 @@ int main() {
     // test) 89.03 dB for the CCT (one 8-bit value differs), inf for the CDCT. Few hits: the
     // warm-up traces 1/16 of the pixels, and a full-pass ray hits only when a warm-up ray filled the texel of
     // its direction (the CDCT: and its search meets the stored surface there).
-    run_warm_up_case(*context, "behind-8", rcx::CacheMode::cct, 16, 0.08, 27.0, 60.0);
-    run_warm_up_case(*context, "behind-8", rcx::CacheMode::cdct, 16, 0.015, 34.0, 60.0);
+    run_warm_up_case(*context, "behind-8", rcx::CacheMode::cct, 16, 0.05, 27.0, 60.0);
+    run_warm_up_case(*context, "behind-8", rcx::CacheMode::cdct, 16, 0.012, 34.0, 60.0);
     context.reset();
     const std::uint64_t errors = rcx::vk::validation_errors_in_process();
     check(errors == 0, format("validation errors: %.0f", double(errors)));

@@ -41,7 +41,8 @@ layout(std430, binding = 8) readonly buffer Params {
     ivec4 frame;          // width, height, mode, max depth
     vec4 relief;          // step, epsilon, max depth, max gap
     ivec4 relief_i;       // max steps, search (RAYCACHE_DEPTH_SEARCH_*), max reads, pixel stride (whitted.comp:
-                          // a warm-up pass traces pixels whose x and y are multiples of it; 0 or 1: every pixel)
+                          // a warm-up pass traces pixels whose x and y are multiples of it; 0 or 1: every pixel;
+                          // -S: every pixel but those of a warm-up over every S-th, final already)
     vec4 origin_test;     // CCT origin test: drift (x the cube's half-size; < 0: off), parallax (inf: none)
 };
 

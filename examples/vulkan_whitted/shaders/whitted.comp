@@ -166,9 +166,13 @@ vec3 trace_primary(vec3 o0, vec3 d0, uint pixel) {
 
 void main() {
     int width = frame.x, height = frame.y;
-    int stride = max(relief_i.w, 1); // a warm-up pass: one invocation per stride-th pixel in x and y
+    // relief_i.w > 1: a warm-up pass, one invocation per stride-th pixel in x and y; < -1: the full pass
+    // after a warm-up over every (-relief_i.w)-th pixel, whose pixels are final already.
+    int stride = max(relief_i.w, 1);
+    int done = relief_i.w < -1 ? -relief_i.w : 0;
     int x = int(gl_GlobalInvocationID.x) * stride, y = int(gl_GlobalInvocationID.y) * stride;
     if (x >= width || y >= height) return;
+    if (done > 0 && x % done == 0 && y % done == 0) return;
     vec3 d = primary_direction(x, y);
     vec3 color = trace_primary(eye.xyz, d, uint(y * width + x));
     pixels[y * width + x] = vec4(color, 1.0);
