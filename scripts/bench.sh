@@ -44,8 +44,10 @@ if [[ "${1:-}" == "--quick" ]]; then
 fi
 
 out=docs/results
-rm -rf "$out"
+# Only what this script writes (the files at the top of docs/results): its folders hold runs made by hand,
+# on lent GPU machines or the Vulkan tracer's own options, that this machine may not be able to repeat.
 mkdir -p "$out"
+find "$out" -maxdepth 1 -type f -delete
 build-bench/bench/raycache_walkthrough_bench --out "$out"
 build-bench/bench/raycache_dynamic_bench --out "$out"
 # Table 5.2 on grid-N and behind-N (N = 1..32) at the thesis's 1024x1024, 9 rounds: about 4 minutes.
