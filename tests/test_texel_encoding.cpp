@@ -371,3 +371,66 @@ TEST_CASE("a channel just under half a mantissa step rounds down, one at half a 
     CHECK((at & 0x1FFu) == 258u);    // 256 + 1.5 rounds up to 258
     CHECK((under & 0x1FFu) == 257u); // just under rounds down to 257
 }
+
+namespace {
+// RGB9E5 as the format defines it, in double precision, where channel * 2^k and + 0.5 are exact for every
+// float channel, so floor(... + 0.5) is exactly half-up rounding: the reference the encoder must equal word
+// for word (it rounds from the float's bits instead).
+std::uint32_t reference_rgb9e5(const glm::vec3& colour) {
+    double c[3];
+    for (int i = 0; i < 3; ++i) c[i] = clamped(colour[i]);
+    const double brightest = std::max(c[0], std::max(c[1], c[2]));
+    int floor_log2 = -16;
+    if (brightest >= std::ldexp(1.0, -16)) {
+        int e = 0;
+        std::frexp(brightest, &e); // brightest = f * 2^e, f in [0.5, 1)
+        floor_log2 = e - 1;
+    }
+    int shared = floor_log2 + 16;
+    auto mantissa = [&](double x) { return static_cast<std::uint32_t>(std::floor(std::ldexp(x, 24 - shared) + 0.5)); };
+    if (mantissa(brightest) == 512u) ++shared;
+    return rgb9e5(mantissa(c[0]), mantissa(c[1]), mantissa(c[2]), static_cast<std::uint32_t>(shared));
+}
+} // namespace
+
+TEST_CASE("RGB9E5 words equal the format's definition computed in double precision, over every exponent and rounding edge") {
+    std::uint64_t checked = 0, differ = 0;
+    glm::vec3 first{0.0f};
+    auto check = [&](const glm::vec3& c) {
+        ++checked;
+        if (raycache_pack_rgb9e5(c) != reference_rgb9e5(c)) {
+            if (differ == 0) first = c;
+            ++differ;
+        }
+    };
+    // Every 509th float bit pattern as a grey and as one channel beside others (NaN, inf, negatives,
+    // subnormals and -0 included): 25 million colours through every exponent.
+    for (std::uint64_t bits = 0; bits <= 0xFFFFFFFFull; bits += 509) {
+        float x;
+        const std::uint32_t b = static_cast<std::uint32_t>(bits);
+        std::memcpy(&x, &b, 4);
+        check(glm::vec3(x));
+        check(glm::vec3(x, 1.0f, 0.0f));
+        check(glm::vec3(0.25f, 0.0f, x));
+    }
+    // Channels exactly at, and one float either side of, half a mantissa step at every shared exponent.
+    for (int shared = 0; shared <= 31; ++shared)
+        for (int m = 0; m <= 512; ++m) {
+            const float half = static_cast<float>(std::ldexp(m + 0.5, shared - 24));
+            const float top = static_cast<float>(std::ldexp(256.0, shared - 24)); // a brightest channel of that exponent
+            for (float x : {half, std::nextafter(half, 0.0f), std::nextafter(half, inf)}) {
+                check(glm::vec3(x, 0.0f, 0.0f));
+                check(glm::vec3(top, x, x));
+            }
+        }
+    Lcg rng{2026};
+    for (int i = 0; i < 1000000; ++i) {
+        const float scale = std::ldexp(1.0f, static_cast<int>(rng.next() % 48) - 30);
+        check(glm::vec3(rng.uniform() * scale, rng.uniform() * scale, rng.uniform() * scale));
+    }
+    CAPTURE(first.x);
+    CAPTURE(first.y);
+    CAPTURE(first.z);
+    CHECK(checked > 25000000u);
+    CHECK(differ == 0u);
+}
