@@ -112,6 +112,7 @@ int run(const rcx::Options& o) {
             cache_settings.adaptive.first_face_size = o.first_face_size;
             cache_settings.budget_bytes = static_cast<std::size_t>(o.budget_mib) << 20;
             cache_settings.filtered = o.filtered;
+            cache_settings.trace_hits = o.trace_hits;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
             cache_settings.origin_parallax = o.origin_parallax;

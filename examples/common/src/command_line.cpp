@@ -160,6 +160,10 @@ CommandLine::CommandLine(const std::string& program)
                "the largest cubes' faces [" + std::to_string(d.budget_mib) + "]",
                [&o](const std::string& text) { o.budget_mib = static_cast<int>(parse_int_value("--budget-mib", text, 1, 1l << 20)); });
     add_flag("--filtered", o.filtered, "CCT: bilinear lookups instead of the nearest texel (Embree tracer)");
+    add_flag("--trace-hits", o.trace_hits,
+             "diagnostics: rays the cubes answer are traced anyway, so frames\n"
+             "equal uncached ones and what a frame takes beyond an uncached one\n"
+             "is the cache's own work (Embree tracer)");
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"
                "traced, not answered (CCT and CDCT); negative: off " + shown_default(d.edge_threshold),

@@ -49,6 +49,7 @@ struct Options {
     int budget_mib = 256;             // bytes all cubes may take, MiB (SceneCacheSettings::budget_bytes's default;
                                       // Vulkan: raycache::gpu_texel_bytes_within)
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
+    bool trace_hits = false;          // diagnostics: answered rays traced anyway (SceneCacheSettings::trace_hits)
     int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
     InvalidationPolicy invalidate = InvalidationPolicy::exact; // dynamic scenes: texels dropped when objects move

@@ -155,6 +155,11 @@ struct SceneCacheSettings {
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
     // When the cubes keep what their stores' paths saw (PathRecords).
     PathRecords path_records = PathRecords::from_first_move;
+    // Diagnostics: a ray the cube answers is traced anyway and its traced colour returned, while the cubes
+    // work as usual (looked up, counted, filled on misses, ended). Frames then equal uncached ones, and what
+    // they take beyond an uncached frame is the cache's own work. (Rays leaving cached objects inside such a
+    // traced hit are looked up too, which a frame that uses its hits skips.) Off by default.
+    bool trace_hits = false;
 };
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
@@ -398,7 +403,7 @@ public:
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax), path_records_(settings.path_records == PathRecords::always),
-          record_policy_(settings.path_records),
+          record_policy_(settings.path_records), trace_hits_(settings.trace_hits),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
         validate(adaptive_);
@@ -501,13 +506,38 @@ public:
     // infinity when it escaped; the CCT keeps the nearest per tile to bound parallax), or `TracedRay
     // trace(PathRecord&)`, which also reports what the path hit (raycache/path_record.hpp) so that
     // scene_changed() can keep what a move cannot have changed. It runs on a miss; its colour is returned
-    // unchanged. Objects without a cube: returns trace().color. Thread-safe.
+    // unchanged (under SceneCacheSettings::trace_hits it runs on a hit too, and its colour is returned).
+    // Objects without a cube: returns trace().color. Thread-safe.
     template <class Trace>
     glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
-        constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
-        static_assert(std::is_invocable_r_v<TracedRay, Trace&> || records,
+        static_assert(std::is_invocable_r_v<TracedRay, Trace&> || std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>,
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
+        if (!trace_hits_) return through_cube(id, origin, direction, trace);
+        // SceneCacheSettings::trace_hits: whether the cube answered is known by whether trace() ran.
+        bool traced = false;
+        if constexpr (std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>) {
+            const glm::vec3 colour = through_cube(id, origin, direction, [&](PathRecord& path) {
+                traced = true;
+                return trace(path);
+            });
+            if (traced) return colour;
+            PathRecord unused;
+            return trace(unused).color;
+        } else {
+            const glm::vec3 colour = through_cube(id, origin, direction, [&] {
+                traced = true;
+                return trace();
+            });
+            return traced ? colour : trace().color;
+        }
+    }
+
+private:
+    // leaving_ray() through the cube: looked up, and on a miss traced and stored.
+    template <class Trace>
+    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
+        constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
         auto trace_alone = [&] { // no cube to look in or store into
             PathRecord unused;
             if constexpr (records) return trace(unused).color;
@@ -542,6 +572,7 @@ public:
         return color;
     }
 
+public:
     // Between frames, after objects (or lights) moved: cubes of moved objects move with them, emptied
     // (except under Invalidation::none); the other cubes lose what `policy` says. Under exact, a CCT cube
     // or CDCT cube loses the texels the moves can have changed (raycache/invalidation.hpp: their rays'
@@ -1197,6 +1228,7 @@ private:
     float origin_parallax_;
     bool path_records_;          // the cubes keep path records now (SceneCacheSettings::path_records)
     PathRecords record_policy_;
+    bool trace_hits_;            // SceneCacheSettings::trace_hits
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     int first_face_size_;                  // adaptive cubes start here (shrink_first_face_size)
     std::vector<Entry> entries_;
