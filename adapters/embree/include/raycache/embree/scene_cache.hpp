@@ -514,37 +514,34 @@ public:
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
         if (!trace_hits_) return through_cube(id, origin, direction, trace);
-        // SceneCacheSettings::trace_hits: whether the cube answered is known by whether trace() ran.
+        // SceneCacheSettings::trace_hits: whether the cube answered is known by whether trace() ran. The
+        // wrapper takes whichever form `trace` has (its return type keeps the other form out of overloads).
         bool traced = false;
-        if constexpr (std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>) {
-            const glm::vec3 colour = through_cube(id, origin, direction, [&](PathRecord& path) {
-                traced = true;
-                return trace(path);
-            });
-            if (traced) return colour;
-            PathRecord unused;
-            return trace(unused).color;
-        } else {
-            const glm::vec3 colour = through_cube(id, origin, direction, [&] {
-                traced = true;
-                return trace();
-            });
-            return traced ? colour : trace().color;
-        }
+        auto noting = [&](auto&... path) -> decltype(trace(path...)) {
+            traced = true;
+            return trace(path...);
+        };
+        const glm::vec3 colour = through_cube(id, origin, direction, noting);
+        return traced ? colour : trace_alone(trace);
     }
 
 private:
+    // trace() for a ray no cube looks at or stores into: the recording form with a record nobody keeps.
+    template <class Trace>
+    static glm::vec3 trace_alone(Trace& trace) {
+        if constexpr (std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>) {
+            PathRecord unused;
+            return trace(unused).color;
+        } else {
+            return trace().color;
+        }
+    }
+
     // leaving_ray() through the cube: looked up, and on a miss traced and stored.
     template <class Trace>
     glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
-        constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
-        auto trace_alone = [&] { // no cube to look in or store into
-            PathRecord unused;
-            if constexpr (records) return trace(unused).color;
-            else return trace().color;
-        };
         const int index = find(id);
-        if (index < 0) return trace_alone();
+        if (index < 0) return trace_alone(trace);
         Entry& e = entries_[static_cast<std::size_t>(index)];
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
@@ -559,7 +556,7 @@ private:
         if (e.coverage) e.coverage->mark(direction);
         if (!answerable) {
             e.cdct->cube().record_miss(MissReason::outside);
-            return trace_alone();
+            return trace_alone(trace);
         }
         int read = 0;
         const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read);
