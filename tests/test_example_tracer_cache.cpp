@@ -289,28 +289,34 @@ TEST_CASE("trace_hits: the cubes answer rays, yet every frame equals the uncache
     // orbit every frame is the uncached one while the cubes fill and report hits as usual.
     const rcx::Scene scene = rcx::make_scene("behind-8");
     const rcx::embree::Tracer tracer(scene);
-    for (const Technique technique : {Technique::cct, Technique::cdct}) {
-        CAPTURE(static_cast<int>(technique));
-        raycache::embree::SceneCacheSettings s;
-        s.trace_hits = true;
-        SceneCache diagnostic(technique, s), plain(technique, raycache::embree::SceneCacheSettings{});
-        tracer.attach_caches(diagnostic, 32);
-        tracer.attach_caches(plain, 32);
-        const Variant& v = technique == Technique::cct ? cct : cdct_secant;
-        std::uint64_t hits = 0;
-        for (int frame = 0; frame < 3; ++frame) {
-            CAPTURE(frame);
-            const rcx::Image uncached = tracer.render(scene.camera_at(frame), settings(40, off, nullptr));
-            const rcx::Image traced = tracer.render(scene.camera_at(frame), settings(40, v, &diagnostic));
-            const rcx::Image cached = tracer.render(scene.camera_at(frame), settings(40, v, &plain));
-            const SceneCacheStatistics d = diagnostic.begin_frame(), p = plain.begin_frame();
-            CHECK(rcx::bit_identical(traced, uncached));
-            CHECK(d.lookups > 0);
-            hits += d.hits;
-            // The frames that use their hits differ from uncached ones once the cubes answer.
-            if (frame > 0 && p.hits > 0) CHECK_FALSE(rcx::bit_identical(cached, uncached));
+    // Path records always kept: the tracer calls leaving_ray's recording form; else (a static scene) the plain one.
+    for (const raycache::embree::PathRecords records : {raycache::embree::PathRecords::from_first_move, raycache::embree::PathRecords::always}) {
+        for (const Technique technique : {Technique::cct, Technique::cdct}) {
+            CAPTURE(static_cast<int>(records));
+            CAPTURE(static_cast<int>(technique));
+            raycache::embree::SceneCacheSettings s;
+            s.path_records = records;
+            SceneCache plain(technique, s);
+            s.trace_hits = true;
+            SceneCache diagnostic(technique, s);
+            tracer.attach_caches(diagnostic, 32);
+            tracer.attach_caches(plain, 32);
+            const Variant& v = technique == Technique::cct ? cct : cdct_secant;
+            std::uint64_t hits = 0;
+            for (int frame = 0; frame < 3; ++frame) {
+                CAPTURE(frame);
+                const rcx::Image uncached = tracer.render(scene.camera_at(frame), settings(40, off, nullptr));
+                const rcx::Image traced = tracer.render(scene.camera_at(frame), settings(40, v, &diagnostic));
+                const rcx::Image cached = tracer.render(scene.camera_at(frame), settings(40, v, &plain));
+                const SceneCacheStatistics d = diagnostic.begin_frame(), p = plain.begin_frame();
+                CHECK(rcx::bit_identical(traced, uncached));
+                CHECK(d.lookups > 0);
+                hits += d.hits;
+                // The frames that use their hits differ from uncached ones once the cubes answer.
+                if (frame > 0 && p.hits > 0) CHECK_FALSE(rcx::bit_identical(cached, uncached));
+            }
+            CHECK(hits > 0);
         }
-        CHECK(hits > 0);
     }
 }
 
