@@ -13,6 +13,7 @@
 #include "raycache/path_record.hpp"
 #include "raycache/cache_cube.hpp"
 #include "raycache/adaptive_resolution.hpp"
+#include "raycache/resting.hpp"
 #include "raycache/edge_confidence.hpp"
 #include "raycache/cached_trace.hpp"
 #include "raycache/depth_pyramid.hpp"

@@ -27,8 +27,9 @@ enum class MissReason : std::uint8_t {
                // edge; also a caller's record_lookup(false), which gives no cause
     outside,   // not a direction, bad input (a texel off the cube, a box no search can use), or a ray from
                // outside what the last exact invalidation checked
+    resting,   // not looked up: the cube rests, since it answered too few of its rays (raycache/resting.hpp)
 };
-inline constexpr std::size_t miss_reason_count = 6;
+inline constexpr std::size_t miss_reason_count = 7;
 
 // A snapshot of one cube's counters since they were last reset (begin_frame() resets them).
 struct CubeStatistics {
@@ -54,7 +55,7 @@ struct CubeStatistics {
     }
 };
 
-// A lower-case name of a miss reason ("empty", "fresh", "doubtful", "origin", "search", "outside").
+// A lower-case name of a miss reason ("empty", "fresh", "doubtful", "origin", "search", "outside", "resting").
 inline const char* to_string(MissReason why) noexcept {
     switch (why) {
     case MissReason::empty: return "empty";
@@ -63,6 +64,7 @@ inline const char* to_string(MissReason why) noexcept {
     case MissReason::origin: return "origin";
     case MissReason::search: return "search";
     case MissReason::outside: return "outside";
+    case MissReason::resting: return "resting";
     }
     return "?";
 }

@@ -42,6 +42,22 @@ RAYCACHE_FN uint raycache_coverage_cell_of_texel(raycache_texel_address t, int f
     return raycache_texel_linear_index(c, RAYCACHE_COVERAGE_CELLS_PER_EDGE);
 }
 
+/* A resting cube (raycache/resting.hpp) looks up one direction in 2^RAYCACHE_PROBE_BITS. */
+#ifndef RAYCACHE_PROBE_BITS
+#define RAYCACHE_PROBE_BITS 4u
+#endif
+/* Whether `direction` is a probe direction of a resting cube. Direction space is cut into boxes by the
+ * sign, exponent and first three mantissa bits of each component (the top 12 bits of its float); a box
+ * probes when the top RAYCACHE_PROBE_BITS bits of a multiplicative hash of its three keys are zero. The
+ * same boxes every frame, without a face choice (a resting cube's rays pay for this test alone). A
+ * direction's length matters (scale it and it may fall in another box): pass the rays' unit directions. */
+RAYCACHE_FN bool raycache_is_probe_direction(vec3 direction) {
+    uint key = (floatBitsToUint(direction.x) >> 20u) * 2654435761u;
+    key = (key ^ (floatBitsToUint(direction.y) >> 20u)) * 2654435761u;
+    key = (key ^ (floatBitsToUint(direction.z) >> 20u)) * 2654435761u;
+    return (key >> (32u - RAYCACHE_PROBE_BITS)) == 0u;
+}
+
 #ifdef __cplusplus
 } // namespace shared
 } // namespace raycache

@@ -1,0 +1,145 @@
+// Resting cubes (raycache/resting.hpp): which directions probe a resting cube, and how a frame's counters
+// decide whether the cube rests in the next.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include <raycache/raycache.hpp>
+
+using raycache::CubeStatistics;
+using raycache::MissReason;
+
+namespace {
+
+// A frame's counters: `hits` of `lookups`, `rested` of the misses resting ones.
+CubeStatistics frame(std::uint64_t lookups, std::uint64_t hits, std::uint64_t rested = 0) {
+    CubeStatistics s;
+    s.lookups = lookups;
+    s.hits = hits;
+    s.misses = lookups - hits;
+    s.misses_by[static_cast<std::size_t>(MissReason::resting)] = rested;
+    s.misses_by[static_cast<std::size_t>(MissReason::empty)] = lookups - hits - rested;
+    return s;
+}
+
+} // namespace
+
+TEST_CASE("probe directions are a sixteenth of all directions, spread over every quarter of every cube face") {
+    // Uniformly random unit directions (normalised Gaussian vectors); each quarter of a face (8 x 8 of the
+    // 16 x 16 direction cells) must hold probes in about the same share.
+    std::mt19937 rng(7);
+    std::normal_distribution<float> gaussian;
+    const int n = 200000;
+    int probes = 0;
+    int per_quarter[24][2] = {}; // directions, probes
+    for (int i = 0; i < n; ++i) {
+        const glm::vec3 d = glm::normalize(glm::vec3(gaussian(rng), gaussian(rng), gaussian(rng)));
+        const bool probe = raycache::is_probe_direction(d);
+        probes += probe ? 1 : 0;
+        const std::uint32_t cell = raycache::shared::raycache_coverage_cell(d);
+        const int quarter = static_cast<int>(cell / 256 * 4 + cell % 256 / 16 / 8 * 2 + cell % 16 / 8);
+        ++per_quarter[quarter][0];
+        per_quarter[quarter][1] += probe ? 1 : 0;
+    }
+    CHECK(probes > n / 20);
+    CHECK(probes < n * 3 / 40);
+    for (int q = 0; q < 24; ++q) {
+        CAPTURE(q);
+        const double share = static_cast<double>(per_quarter[q][1]) / per_quarter[q][0];
+        CHECK(share > 0.03);
+        CHECK(share < 0.12);
+    }
+}
+
+TEST_CASE("a probe is a box of directions: the low mantissa bits of a component never change the answer") {
+    // The boxes are cut by each component's sign, exponent and three first mantissa bits (its float's top
+    // 12 bits), so changing any of the 20 bits below moves a direction within its box.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> component(-1.0f, 1.0f);
+    std::uniform_int_distribution<std::uint32_t> low(0, (1u << 20) - 1);
+    auto with_low_bits = [&](float x) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &x, sizeof bits);
+        bits = (bits & ~((1u << 20) - 1)) | low(rng);
+        std::memcpy(&x, &bits, sizeof bits);
+        return x;
+    };
+    int probes = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const glm::vec3 d(component(rng), component(rng), component(rng));
+        const bool probe = raycache::is_probe_direction(d);
+        probes += probe ? 1 : 0;
+        CHECK(raycache::is_probe_direction(glm::vec3(with_low_bits(d.x), with_low_bits(d.y), with_low_bits(d.z))) == probe);
+    }
+    CHECK(probes > 0); // the comparison saw both answers
+    CHECK(probes < 20000);
+}
+
+TEST_CASE("a working cube rests after a frame whose hit rate fell below min_hit_rate, and not at it") {
+    CHECK(raycache::rests_next_frame(false, frame(100, 40), 0.5f));
+    CHECK(raycache::rests_next_frame(false, frame(100, 49), 0.5f));
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 50), 0.5f)); // 50 %: not below
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 40), 0.4f));
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 90), 0.5f));
+    CHECK(raycache::rests_next_frame(false, frame(1000, 0), 0.01f));
+}
+
+TEST_CASE("a resting cube is judged by the rays it looked up (its probes), not by the rays it let through") {
+    // 1000 rays, 940 let through resting: 60 probes, 30 hits, 50 %.
+    CHECK(raycache::looked_up_hit_rate(frame(1000, 30, 940)).value() == doctest::Approx(0.5));
+    CHECK_FALSE(raycache::rests_next_frame(true, frame(1000, 30, 940), 0.5f)); // works again
+    CHECK(raycache::rests_next_frame(true, frame(1000, 29, 940), 0.5f));       // 48 %: rests on
+    // (Judged over all 1000 rays, 3 %, it would rest for ever.)
+}
+
+TEST_CASE("too few looked-up rays decide nothing: the cube keeps resting or working") {
+    const std::uint64_t few = raycache::resting_min_judged_lookups - 1;
+    CHECK_FALSE(raycache::looked_up_hit_rate(frame(few, 0)).has_value());
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(few, 0), 0.5f));
+    CHECK(raycache::rests_next_frame(true, frame(few, few), 0.5f));
+    CHECK(raycache::rests_next_frame(true, frame(1000, 0, 1000), 0.5f)); // no probe at all: rests on
+    CHECK(raycache::looked_up_hit_rate(frame(few + 1, 0)).has_value());
+}
+
+TEST_CASE("a resting cube too few of whose rays probe works again after resting_max_unjudged_frames frames") {
+    const CubeStatistics unprobed = frame(1000, 0, 1000); // every ray let through: nothing to judge by
+    raycache::RestingState state{true, 0};
+    for (int f = 1; f < raycache::resting_max_unjudged_frames; ++f) {
+        CAPTURE(f);
+        state = raycache::next_resting_state(state, unprobed, 0.5f);
+        CHECK(state.resting);
+        CHECK(state.unjudged == f);
+    }
+    state = raycache::next_resting_state(state, unprobed, 0.5f);
+    CHECK_FALSE(state.resting);
+    CHECK(state.unjudged == 0);
+    // A frame that judges it starts the count again, resting or not.
+    CHECK(raycache::next_resting_state({true, 5}, frame(1000, 10, 900), 0.5f).unjudged == 0);
+    CHECK(raycache::next_resting_state({true, 5}, frame(1000, 10, 900), 0.5f).resting);
+    // A working cube with too few rays to judge keeps working, and counts nothing.
+    CHECK(raycache::next_resting_state({false, 0}, frame(3, 0), 0.5f).unjudged == 0);
+}
+
+TEST_CASE("min_hit_rate 0 (or not a number) never rests a cube, whatever its hit rate") {
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), 0.0f));
+    CHECK_FALSE(raycache::rests_next_frame(true, frame(1000, 0, 900), 0.0f));
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), std::numeric_limits<float>::quiet_NaN()));
+    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), -1.0f));
+}
+
+TEST_CASE("a resting miss has a name and a counter slot of its own") {
+    CHECK(std::string(raycache::to_string(MissReason::resting)) == "resting");
+    CHECK(static_cast<std::size_t>(MissReason::resting) + 1 == raycache::miss_reason_count);
+    raycache::CctCube cube(8);
+    cube.record_miss(MissReason::resting);
+    cube.record_miss(MissReason::resting);
+    cube.record_miss(MissReason::empty);
+    const CubeStatistics s = cube.begin_frame();
+    CHECK(s.lookups == 3);
+    CHECK(s.misses == 3);
+    CHECK(s.misses_by[static_cast<std::size_t>(MissReason::resting)] == 2);
+    CHECK(s.miss_share(MissReason::resting) == doctest::Approx(2.0 / 3.0));
+}
