@@ -1,4 +1,5 @@
-// Test helper: an Embree sphere (RTC_GEOMETRY_TYPE_SPHERE_POINT, one point) attached to a scene.
+// Test helpers: an Embree sphere (RTC_GEOMETRY_TYPE_SPHERE_POINT, one point) attached to a scene, and a
+// device with a scene that release themselves.
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -14,3 +15,16 @@ inline unsigned add_embree_sphere(RTCDevice device, RTCScene scene, glm::vec3 c,
     rtcReleaseGeometry(g);
     return id;
 }
+
+// A device and a scene, released together: derive a test world from it, attach geometry, commit.
+struct EmbreeScene {
+    RTCDevice device = rtcNewDevice(nullptr);
+    RTCScene scene = rtcNewScene(device);
+    EmbreeScene() = default;
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+    ~EmbreeScene() {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+    }
+};

@@ -83,6 +83,9 @@ SceneCacheSettings settings_with_first_size(int first_face_size) {
 std::unique_ptr<SceneCache> make_cache(Technique technique, int face_size, bool relief = false) {
     SceneCacheSettings settings = settings_with_first_size(64);
     if (relief) settings.relief.search = raycache::DepthSearch::relief;
+    // Files hold texels, not whether a cube rests (a loaded cache starts working and its frames decide):
+    // cubes that never rest answer the frame after a load as the saved cache would.
+    settings.min_hit_rate = 0.0f;
     auto caches = std::make_unique<SceneCache>(technique, settings);
     for (int k = 0; k < 3; ++k) caches->attach(objects[k], face_size, placements[k]);
     return caches;

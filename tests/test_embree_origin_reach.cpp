@@ -29,19 +29,13 @@ namespace {
 const float infinity = std::numeric_limits<float>::infinity();
 
 // A mirror sphere of radius 1 at the origin (its cube: centre 0, half-size 1) and a small ball that moves.
-struct World {
-    RTCDevice device = rtcNewDevice(nullptr);
-    RTCScene scene = rtcNewScene(device);
+struct World : EmbreeScene {
     unsigned mirror = 0, ball = 0;
 
     World() {
         mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
         ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
         rtcCommitScene(scene);
-    }
-    ~World() {
-        rtcReleaseScene(scene);
-        rtcReleaseDevice(device);
     }
 };
 

@@ -44,8 +44,10 @@ constexpr Variant cached_variants[] = {cct, cdct_secant, cdct_pyramid, cdct_line
 // The scene's cubes for `v` (face_size texels per edge on every cached object), with the relief search
 // parameters the example's command line uses by default and the given CCT confidence threshold (the
 // library's default unless stated; negative: every filled texel answers); nullptr for the modes without caches.
+// Cubes never rest unless min_hit_rate says so: these tests look at what cubes answer, frame after frame.
 std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const Variant& v, int face_size,
-                                        float edge_threshold = raycache::embree::SceneCacheSettings{}.edge_threshold) {
+                                        float edge_threshold = raycache::embree::SceneCacheSettings{}.edge_threshold,
+                                        float min_hit_rate = 0.0f) {
     if (!rcx::uses_caches(v.mode)) return nullptr;
     const rcx::Options defaults;
     raycache::embree::SceneCacheSettings s;
@@ -56,6 +58,7 @@ std::unique_ptr<SceneCache> make_caches(const rcx::embree::Tracer& tracer, const
     s.depth_pyramid = v.pyramid;
     s.relief.search = v.secant ? raycache::DepthSearch::secant : raycache::DepthSearch::relief;
     s.edge_threshold = edge_threshold;
+    s.min_hit_rate = min_hit_rate;
     auto caches = std::make_unique<SceneCache>(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, s);
     tracer.attach_caches(*caches, face_size);
     return caches;
@@ -245,6 +248,35 @@ TEST_CASE("one and two threads give bit-identical frames and cache counters over
                 CHECK(sa.misses > 0);
             }
         }
+    }
+}
+
+TEST_CASE("with resting cubes, one and two threads still give bit-identical frames, and the rested rays are traced") {
+    // min_hit_rate above any hit rate: every warm cube rests from its second frame on, answering its probe
+    // directions alone; which rays rest depends on the frames' counters, never on timing.
+    const rcx::Scene scene = rcx::make_scene("behind-8");
+    const rcx::embree::Tracer tracer(scene);
+    for (const Variant& v : {cct, cdct_secant}) {
+        const std::string variant = v.name;
+        CAPTURE(variant);
+        const float edges = raycache::embree::SceneCacheSettings{}.edge_threshold;
+        const std::unique_ptr<SceneCache> one = make_caches(tracer, v, 32, edges, 2.0f), two = make_caches(tracer, v, 32, edges, 2.0f);
+        std::uint64_t rested = 0;
+        for (int frame = 0; frame < 4; ++frame) {
+            CAPTURE(frame);
+            const rcx::Image a = tracer.render(scene.camera_at(frame), settings(40, v, one.get(), 1));
+            const rcx::Image b = tracer.render(scene.camera_at(frame), settings(40, v, two.get(), 2));
+            CHECK(rcx::bit_identical(a, b));
+            const SceneCacheStatistics sa = one->begin_frame(), sb = rcx::embree::end_frame(*two, 2);
+            const std::uint64_t ra = sa.misses_by[static_cast<std::size_t>(raycache::MissReason::resting)];
+            CHECK(ra == sb.misses_by[static_cast<std::size_t>(raycache::MissReason::resting)]);
+            CHECK(sa.hits == sb.hits);
+            CHECK(sa.resting_cubes == sb.resting_cubes);
+            if (frame >= 1) CHECK(sa.resting_cubes > 0);
+            if (frame >= 2) CHECK(ra > 0);
+            rested += ra;
+        }
+        CHECK(rested > 0);
     }
 }
 

@@ -160,7 +160,17 @@ struct SceneCacheSettings {
     // they take beyond an uncached frame is the cache's own work. (Rays leaving cached objects inside such a
     // traced hit are looked up too, which a frame that uses its hits skips.) Off by default.
     bool trace_hits = false;
+    // Resting cubes (raycache/resting.hpp): a cube whose looked-up rays found fewer than this share of hits
+    // in a frame rests the next frame (its rays are traced without lookup or store, but for a sixteenth of
+    // the directions, which keep measuring it) and works again once those find this share. Unset: the
+    // technique's default_min_hit_rate(). 0: cubes never rest.
+    std::optional<float> min_hit_rate;
 };
+
+// SceneCacheSettings::min_hit_rate unset: about where a cube starts to pay on the Embree example tracer,
+// whose traced leaving ray costs about twice a CCT lookup and store: 0.5 for the CCT, 0.6 for the CDCT,
+// whose search and store of a hit point cost more.
+inline float default_min_hit_rate(Technique technique) noexcept { return technique == Technique::cct ? 0.5f : 0.6f; }
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
 // (Embree reports RTC_INVALID_GEOMETRY_ID there for a plain hit); primID, which matters only for a
@@ -234,6 +244,7 @@ struct SceneCacheStatistics {
     std::size_t resized_cubes = 0;   // adaptive cubes whose face size changed at this begin_frame()
     std::size_t doubtful_texels = 0; // texels the confidence test does not answer (their rays are traced)
     std::size_t emptied_for_origins = 0; // cubes emptied: rays left further out than an invalidation checked
+    std::size_t resting_cubes = 0;   // cubes that rest during the next frame (SceneCacheSettings::min_hit_rate)
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     // The share of the lookups that missed for `why`, 0..1.
@@ -369,6 +380,12 @@ class SceneCache {
         // The counters of cubes this entry's emptied or replaced since the last begin_frame() (scene_changed()
         // may run between a frame and its begin_frame()): that frame's statistics and sizing still count them.
         CubeStatistics carried{};
+        // raycache/resting.hpp: whether the cube rests this frame; whether its hit rate this frame says
+        // nothing of what it would answer, since it started the frame empty (cold) or has just stopped
+        // resting (refilling: it kept only its probe directions current).
+        RestingState rest{};
+        bool cold = true;
+        bool refilling = false;
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -403,7 +420,7 @@ public:
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax), path_records_(settings.path_records == PathRecords::always),
-          record_policy_(settings.path_records), trace_hits_(settings.trace_hits),
+          record_policy_(settings.path_records), trace_hits_(settings.trace_hits), min_hit_rate_(settings.min_hit_rate.value_or(default_min_hit_rate(technique))),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
         validate(adaptive_);
@@ -412,6 +429,9 @@ public:
                                         std::to_string(origin_parallax_));
         if (std::isnan(origin_drift_))
             throw std::invalid_argument("RayCache SceneCacheSettings::origin_drift must be a number (negative: off)");
+        if (!(min_hit_rate_ >= 0.0f))
+            throw std::invalid_argument("RayCache SceneCacheSettings::min_hit_rate must be >= 0 (0: cubes never rest), got " +
+                                        std::to_string(min_hit_rate_));
     }
 
     Technique technique() const noexcept { return technique_; }
@@ -545,6 +565,12 @@ private:
         Entry& e = entries_[static_cast<std::size_t>(index)];
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
+        // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
+        // while it rests, so the other rays need no face choice.
+        if (answerable && e.rest.resting && !shared::raycache_is_probe_direction(direction)) {
+            with_cube(e, [](auto& cube) { cube.record_miss(MissReason::resting); });
+            return trace_alone(trace);
+        }
         if (technique_ == Technique::cct) {
             // The recording form lets exact invalidation keep what a move cannot have changed.
             const OriginTolerance tolerance{origin_drift_ * e.bounds.half_size, origin_parallax_};
@@ -719,10 +745,15 @@ public:
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
+        for (std::size_t i = 0; i < entries_.size(); ++i) decide_rest(entries_[i], frames[i]);
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
         for (Entry& e : entries_)
             if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
         total.resized_cubes = adapt(resizes, parallel_for);
+        for (Entry& e : entries_) {
+            total.resting_cubes += e.rest.resting ? 1 : 0;
+            e.cold = with_cube(e, [](const auto& cube) { return cube.valid_texels(); }) == 0; // as the next frame starts
+        }
         total.texels_read = texels_read_.sum(0);
         total.max_texels_read = max_texels_read_.exchange(0, std::memory_order_relaxed);
         total.texel_bytes = texel_bytes();
@@ -788,7 +819,7 @@ public:
 
     // Empties every cube (the objects keep their cubes) and resets the counters.
     void clear() {
-        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{};
+        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{}, e.refilling = false;
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
@@ -847,11 +878,24 @@ private:
     // was checked for, it may answer rays from anywhere again.
     std::size_t empty_cube(Entry& e) {
         carry_counts(e);
+        e.cold = true;
         e.origins->forget();
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         if (e.cct) e.cct->clear();
         else e.cdct->clear(); // and its pyramid
         return valid;
+    }
+    // raycache/resting.hpp: whether `e` rests during the next frame, after a frame with counters `frame`. A
+    // frame its cube started empty, or refilled after resting, says nothing of what the cube would answer
+    // once filled: it decides nothing (else a cube that stops resting would rest again at once).
+    void decide_rest(Entry& e, const CubeStatistics& frame) {
+        if (e.cold || e.refilling) {
+            e.refilling = false;
+            return;
+        }
+        const bool was_resting = e.rest.resting;
+        e.rest = next_resting_state(e.rest, frame, min_hit_rate_);
+        e.refilling = was_resting && !e.rest.resting;
     }
     // Cubes with more tiles than this share them among the threads in scene_changed() (16 tiles a task).
     static constexpr std::size_t shared_cube_tiles = 64;
@@ -1041,6 +1085,10 @@ private:
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
             if (!e.coverage) continue;
+            if (e.rest.resting) { // its coverage holds the probes' cells alone; the size it had stays
+                e.coverage->reset();
+                continue;
+            }
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
             const std::uint64_t rays = counts_of(e).lookups;
             const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
@@ -1226,6 +1274,7 @@ private:
     bool path_records_;          // the cubes keep path records now (SceneCacheSettings::path_records)
     PathRecords record_policy_;
     bool trace_hits_;            // SceneCacheSettings::trace_hits
+    float min_hit_rate_;         // SceneCacheSettings::min_hit_rate
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     int first_face_size_;                  // adaptive cubes start here (shrink_first_face_size)
     std::vector<Entry> entries_;

@@ -1,0 +1,169 @@
+// Resting cubes in SceneCache (raycache/resting.hpp), on a real Embree scene: a cube that answers too few of
+// its rays lets them through the next frame, but for its probe directions, and works again once those hit.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include <raycache/embree/scene_cache.hpp>
+
+#include "embree_spheres.hpp"
+
+using raycache::MissReason;
+using raycache::TracedRay;
+using raycache::embree::SceneCache;
+using raycache::embree::SceneCacheSettings;
+using raycache::embree::SceneCacheStatistics;
+using raycache::embree::Technique;
+
+namespace {
+
+// A mirror sphere of radius 1 at the origin: its cube's centre 0, half-size 1.
+struct Mirror : EmbreeScene {
+    unsigned id = 0;
+    Mirror() {
+        id = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
+        rtcCommitScene(scene);
+    }
+};
+
+// One ray through each texel centre of a 16-texel face (one texel of the test's cubes each).
+std::vector<glm::vec3> cell_directions() {
+    std::vector<glm::vec3> directions;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 16; ++row)
+            for (int column = 0; column < 16; ++column)
+                directions.push_back(glm::normalize(raycache::texel_direction(raycache::TexelAddress{face, column, row}, 16)));
+    return directions;
+}
+
+// Those of them that probe a resting cube, by the rule written out here: the top 12 bits of each
+// component's float, hashed (multiply by 2654435761, xor the next), probe when the hash's top four bits are 0.
+std::size_t probe_count() {
+    std::size_t n = 0;
+    for (const glm::vec3& d : cell_directions()) {
+        std::uint32_t hash = 0;
+        for (int k = 0; k < 3; ++k) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &d[k], sizeof bits);
+            hash = (hash ^ (bits >> 20)) * 2654435761u;
+        }
+        n += hash >> 28 == 0 ? 1 : 0;
+    }
+    return n;
+}
+
+std::uint64_t rested(const SceneCacheStatistics& s) { return s.misses_by[static_cast<std::size_t>(MissReason::resting)]; }
+
+// One frame of SceneCache `caches` (cube of `mirror`): every direction leaves from `origin`; returns the
+// frame's statistics and counts the rays traced into `traced`.
+SceneCacheStatistics frame(SceneCache& caches, const Mirror& mirror, glm::vec3 origin, int& traced) {
+    for (const glm::vec3& d : cell_directions())
+        caches.leaving_ray({mirror.id}, origin, d, [&] {
+            ++traced;
+            return TracedRay{0.5f + 0.5f * d, 10.0f};
+        });
+    return caches.begin_frame();
+}
+
+SceneCache resting_caches(float min_hit_rate) {
+    SceneCacheSettings s;
+    s.edge_threshold = -1.0f; // every texel answers: the hit rates below are the origin test's alone
+    s.min_hit_rate = min_hit_rate;
+    return SceneCache(Technique::cct, s);
+}
+
+// A mirror whose cube (16-texel faces: one texel a direction cell) saw one cold frame from the top.
+struct WarmMirror {
+    Mirror mirror;
+    SceneCache caches;
+    int traced = 0;
+    explicit WarmMirror(float min_hit_rate) : caches(resting_caches(min_hit_rate)) {
+        caches.attach(mirror.scene, {mirror.id}, 16);
+        from(glm::vec3(0, 1, 0));
+    }
+    // The next frame, every direction leaving from `origin`.
+    SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, mirror, origin, traced); }
+};
+
+} // namespace
+
+TEST_CASE("a cube whose rays all missed rests: the next frame looks up its probe directions alone") {
+    // Frame 0 (WarmMirror) started with an empty cube: all missed, but a cold frame decides nothing.
+    WarmMirror w(0.5f);
+    const std::size_t rays = 1536, probes = probe_count();
+    REQUIRE(probes > 0);
+    const glm::vec3 side(1.0f, 0.0f, 0.0f); // 1.4 from the top: far beyond the origin test's 0.1
+    // Frame 1 leaves from elsewhere: every tile fails the origin test; the cube rests.
+    SceneCacheStatistics s = w.from(side);
+    CHECK(s.hits == 0);
+    CHECK(s.misses_by[static_cast<std::size_t>(MissReason::origin)] == rays);
+    CHECK(rested(s) == 0);
+    CHECK(s.resting_cubes == 1);
+    // Frame 2, resting: every ray is traced, only the probes were looked up (and stored). The stale tiles
+    // were dropped, so the cube started empty: that frame decides nothing either.
+    w.traced = 0;
+    s = w.from(side);
+    CHECK(w.traced == static_cast<int>(rays));
+    CHECK(s.lookups == rays); // resting rays count as lookups, so adaptive sizes still see them
+    CHECK(rested(s) == rays - probes);
+    CHECK(s.misses_by[static_cast<std::size_t>(MissReason::empty)] == probes);
+    CHECK(s.stores == probes);
+    CHECK(s.resting_cubes == 1);
+    // Frame 3, resting: the probes hit what frame 2 stored; the cube works again.
+    w.traced = 0;
+    s = w.from(side);
+    CHECK(s.hits == probes);
+    CHECK(w.traced == static_cast<int>(rays - probes));
+    CHECK(rested(s) == rays - probes);
+    CHECK(s.resting_cubes == 0);
+    // Frame 4 works: every ray looked up; the directions let through while resting are empty and refill.
+    // Its low hit rate (a sixteenth) decides nothing: a cube just back from resting refills first.
+    s = w.from(side);
+    CHECK(rested(s) == 0);
+    CHECK(s.hits == probes);
+    CHECK(s.misses_by[static_cast<std::size_t>(MissReason::empty)] == rays - probes);
+    CHECK(s.resting_cubes == 0);
+    // Frame 5: every direction hits, and it stays working.
+    w.traced = 0;
+    s = w.from(side);
+    CHECK(s.hits == rays);
+    CHECK(w.traced == 0);
+    CHECK(s.resting_cubes == 0);
+}
+
+TEST_CASE("with min_hit_rate 0 a cube never rests, whatever its hit rate") {
+    WarmMirror w(0.0f);
+    for (int f = 0; f < 3; ++f) {
+        // From alternating points: every frame misses on the origin test or on dropped tiles.
+        const SceneCacheStatistics s = w.from(f % 2 ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0));
+        CHECK(s.hits == 0);
+        CHECK(rested(s) == 0);
+        CHECK(s.resting_cubes == 0);
+    }
+}
+
+TEST_CASE("a cube emptied by clear() is cold again: its next frame decides nothing, and it stops resting") {
+    WarmMirror w(0.5f);
+    CHECK(w.from(glm::vec3(1, 0, 0)).resting_cubes == 1);
+    w.caches.clear();
+    const SceneCacheStatistics s = w.from(glm::vec3(1, 0, 0)); // all miss: empty
+    CHECK(rested(s) == 0);
+    CHECK(s.hits == 0);
+    CHECK(s.resting_cubes == 0);
+    CHECK(w.from(glm::vec3(1, 0, 0)).hits == 1536);
+}
+
+TEST_CASE("min_hit_rate must be a number >= 0") {
+    for (const float bad : {-0.1f, std::numeric_limits<float>::quiet_NaN()}) {
+        SceneCacheSettings s;
+        s.min_hit_rate = bad;
+        CHECK_THROWS_AS(SceneCache(Technique::cct, s), std::invalid_argument);
+    }
+    SceneCacheSettings s;
+    s.min_hit_rate = 2.0f; // above any hit rate: every cube rests once warm (a measurement aid)
+    CHECK_NOTHROW(SceneCache(Technique::cdct, s));
+}
