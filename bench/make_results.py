@@ -144,7 +144,8 @@ def plot_walkthrough(results, out):
 
 
 MISS_REASONS = [("empty", "tab:red"), ("fresh", "tab:orange"), ("doubtful", "tab:purple"),
-                ("origin", "tab:brown"), ("search", "tab:gray"), ("outside", "black")]
+                ("origin", "tab:brown"), ("search", "tab:gray"), ("outside", "black"),
+                ("resting", "tab:cyan")]
 
 
 def plot_walkthrough_misses(scene, data, out):

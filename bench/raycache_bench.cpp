@@ -62,7 +62,12 @@ Variant make_variant(const rcx::embree::Tracer& tracer, std::string label, Cache
     v.label = std::move(label);
     v.mode = mode;
     if (rcx::uses_caches(mode)) {
-        v.caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, relief, pyramid);
+        // The thesis's caches: every cube answers every frame (SceneCacheSettings::min_hit_rate 0, no resting).
+        raycache::embree::SceneCacheSettings settings;
+        settings.relief = relief;
+        settings.depth_pyramid = pyramid;
+        settings.min_hit_rate = 0.0f;
+        v.caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, settings);
         tracer.attach_caches(*v.caches, face_size);
         if (prefill) {
             tracer.prefill(*v.caches);

@@ -66,17 +66,20 @@ struct Options {
     std::vector<std::string> startup{"mirrors-1000", "behind-32"};
     double startup_budget_mib = 8192.0;
     std::vector<std::string> warm_start{"behind-32"};
+    std::optional<float> min_hit_rate; // SceneCacheSettings::min_hit_rate (unset: the technique's default)
 };
 
 const char* const usage =
     "usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST] [--paths LIST]\n"
-    "       [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N] [--warm-start LIST]\n"
+    "       [--modes LIST] [--face-size N] [--min-hit-rate F] [--startup LIST] [--startup-budget-mib N]\n"
+    "       [--warm-start LIST]\n"
     "  --size N             N x N pixels                                                [1024]\n"
     "  --frames N           frames per path, 1 degree apart                             [30]\n"
     "  --scenes LIST        comma-separated scenes            [behind-32,grid-32,reflective-32]\n"
     "  --paths LIST         fixed, orbit, pan                                [fixed,orbit,pan]\n"
     "  --modes LIST         off, cct, cdct, ceiling (off is always rendered: the reference)\n"
     "  --face-size N|auto   texels per cube face side; auto: adaptive (the tracer's default) [auto]\n"
+    "  --min-hit-rate F     cubes answering fewer of their rays rest; 0: never    [CCT 0.5, CDCT 0.6]\n"
     "  --startup LIST       scenes of the start-up section, or none    [mirrors-1000,behind-32]\n"
     "  --startup-budget-mib N  start-up rows whose cubes would need more are not allocated [8192]\n"
     "  --warm-start LIST    scenes whose caches are saved after an orbit and loaded back, or none [behind-32]\n"
@@ -95,6 +98,7 @@ std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, 
     settings.relief = rcx::bench::our_relief;
     settings.depth_pyramid = true;
     if (first_face_size > 0) settings.adaptive.first_face_size = first_face_size;
+    settings.min_hit_rate = o.min_hit_rate;
     auto caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, settings);
     tracer.attach_caches(*caches, o.face_size);
     return caches;
@@ -513,6 +517,13 @@ Options parse_options(int argc, char** argv) {
             const std::string v = value();
             face = v == "auto" ? 0 : positive(a, v);
         }
+        else if (a == "--min-hit-rate") {
+            const std::string v = value();
+            char* end = nullptr;
+            const float rate = std::strtof(v.c_str(), &end);
+            if (end == v.c_str() || *end != '\0' || !(rate >= 0.0f)) throw rcx::UsageError(a + ": '" + v + "' is not a number >= 0");
+            o.min_hit_rate = rate;
+        }
         else if (a == "--scenes") o.scenes = rcx::bench::split_list(value());
         else if (a == "--paths") o.paths = parse_each<PathKind>(a, value(), rcx::parse_path_kind, "fixed, orbit, pan");
         else if (a == "--modes") o.modes = parse_each<CacheMode>(a, value(), rcx::parse_cache_mode, "off, cct, cdct, ceiling");
@@ -564,11 +575,11 @@ int main(int argc, char** argv) {
         out.frames_csv = out.report.csv("walkthrough_frames.csv",
                                         "scene,path,frame,mode,ms,speedup,psnr,mean_abs_error,max_abs_error,hit_rate,"
                                         "texels_per_lookup,max_texels,valid_fraction,cube_bytes,rays,miss_empty,miss_fresh,"
-                                        "miss_doubtful,miss_origin,miss_search,miss_outside");
+                                        "miss_doubtful,miss_origin,miss_search,miss_outside,miss_resting");
         out.paths_csv = out.report.csv("walkthrough_paths.csv",
                                        "scene,path,mode,frames,off_ms,ms,speedup,median_ratio_speedup,ceiling_share,"
                                        "psnr_mean,psnr_min,identical_frames,hit_rate,texels_per_lookup,cube_bytes,miss_empty,"
-                                       "miss_fresh,miss_doubtful,miss_origin,miss_search,miss_outside");
+                                       "miss_fresh,miss_doubtful,miss_origin,miss_search,miss_outside,miss_resting");
         for (const std::string& name : o.scenes) {
             progress("walkthrough: " + name + " (" + std::to_string(o.frames) + " frames x " + std::to_string(o.modes.size()) +
                      " modes per path)");
@@ -608,14 +619,15 @@ int main(int argc, char** argv) {
            << "texel held nothing: never stored, or dropped with a stale tile), *fresh* (stored this frame, visible from "
            << "the next), *doubtful* (at a colour edge: the confidence test traces it), *origin* (CCT: the ray left too far "
            << "from its tile's origins; the tile is dropped and refills), *search* (CDCT: no consistent crossing within "
-           << "the reads), *outside* (not answerable). *Free lookups* is the speed-up the hit rate alone would give if "
+           << "the reads), *outside* (not answerable), *resting* (the cube rested: it had answered too few of its rays, "
+           << "so its rays were traced, but for a sixteenth of the directions, which kept measuring it). *Free lookups* is the speed-up the hit rate alone would give if "
            << "lookups and stores cost nothing and a missed ray cost what an average leaving ray costs (the ceiling's ms "
            << "plus the missed share of what the ceiling saves); *ms beyond* is the mode's mean ms minus that time: what "
            << "looking up, storing and ending frames cost, and what the missed rays cost above the average. A rough "
            << "split: the lookups include those of rays leaving cached objects inside a missed ray's trace, which "
            << "the ceiling never makes, so where cached objects reflect each other it is approximate.\n\n"
            << rcx::bench::markdown_table({"scene", "path", "mode", "hit rate", "empty", "fresh", "doubtful", "origin",
-                                          "search", "outside", "free lookups", "ms beyond"},
+                                          "search", "outside", "resting", "free lookups", "ms beyond"},
                                          out.miss_rows)
            << "\n"
            << startup_md << "\n" << single_md << (warm_start_md.empty() ? "" : "\n") << warm_start_md;

@@ -18,10 +18,11 @@ cmake --build build-release --target raycache_embree_whitted -j"$(nproc 2>/dev/n
 tracer=build-release/examples/embree_whitted/raycache_embree_whitted
 common=(--scene behind-32 --size 1024x1024 --path orbit --step 1 --frames 16 --compare)
 echo
-echo "===== CCT: colour caching; adaptive cube sizes, texels at colour edges traced (frame 0 is cold) ====="
+echo "===== CCT: colour caching; adaptive cube sizes, texels at colour edges traced (frame 0 is cold);"
+echo "      a cube whose rays found under 50% hits rests the next frame (its rays traced, a sixteenth probing) ====="
 "$tracer" "${common[@]}" --cache cct --out out/main/cct "$@"
 echo
-echo "===== CDCT: colour + depth, secant search (a few texel reads), doubtful answers traced ====="
+echo "===== CDCT: colour + depth, secant search (a few texel reads), doubtful answers traced; rests under 60% hits ====="
 "$tracer" "${common[@]}" --cache cdct --out out/main/cdct "$@"
 echo
 echo "Images: out/main/{cct,cdct}/ (frames, uncached references, difference images: blue = equal, red = different)."

@@ -113,6 +113,7 @@ int run(const rcx::Options& o) {
             cache_settings.budget_bytes = static_cast<std::size_t>(o.budget_mib) << 20;
             cache_settings.filtered = o.filtered;
             cache_settings.trace_hits = o.trace_hits;
+            if (o.min_hit_rate >= 0.0f) cache_settings.min_hit_rate = o.min_hit_rate;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
             cache_settings.origin_parallax = o.origin_parallax;
@@ -280,7 +281,7 @@ int run(const rcx::Options& o) {
                         100.0 * static_cast<double>(misses_by[k]) / static_cast<double>(lookups));
         std::printf(" (empty: not stored or dropped; fresh: stored this frame; doubtful: a colour edge;"
                     " origin: left too far from the tile's origins; search: no consistent CDCT crossing;"
-                    " outside: not answerable)\n");
+                    " outside: not answerable; resting: a cube that did not pay, traced)\n");
     }
     if (o.compare) {
         const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;

@@ -164,6 +164,15 @@ CommandLine::CommandLine(const std::string& program)
              "diagnostics: rays the cubes answer are traced anyway, so frames\n"
              "equal uncached ones and what a frame takes beyond an uncached one\n"
              "is the cache's own work (Embree tracer)");
+    add_option("--min-hit-rate", "F",
+               "a cube whose rays found fewer hits than this share in a frame\n"
+               "rests: its rays are traced, but for a sixteenth of the directions,\n"
+               "which keep measuring it; 0: cubes never rest (Embree tracer)\n"
+               "[CCT 0.5, CDCT 0.6]",
+               [&o](const std::string& text) {
+                   o.min_hit_rate = parse_float_value("--min-hit-rate", text, false);
+                   if (!(o.min_hit_rate >= 0.0f)) throw UsageError("--min-hit-rate: must be >= 0, got '" + text + "'");
+               });
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"
                "traced, not answered (CCT and CDCT); negative: off " + shown_default(d.edge_threshold),
