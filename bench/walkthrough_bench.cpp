@@ -156,7 +156,7 @@ struct PathSummary {
     double psnr_mean = 0.0, psnr_min = 0.0;
     int identical_frames = 0;          // frames equal to 'off' in every 8-bit value (PSNR infinite)
     double hit_rate = 0.0;             // mean over the warm frames
-    double texels_per_lookup = 0.0;    // texels read / lookups, summed over the warm frames
+    double texels_per_lookup = 0.0;    // texels read / rays looked up (resting ones left out), over the warm frames
     std::size_t cube_bytes = 0;
     // Hits and misses by raycache::MissReason as shares of all the warm frames' lookups together.
     double pooled_hit_rate = 0.0;
@@ -173,7 +173,7 @@ std::array<double, raycache::miss_reason_count> miss_shares(const SceneCacheStat
 PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
     PathSummary s;
     std::vector<double> off_ms, ms, ratios, psnrs, hits;
-    std::uint64_t texels = 0, lookups = 0, hit_count = 0;
+    std::uint64_t texels = 0, searched = 0, lookups = 0, hit_count = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
     s.psnr_min = std::numeric_limits<double>::infinity();
     for (std::size_t f : warm_frames(m.frames.size())) {
@@ -186,6 +186,7 @@ PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
         else ++s.identical_frames;
         hits.push_back(r.stats.hit_rate());
         texels += r.stats.texels_read;
+        searched += r.stats.looked_up();
         lookups += r.stats.lookups;
         hit_count += r.stats.hits;
         for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += r.stats.misses_by[k];
@@ -197,7 +198,7 @@ PathSummary summarise(const ModeTrack& off, const ModeTrack& m) {
     s.median_ratio_speedup = median(ratios);
     s.psnr_mean = psnrs.empty() ? std::numeric_limits<double>::infinity() : mean_of(psnrs);
     s.hit_rate = mean_of(hits);
-    s.texels_per_lookup = lookups ? static_cast<double>(texels) / static_cast<double>(lookups) : 0.0;
+    s.texels_per_lookup = searched ? static_cast<double>(texels) / static_cast<double>(searched) : 0.0; // resting rays read none
     s.pooled_hit_rate = lookups ? static_cast<double>(hit_count) / static_cast<double>(lookups) : 0.0;
     for (std::size_t k = 0; k < misses_by.size(); ++k)
         s.miss_shares[k] = lookups ? static_cast<double>(misses_by[k]) / static_cast<double>(lookups) : 0.0;

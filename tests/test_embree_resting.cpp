@@ -167,3 +167,14 @@ TEST_CASE("min_hit_rate must be a number >= 0") {
     s.min_hit_rate = 2.0f; // above any hit rate: every cube rests once warm (a measurement aid)
     CHECK_NOTHROW(SceneCache(Technique::cdct, s));
 }
+
+TEST_CASE("texels a CDCT search read are counted over the rays looked up, not over the rays a resting cube let through") {
+    SceneCacheStatistics s;
+    s.lookups = 100;
+    s.misses_by[static_cast<std::size_t>(MissReason::resting)] = 60;
+    s.texels_read = 80;
+    CHECK(s.looked_up() == 40u);
+    CHECK(s.texels_per_lookup() == doctest::Approx(2.0));
+    s.misses_by[static_cast<std::size_t>(MissReason::resting)] = 100; // every ray let through
+    CHECK(s.texels_per_lookup() == 0.0);
+}

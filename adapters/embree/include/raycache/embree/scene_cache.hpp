@@ -254,8 +254,12 @@ struct SceneCacheStatistics {
     double valid_fraction() const noexcept {
         return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
     }
+    // Lookups a cube made (its resting misses left out: a resting cube reads nothing for them).
+    std::uint64_t looked_up() const noexcept { return lookups - misses_by[static_cast<std::size_t>(MissReason::resting)]; }
+    // CDCT: texels a search read, over the rays looked up.
     double texels_per_lookup() const noexcept {
-        return lookups ? static_cast<double>(texels_read) / static_cast<double>(lookups) : 0.0;
+        const std::uint64_t n = looked_up();
+        return n ? static_cast<double>(texels_read) / static_cast<double>(n) : 0.0;
     }
 };
 
