@@ -58,11 +58,11 @@ std::size_t probe_count() {
 
 std::uint64_t rested(const SceneCacheStatistics& s) { return s.misses_by[static_cast<std::size_t>(MissReason::resting)]; }
 
-// One frame of SceneCache `caches` (cube of `mirror`): every direction leaves from `origin`; returns the
-// frame's statistics and counts the rays traced into `traced`.
-SceneCacheStatistics frame(SceneCache& caches, const Mirror& mirror, glm::vec3 origin, int& traced) {
+// One frame of SceneCache `caches` (the cube of geometry `object`): every direction leaves from `origin`;
+// returns the frame's statistics and counts the rays traced into `traced`.
+SceneCacheStatistics frame(SceneCache& caches, unsigned object, glm::vec3 origin, int& traced) {
     for (const glm::vec3& d : cell_directions())
-        caches.leaving_ray({mirror.id}, origin, d, [&] {
+        caches.leaving_ray({object}, origin, d, [&] {
             ++traced;
             return TracedRay{0.5f + 0.5f * d, 10.0f};
         });
@@ -86,7 +86,7 @@ struct WarmMirror {
         from(glm::vec3(0, 1, 0));
     }
     // The next frame, every direction leaving from `origin`.
-    SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, mirror, origin, traced); }
+    SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, mirror.id, origin, traced); }
 };
 
 } // namespace
@@ -155,6 +155,40 @@ TEST_CASE("a cube emptied by clear() is cold again: its next frame decides nothi
     CHECK(s.hits == 0);
     CHECK(s.resting_cubes == 0);
     CHECK(w.from(glm::vec3(1, 0, 0)).hits == 1536);
+}
+
+TEST_CASE("cubes emptied by a scene change, or replaced when path records start, decide nothing the next frame") {
+    // A ball moves far from the mirror: the first move makes every cube keep path records, which replaces
+    // it by an empty one; the frame after finds it empty (all misses) and must not rest it.
+    struct World : EmbreeScene {
+        unsigned mirror = 0, ball = 0;
+        World() {
+            mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
+            ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
+            rtcCommitScene(scene);
+        }
+    } w;
+    SceneCache caches = resting_caches(0.5f);
+    caches.attach(w.scene, {w.mirror}, 16);
+    int traced = 0;
+    const glm::vec3 top(0, 1, 0);
+    frame(caches, w.mirror, top, traced);
+    CHECK(frame(caches, w.mirror, top, traced).hits == 1536); // warm, working
+    raycache::embree::SceneChange change;
+    change.moved.push_back({{w.ball}, {glm::vec3(-6, 0, 0), 0.2f}, {glm::vec3(-6, 0, 1), 0.2f}, std::nullopt});
+    caches.scene_changed(change, raycache::embree::Invalidation::exact);
+    REQUIRE(caches.keeps_path_records());
+    SceneCacheStatistics s = frame(caches, w.mirror, top, traced);
+    CHECK(s.hits == 0); // the replaced cube was empty
+    CHECK(s.resting_cubes == 0);
+    CHECK(frame(caches, w.mirror, top, traced).hits == 1536);
+    // Moving the mirror itself empties its cube: the same.
+    raycache::embree::SceneChange mirror_moved;
+    mirror_moved.moved.push_back({{w.mirror}, {glm::vec3(0, 0, 0), 1.0f}, {glm::vec3(0, 0, 0), 1.0f}, std::nullopt});
+    caches.scene_changed(mirror_moved, raycache::embree::Invalidation::exact);
+    s = frame(caches, w.mirror, top, traced);
+    CHECK(s.hits == 0);
+    CHECK(s.resting_cubes == 0);
 }
 
 TEST_CASE("min_hit_rate must be a number >= 0") {

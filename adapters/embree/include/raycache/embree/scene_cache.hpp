@@ -1047,6 +1047,7 @@ private:
     // Gives `e` a new, empty cube (and pyramid) of `face_size` drawing on the budget.
     void make_cube(Entry& e, int face_size) {
         if (e.cct || e.cdct) carry_counts(e); // a cube replaced within a frame: its counts stay the frame's
+        e.cold = true; // empty (begin_frame() looks again after filling a smaller one from the old)
         if (technique_ == Technique::cct) {
             e.cct = std::make_unique<CctCube>(face_size, budget_, path_records_);
         } else {
