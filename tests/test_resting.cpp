@@ -25,6 +25,11 @@ CubeStatistics frame(std::uint64_t lookups, std::uint64_t hits, std::uint64_t re
     return s;
 }
 
+// Whether a cube working (or resting, `resting`) in a judged frame with counters `f` rests next.
+bool rests(bool resting, const CubeStatistics& f, float min_hit_rate) {
+    return raycache::next_resting_state(raycache::RestingState{resting, 0, false}, f, min_hit_rate).resting;
+}
+
 } // namespace
 
 TEST_CASE("probe directions are a sixteenth of all directions, spread over every quarter of every cube face") {
@@ -79,34 +84,34 @@ TEST_CASE("a probe is a box of directions: the low mantissa bits of a component 
 }
 
 TEST_CASE("a working cube rests after a frame whose hit rate fell below min_hit_rate, and not at it") {
-    CHECK(raycache::rests_next_frame(false, frame(100, 40), 0.5f));
-    CHECK(raycache::rests_next_frame(false, frame(100, 49), 0.5f));
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 50), 0.5f)); // 50 %: not below
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 40), 0.4f));
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(100, 90), 0.5f));
-    CHECK(raycache::rests_next_frame(false, frame(1000, 0), 0.01f));
+    CHECK(rests(false, frame(100, 40), 0.5f));
+    CHECK(rests(false, frame(100, 49), 0.5f));
+    CHECK_FALSE(rests(false, frame(100, 50), 0.5f)); // 50 %: not below
+    CHECK_FALSE(rests(false, frame(100, 40), 0.4f));
+    CHECK_FALSE(rests(false, frame(100, 90), 0.5f));
+    CHECK(rests(false, frame(1000, 0), 0.01f));
 }
 
 TEST_CASE("a resting cube is judged by the rays it looked up (its probes), not by the rays it let through") {
     // 1000 rays, 940 let through resting: 60 probes, 30 hits, 50 %.
     CHECK(raycache::looked_up_hit_rate(frame(1000, 30, 940)).value() == doctest::Approx(0.5));
-    CHECK_FALSE(raycache::rests_next_frame(true, frame(1000, 30, 940), 0.5f)); // works again
-    CHECK(raycache::rests_next_frame(true, frame(1000, 29, 940), 0.5f));       // 48 %: rests on
+    CHECK_FALSE(rests(true, frame(1000, 30, 940), 0.5f)); // works again
+    CHECK(rests(true, frame(1000, 29, 940), 0.5f));       // 48 %: rests on
     // (Judged over all 1000 rays, 3 %, it would rest for ever.)
 }
 
 TEST_CASE("too few looked-up rays decide nothing: the cube keeps resting or working") {
     const std::uint64_t few = raycache::resting_min_judged_lookups - 1;
     CHECK_FALSE(raycache::looked_up_hit_rate(frame(few, 0)).has_value());
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(few, 0), 0.5f));
-    CHECK(raycache::rests_next_frame(true, frame(few, few), 0.5f));
-    CHECK(raycache::rests_next_frame(true, frame(1000, 0, 1000), 0.5f)); // no probe at all: rests on
+    CHECK_FALSE(rests(false, frame(few, 0), 0.5f));
+    CHECK(rests(true, frame(few, few), 0.5f));
+    CHECK(rests(true, frame(1000, 0, 1000), 0.5f)); // no probe at all: rests on
     CHECK(raycache::looked_up_hit_rate(frame(few + 1, 0)).has_value());
 }
 
 TEST_CASE("a resting cube too few of whose rays probe works again after resting_max_unjudged_frames frames") {
     const CubeStatistics unprobed = frame(1000, 0, 1000); // every ray let through: nothing to judge by
-    raycache::RestingState state{true, 0};
+    raycache::RestingState state{true, 0, false};
     for (int f = 1; f < raycache::resting_max_unjudged_frames; ++f) {
         CAPTURE(f);
         state = raycache::next_resting_state(state, unprobed, 0.5f);
@@ -117,17 +122,43 @@ TEST_CASE("a resting cube too few of whose rays probe works again after resting_
     CHECK_FALSE(state.resting);
     CHECK(state.unjudged == 0);
     // A frame that judges it starts the count again, resting or not.
-    CHECK(raycache::next_resting_state({true, 5}, frame(1000, 10, 900), 0.5f).unjudged == 0);
-    CHECK(raycache::next_resting_state({true, 5}, frame(1000, 10, 900), 0.5f).resting);
+    CHECK(raycache::next_resting_state({true, 5, false}, frame(1000, 10, 900), 0.5f).unjudged == 0);
+    CHECK(raycache::next_resting_state({true, 5, false}, frame(1000, 10, 900), 0.5f).resting);
     // A working cube with too few rays to judge keeps working, and counts nothing.
-    CHECK(raycache::next_resting_state({false, 0}, frame(3, 0), 0.5f).unjudged == 0);
+    CHECK(raycache::next_resting_state({false, 0, false}, frame(3, 0), 0.5f).unjudged == 0);
+}
+
+TEST_CASE("a frame the cube started empty, or refilled in after resting, decides nothing") {
+    using raycache::RestingState;
+    const CubeStatistics missed_all = frame(1000, 0); // a working cube's frame: no hit at all
+    // Started empty: its misses say nothing; the state stays.
+    CHECK_FALSE(raycache::next_resting_state(RestingState{}, missed_all, 0.5f, true).resting);
+    const RestingState resting{true, 3, false};
+    const RestingState kept = raycache::next_resting_state(resting, frame(1000, 10, 900), 0.5f, true);
+    CHECK(kept.resting);
+    CHECK(kept.unjudged == 3);
+    // A resting cube whose probes hit works again, and refills first: that frame decides nothing either.
+    RestingState state = raycache::next_resting_state(resting, frame(1000, 90, 900), 0.5f); // 90 % of the probes
+    CHECK_FALSE(state.resting);
+    CHECK(state.refilling);
+    state = raycache::next_resting_state(state, missed_all, 0.5f);
+    CHECK_FALSE(state.resting); // refilled, not judged
+    CHECK_FALSE(state.refilling);
+    state = raycache::next_resting_state(state, missed_all, 0.5f);
+    CHECK(state.resting); // judged again
+    CHECK_FALSE(state.refilling);
+    // Resting after too many unjudged frames also ends in a refill.
+    const RestingState given_up = raycache::next_resting_state(
+        RestingState{true, raycache::resting_max_unjudged_frames - 1, false}, frame(1000, 0, 1000), 0.5f);
+    CHECK_FALSE(given_up.resting);
+    CHECK(given_up.refilling);
 }
 
 TEST_CASE("min_hit_rate 0 (or not a number) never rests a cube, whatever its hit rate") {
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), 0.0f));
-    CHECK_FALSE(raycache::rests_next_frame(true, frame(1000, 0, 900), 0.0f));
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), std::numeric_limits<float>::quiet_NaN()));
-    CHECK_FALSE(raycache::rests_next_frame(false, frame(1000, 0), -1.0f));
+    CHECK_FALSE(rests(false, frame(1000, 0), 0.0f));
+    CHECK_FALSE(rests(true, frame(1000, 0, 900), 0.0f));
+    CHECK_FALSE(rests(false, frame(1000, 0), std::numeric_limits<float>::quiet_NaN()));
+    CHECK_FALSE(rests(false, frame(1000, 0), -1.0f));
 }
 
 TEST_CASE("a resting miss has a name and a counter slot of its own") {

@@ -6,13 +6,14 @@
 // half of its rays makes a frame slower than no cube would. Along a camera path a mirror can hover there:
 // its tiles' origins drift out of the origin test every few frames, or its reflections are mostly colour
 // edges. Such a cube rests. Its rays are traced as if it were not there (counted as MissReason::resting
-// misses, no lookup, no store), except the rays whose direction falls in a probe cell
-// (shared::raycache_is_probe_direction: a sixteenth of direction space, in small boxes scattered over
-// it, tested without a face choice), which go on looking up and storing, so that the hit rate the whole cube would have stays measured. Each frame
+// misses, no lookup, no store), except its probe directions (shared::raycache_is_probe_direction: a
+// sixteenth of direction space, in small boxes scattered over it, tested without a face choice), which
+// go on looking up and storing, so that the hit rate the whole cube would have stays measured. Each frame
 // decides the next: a working cube rests when the rays it looked up found fewer than min_hit_rate hits;
 // a resting cube works again when its probes find at least that many, or after resting_max_unjudged_frames
-// frames with too few probes to tell. Decisions follow the frame's counters alone, so frames stay the
-// same with 1 or N threads.
+// frames with too few probes to tell. A frame the cube started empty, or refilled in just after resting,
+// decides nothing. Decisions follow the frame's counters alone, so frames stay the same with 1 or N
+// threads.
 
 #include "raycache/shared/coverage.h"
 #include "raycache/statistics.hpp"
@@ -33,8 +34,7 @@ inline constexpr std::uint64_t resting_min_judged_lookups = 32;
 // The hit rate of the rays a frame looked up in a cube (its resting misses left out); std::nullopt when
 // they were fewer than resting_min_judged_lookups.
 inline std::optional<double> looked_up_hit_rate(const CubeStatistics& frame) noexcept {
-    const std::uint64_t rested = frame.misses_by[static_cast<std::size_t>(MissReason::resting)];
-    const std::uint64_t looked_up = frame.lookups >= rested ? frame.lookups - rested : 0;
+    const std::uint64_t looked_up = frame.looked_up();
     if (looked_up < resting_min_judged_lookups) return std::nullopt;
     return static_cast<double>(frame.hits) / static_cast<double>(looked_up);
 }
@@ -46,23 +46,28 @@ inline constexpr int resting_max_unjudged_frames = 8;
 // One cube's resting state from frame to frame.
 struct RestingState {
     bool resting = false;
-    int unjudged = 0; // frames in a row it rested with too few probes to judge it
+    int unjudged = 0;       // frames in a row it rested with too few probes to judge it
+    bool refilling = false; // it has just stopped resting: its next frame refills what it let through
 };
 
-// The state for the next frame of a cube in state `now` after a frame with counters `frame`.
-// min_hit_rate <= 0 (or NaN): never resting.
-inline RestingState next_resting_state(RestingState now, const CubeStatistics& frame, float min_hit_rate) noexcept {
+// The state for the next frame of a cube in state `now` after a frame with counters `frame`, which the
+// cube started empty when `started_empty`. A frame it started empty, or refilled in, says nothing of what
+// it would answer once filled, so it keeps the state (else a cube that stops resting would rest again at
+// once). min_hit_rate <= 0 (or NaN): never resting.
+inline RestingState next_resting_state(RestingState now, const CubeStatistics& frame, float min_hit_rate,
+                                       bool started_empty = false) noexcept {
     if (!(min_hit_rate > 0.0f)) return {};
+    if (started_empty || now.refilling) {
+        now.refilling = false;
+        return now;
+    }
+    RestingState next;
     if (const std::optional<double> rate = looked_up_hit_rate(frame))
-        return {static_cast<float>(*rate) < min_hit_rate, 0}; // compared as floats: exactly 0.4 is not below 0.4f
-    if (!now.resting || now.unjudged + 1 >= resting_max_unjudged_frames) return {};
-    return {true, now.unjudged + 1};
-}
-
-// Whether a cube rests during the next frame, after a frame with counters `frame` in which it rested
-// (`resting`) or worked (next_resting_state() without the count of unjudged frames).
-inline bool rests_next_frame(bool resting, const CubeStatistics& frame, float min_hit_rate) noexcept {
-    return next_resting_state(RestingState{resting, 0}, frame, min_hit_rate).resting;
+        next.resting = static_cast<float>(*rate) < min_hit_rate; // compared as floats: exactly 0.4 is not below 0.4f
+    else if (now.resting && now.unjudged + 1 < resting_max_unjudged_frames)
+        next = {true, now.unjudged + 1};
+    next.refilling = now.resting && !next.resting;
+    return next;
 }
 
 } // namespace raycache

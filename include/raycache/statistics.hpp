@@ -31,6 +31,13 @@ enum class MissReason : std::uint8_t {
 };
 inline constexpr std::size_t miss_reason_count = 7;
 
+// Of `lookups` with misses `misses_by` (by MissReason), those a cube really made: its resting misses left
+// out. (CubeStatistics::looked_up() and the Embree adapter's totals.)
+inline std::uint64_t looked_up_count(std::uint64_t lookups, const std::array<std::uint64_t, miss_reason_count>& misses_by) noexcept {
+    const std::uint64_t rested = misses_by[static_cast<std::size_t>(MissReason::resting)];
+    return lookups >= rested ? lookups - rested : 0;
+}
+
 // A snapshot of one cube's counters since they were last reset (begin_frame() resets them).
 struct CubeStatistics {
     std::uint64_t lookups = 0;          // hits + misses
@@ -49,6 +56,8 @@ struct CubeStatistics {
     double hit_rate() const noexcept {
         return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
     }
+    // Lookups the cube made: its resting misses (raycache/resting.hpp) left out, since it read nothing for them.
+    std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }
     // The share of the lookups that missed for `why`, 0..1 (0 for every cause on GPU statistics).
     double miss_share(MissReason why) const noexcept {
         return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;

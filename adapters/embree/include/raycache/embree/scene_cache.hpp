@@ -254,8 +254,8 @@ struct SceneCacheStatistics {
     double valid_fraction() const noexcept {
         return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
     }
-    // Lookups a cube made (its resting misses left out: a resting cube reads nothing for them).
-    std::uint64_t looked_up() const noexcept { return lookups - misses_by[static_cast<std::size_t>(MissReason::resting)]; }
+    // Lookups the cubes made (resting misses left out: a resting cube reads nothing for them).
+    std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }
     // CDCT: texels a search read, over the rays looked up.
     double texels_per_lookup() const noexcept {
         const std::uint64_t n = looked_up();
@@ -384,12 +384,9 @@ class SceneCache {
         // The counters of cubes this entry's emptied or replaced since the last begin_frame() (scene_changed()
         // may run between a frame and its begin_frame()): that frame's statistics and sizing still count them.
         CubeStatistics carried{};
-        // raycache/resting.hpp: whether the cube rests this frame; whether its hit rate this frame says
-        // nothing of what it would answer, since it started the frame empty (cold) or has just stopped
-        // resting (refilling: it kept only its probe directions current).
+        // raycache/resting.hpp: whether the cube rests this frame, and whether it started the frame empty.
         RestingState rest{};
         bool cold = true;
-        bool refilling = false;
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -571,7 +568,7 @@ private:
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
         // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
         // while it rests, so the other rays need no face choice.
-        if (answerable && e.rest.resting && !shared::raycache_is_probe_direction(direction)) {
+        if (answerable && e.rest.resting && !is_probe_direction(direction)) {
             with_cube(e, [](auto& cube) { cube.record_miss(MissReason::resting); });
             return trace_alone(trace);
         }
@@ -749,7 +746,7 @@ public:
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
-        for (std::size_t i = 0; i < entries_.size(); ++i) decide_rest(entries_[i], frames[i]);
+        for (std::size_t i = 0; i < entries_.size(); ++i) entries_[i].rest = next_resting_state(entries_[i].rest, frames[i], min_hit_rate_, entries_[i].cold);
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
         for (Entry& e : entries_)
             if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
@@ -823,7 +820,7 @@ public:
 
     // Empties every cube (the objects keep their cubes) and resets the counters.
     void clear() {
-        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{}, e.refilling = false;
+        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{};
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
@@ -888,18 +885,6 @@ private:
         if (e.cct) e.cct->clear();
         else e.cdct->clear(); // and its pyramid
         return valid;
-    }
-    // raycache/resting.hpp: whether `e` rests during the next frame, after a frame with counters `frame`. A
-    // frame its cube started empty, or refilled after resting, says nothing of what the cube would answer
-    // once filled: it decides nothing (else a cube that stops resting would rest again at once).
-    void decide_rest(Entry& e, const CubeStatistics& frame) {
-        if (e.cold || e.refilling) {
-            e.refilling = false;
-            return;
-        }
-        const bool was_resting = e.rest.resting;
-        e.rest = next_resting_state(e.rest, frame, min_hit_rate_);
-        e.refilling = was_resting && !e.rest.resting;
     }
     // Cubes with more tiles than this share them among the threads in scene_changed() (16 tiles a task).
     static constexpr std::size_t shared_cube_tiles = 64;
