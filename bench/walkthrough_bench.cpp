@@ -34,6 +34,7 @@
 
 #include "bench_common.hpp"
 #include "bench_embree.hpp"
+#include "rcx/option_values.hpp"
 #include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
 
@@ -520,9 +521,8 @@ Options parse_options(int argc, char** argv) {
         }
         else if (a == "--min-hit-rate") {
             const std::string v = value();
-            char* end = nullptr;
-            const float rate = std::strtof(v.c_str(), &end);
-            if (end == v.c_str() || *end != '\0' || !(rate >= 0.0f)) throw rcx::UsageError(a + ": '" + v + "' is not a number >= 0");
+            const float rate = rcx::parse_float_value(a, v, false); // as the tracer's option
+            if (!(rate >= 0.0f)) throw rcx::UsageError(a + ": must be >= 0, got '" + v + "'");
             o.min_hit_rate = rate;
         }
         else if (a == "--scenes") o.scenes = rcx::bench::split_list(value());

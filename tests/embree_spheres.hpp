@@ -28,3 +28,14 @@ struct EmbreeScene {
         rtcReleaseDevice(device);
     }
 };
+
+// A mirror sphere of radius 1 at the origin (its cube: centre 0, half-size 1) and a small ball far off
+// (radius 0.2 at (-6, 0, 0)) for tests to move.
+struct MirrorAndBall : EmbreeScene {
+    unsigned mirror = 0, ball = 0;
+    MirrorAndBall() {
+        mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
+        ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
+        rtcCommitScene(scene);
+    }
+};

@@ -28,16 +28,8 @@ namespace {
 
 const float infinity = std::numeric_limits<float>::infinity();
 
-// A mirror sphere of radius 1 at the origin (its cube: centre 0, half-size 1) and a small ball that moves.
-struct World : EmbreeScene {
-    unsigned mirror = 0, ball = 0;
-
-    World() {
-        mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
-        ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
-        rtcCommitScene(scene);
-    }
-};
+// A mirror sphere of radius 1 at the origin and a small ball that moves.
+using World = MirrorAndBall;
 
 // CCT caches keyed by direction alone (no origin test), so only the origin reach decides what answers;
 // path records kept from the first store (a scene that moves), unless told otherwise.

@@ -21,15 +21,6 @@ using raycache::embree::Technique;
 
 namespace {
 
-// A mirror sphere of radius 1 at the origin: its cube's centre 0, half-size 1.
-struct Mirror : EmbreeScene {
-    unsigned id = 0;
-    Mirror() {
-        id = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
-        rtcCommitScene(scene);
-    }
-};
-
 // One ray through each texel centre of a 16-texel face (one texel of the test's cubes each).
 std::vector<glm::vec3> cell_directions() {
     std::vector<glm::vec3> directions;
@@ -78,15 +69,15 @@ SceneCache resting_caches(float min_hit_rate) {
 
 // A mirror whose cube (16-texel faces: one texel a direction cell) saw one cold frame from the top.
 struct WarmMirror {
-    Mirror mirror;
+    MirrorAndBall world; // the mirror's cube: centre 0, half-size 1
     SceneCache caches;
     int traced = 0;
     explicit WarmMirror(float min_hit_rate) : caches(resting_caches(min_hit_rate)) {
-        caches.attach(mirror.scene, {mirror.id}, 16);
+        caches.attach(world.scene, {world.mirror}, 16);
         from(glm::vec3(0, 1, 0));
     }
     // The next frame, every direction leaving from `origin`.
-    SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, mirror.id, origin, traced); }
+    SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, world.mirror, origin, traced); }
 };
 
 } // namespace
@@ -160,14 +151,7 @@ TEST_CASE("a cube emptied by clear() is cold again: its next frame decides nothi
 TEST_CASE("cubes emptied by a scene change, or replaced when path records start, decide nothing the next frame") {
     // A ball moves far from the mirror: the first move makes every cube keep path records, which replaces
     // it by an empty one; the frame after finds it empty (all misses) and must not rest it.
-    struct World : EmbreeScene {
-        unsigned mirror = 0, ball = 0;
-        World() {
-            mirror = add_embree_sphere(device, scene, {0, 0, 0}, 1.0f);
-            ball = add_embree_sphere(device, scene, {-6, 0, 0}, 0.2f);
-            rtcCommitScene(scene);
-        }
-    } w;
+    MirrorAndBall w;
     SceneCache caches = resting_caches(0.5f);
     caches.attach(w.scene, {w.mirror}, 16);
     int traced = 0;
