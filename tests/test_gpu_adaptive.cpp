@@ -59,9 +59,9 @@ TEST_CASE("a direction's coverage cell is its texel on a 16-texel face, by hand"
                     CHECK(shared::raycache_coverage_cell_of_texel({face, column, row}, n) ==
                           shared::raycache_coverage_cell(texel_direction(t, n)));
                 }
-    // The frame buffer keeps 48 words of cells per cube after its 4 counters.
-    CHECK(RAYCACHE_FRAME_CUBE_WORDS == 52u);
-    CHECK(shared::raycache_frame_coverage_word(2, 47) == 8u + 2u * 52u + 4u + 47u);
+    // The frame buffer keeps 48 words of cells per cube after its 5 counters and its resting word.
+    CHECK(RAYCACHE_FRAME_CUBE_WORDS == 54u);
+    CHECK(shared::raycache_frame_coverage_word(2, 47) == 8u + 2u * 54u + 6u + 47u);
 }
 
 TEST_CASE("GPU cubes take the face size their rays call for: at once the first time, then with hysteresis") {

@@ -80,6 +80,25 @@ uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
     return raycache_cube_element(cube, raycache_cube_texel_address(cube, s));
 }
 
+/* Whether a ray leaving the cube's object in unit `direction` passes the cube by this frame: the host started
+ * the frame with the cube resting (raycache/gpu_resting.hpp) and the direction is not one of the probes
+ * that keep measuring it (raycache_is_probe_direction, raycache/shared/coverage.h). Then trace the ray and
+ * neither look it up nor store its colour; it is counted in the cube's `rested` counter. Ask before the
+ * lookup, as C++'s SceneCache does:
+ *   if (raycache_cube_rests(cube, d)) colour = trace(r);
+ *   else { lookup; on a miss trace and store }
+ * Always false under RAYCACHE_READ_ONLY (no frame buffer) and for a cube without texels. */
+bool raycache_cube_rests(raycache_gpu_cube cube, vec3 direction) {
+#ifdef RAYCACHE_READ_ONLY
+    return false;
+#else
+    if (!raycache_cube_has_texels(cube) || !raycache_frame_cube_resting(cube.index) || raycache_is_probe_direction(direction))
+        return false;
+    raycache_frame_count(cube.index, RAYCACHE_FRAME_RESTED);
+    return true;
+#endif
+}
+
 /* Counts a lookup of `cube` as a hit or a miss in the frame buffer (nothing under RAYCACHE_READ_ONLY). */
 void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
 #ifndef RAYCACHE_READ_ONLY

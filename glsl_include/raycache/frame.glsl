@@ -1,5 +1,5 @@
 /* raycache/frame.glsl: the frame buffer of RayCache's GPU frame protocol (layout: raycache/shared/gpu_layout.h):
- * per-cube counters of lookups and stores, the direction cells lookups took, and the list of texels stored this frame, which the
+ * per-cube counters of lookups and stores, whether the cube rests, the direction cells lookups took, and the list of texels stored this frame, which the
  * end-of-frame pass (raycache/end_frame.glsl) publishes. Included by cube.glsl; declares nothing under
  * RAYCACHE_READ_ONLY (lookups are then not counted).
  *
@@ -24,6 +24,14 @@ void raycache_frame_count(uint index, uint which) {
     if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return;
     uint word = raycache_frame_counter_word(index, which);
     if (word < uint(raycache_frame.length())) atomicAdd(raycache_frame[word], 1u);
+}
+
+/* Whether the host started this frame with the cube numbered `index` resting (its resting word; false for a
+ * number past the host's cube count). */
+bool raycache_frame_cube_resting(uint index) {
+    if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return false;
+    uint word = raycache_frame_counter_word(index, RAYCACHE_FRAME_RESTING);
+    return word < uint(raycache_frame.length()) && raycache_frame[word] != 0u;
 }
 
 /* Sets the coverage bit of the direction cell `direction` falls in (raycache/shared/coverage.h) for the

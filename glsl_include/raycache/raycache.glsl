@@ -35,6 +35,9 @@
  * the frame and bind the doubtful-bit buffers (CCT 5, CDCT 6); a second end-of-frame pass, the mark pass
  * (with the cube tables, CCT 7, CDCT 8), marks the texels whose colours differ from a neighbour's, and
  * lookups and searches then miss on them (raycache/shared/gpu_layout.h, raycache/end_frame.glsl).
+ * Resting cubes (C++'s raycache/resting.hpp): ask raycache_cube_rests(cube, direction) before a lookup; true
+ * means the host started the frame with the cube resting (raycache/gpu_resting.hpp decides) and the
+ * direction is not one of its probes: trace the ray, neither look it up nor store it (cube.glsl).
  * The origin test (C++'s lookup and store with an OriginTolerance; CCT): define RAYCACHE_ORIGINS in every
  * shader of the frame, bind the origin records (9), look up and store with raycache_cct_lookup_from and
  * raycache_cct_store_from, and end frames with the drop pass too (raycache/shared/origin_rule.h,

@@ -49,7 +49,8 @@ struct GpuFaceSizes {
 
 // Each cube's next face size from its frame counters (the statistics of descriptor index cubes[k].index):
 // adapted_face_size() of its lookups and the share of direction cells they took. `sized` (one flag per
-// cube, all false before the first frame; updated here) says whether a frame with rays has sized the cube:
+// cube, all false before the first frame; updated here) says whether a frame with rays has sized the cube
+// (a cube that rested in the frame keeps its size and its flag):
 // until then it moves to the ideal size at once, and waits at adaptive.min_face_size (or its own size, if
 // smaller) while it gets no ray at all. Then, if the cubes would pass `max_buffer_bytes` (the
 // device's maxStorageBufferRange), the largest are lowered to fit (fit_gpu_face_sizes); a cube so lowered
@@ -75,6 +76,11 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
                                         std::to_string(cube.index) + ", past the frame's " +
                                         std::to_string(frame.cubes.size()) + " cubes");
         const std::uint64_t rays = frame.cubes[cube.index].lookups;
+        // A cube that rested (raycache/gpu_resting.hpp) marked only its probes' cells: the size it had stays.
+        if (cube.index < frame.resting.size() && frame.resting[cube.index]) {
+            sizes.push_back(cube.face_size);
+            continue;
+        }
         // A cube no ray has reached yet waits at the smallest size: unlike a CPU cube, whose tiles cost only
         // once stored into, a GPU cube's texels are all allocated (an object seen only in other objects'
         // reflections may never get a lookup of its own: the GLSL tracers do not recurse).

@@ -5,8 +5,9 @@
 // storage buffer.
 //
 // A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
-//   1. before it: copy gpu_frame_start_words(frame) into the frame buffer (vkCmdUpdateBuffer or a copy),
-//      then barrier (transfer write -> shader read and write; it also covers the first frame's fill);
+//   1. before it: copy gpu_frame_start_words(frame, mark_coverage, resting) into the frame buffer
+//      (vkCmdUpdateBuffer or a copy; `resting`: raycache/gpu_resting.hpp, or none), then barrier (transfer
+//      write -> shader read and write; it also covers the first frame's fill);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
 //   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
 //      (raycache/end_frame.glsl) by vkCmdDispatchIndirect at gpu_end_frame_dispatch_offset; with the
@@ -87,11 +88,19 @@ inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint
 }
 
 // The frame buffer's first start_bytes before a frame: header (list empty, capacity, cube count, dispatch
-// {0, 1, 1}, flags) and zeroed counters. Upload them before every frame. mark_coverage: lookups mark their
-// direction cells, which next_gpu_face_sizes needs (raycache/gpu_adaptive.hpp); false for fixed face sizes,
-// whose lookups then skip that work (GpuFrameStatistics::coverage reads 0).
-inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true) {
+// {0, 1, 1}, flags), zeroed counters and each cube's resting word. Upload them before every frame.
+// mark_coverage: lookups mark their direction cells, which next_gpu_face_sizes needs
+// (raycache/gpu_adaptive.hpp); false for fixed face sizes, whose lookups then skip that work
+// (GpuFrameStatistics::coverage reads 0). resting: empty (no cube rests) or one flag per cube, by descriptor
+// index (GpuResting::resting(), raycache/gpu_resting.hpp); throws std::invalid_argument for another count.
+inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true,
+                                                        const std::vector<bool>& resting = {}) {
+    if (!resting.empty() && resting.size() != f.cube_count)
+        throw std::invalid_argument("RayCache: gpu_frame_start_words needs one resting flag per cube (" +
+                                    std::to_string(f.cube_count) + "), got " + std::to_string(resting.size()));
     std::vector<std::uint32_t> words(static_cast<std::size_t>(f.start_bytes / 4), 0u);
+    for (std::uint32_t k = 0; k < resting.size(); ++k)
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTING)] = resting[k] ? 1u : 0u;
     words[RAYCACHE_FRAME_LIST_CAPACITY] = f.list_capacity;
     words[RAYCACHE_FRAME_CUBE_COUNT] = f.cube_count;
     words[RAYCACHE_FRAME_DISPATCH + 1] = 1u;
@@ -123,8 +132,12 @@ inline GpuGroups gpu_sweep_groups(std::uint64_t elements, std::uint32_t group_si
 
 // What one frame's frame buffer says: per cube (descriptor index) and in all.
 struct GpuFrameStatistics {
-    std::vector<CubeStatistics> cubes; // lookups, hits, misses, stores (reached the pending word), refused_stores
+    // lookups (every ray that reached the cube), hits, misses (with the rays a resting cube let through, also
+    // counted in misses_by[MissReason::resting], as C++ counts them), stores (reached the pending word),
+    // refused_stores
+    std::vector<CubeStatistics> cubes;
     std::vector<double> coverage;      // per cube: the share of the 1536 direction cells its lookups took (0..1)
+    std::vector<bool> resting;         // per cube: the frame was started with it resting
     CubeStatistics total;
     std::uint64_t listed = 0;   // texels the end-of-frame pass publishes
     std::uint64_t overflow = 0; // texels stored that found the list full: sweep the buffers before the next frame
@@ -146,15 +159,20 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
     GpuFrameStatistics s;
     s.cubes.resize(f.cube_count);
     s.coverage.resize(f.cube_count);
+    s.resting.resize(f.cube_count);
     for (std::uint32_t k = 0; k < f.cube_count; ++k) {
         s.coverage[k] = gpu_coverage_fraction(words + shared::raycache_frame_coverage_word(k, 0));
+        s.resting[k] = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTING)] != 0u;
         CubeStatistics& c = s.cubes[k];
+        const std::uint64_t rested = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTED)];
         c.hits = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)];
-        c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)];
+        c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)] + rested;
+        c.misses_by[static_cast<std::size_t>(MissReason::resting)] = rested;
         c.lookups = c.hits + c.misses;
         c.stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_STORES)];
         c.refused_stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_REFUSED)];
         s.total.hits += c.hits, s.total.misses += c.misses, s.total.lookups += c.lookups;
+        s.total.misses_by[static_cast<std::size_t>(MissReason::resting)] += rested;
         s.total.stores += c.stores, s.total.refused_stores += c.refused_stores;
     }
     s.listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);

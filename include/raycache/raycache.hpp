@@ -27,4 +27,5 @@
 #include "raycache/gpu_buffers.hpp"
 #include "raycache/gpu_frame.hpp"
 #include "raycache/gpu_adaptive.hpp"
+#include "raycache/gpu_resting.hpp"
 #include "raycache/gpu_cache_file.hpp"

@@ -43,7 +43,7 @@ struct CubeStatistics {
     std::uint64_t lookups = 0;          // hits + misses
     std::uint64_t hits = 0;             // lookups answered by a visible, valid texel
     std::uint64_t misses = 0;           // lookups that found nothing usable (the caller traced the ray)
-    // misses by MissReason (their sum is `misses` for C++ cubes; GPU frames count misses without reasons)
+    // misses by MissReason (their sum is `misses` for C++ cubes; GPU frames count only MissReason::resting)
     std::array<std::uint64_t, miss_reason_count> misses_by{};
     std::uint64_t stores = 0;           // stores that wrote a texel
     std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie

@@ -64,8 +64,8 @@ struct Frame {
         buffer.fill(0xDEADBEEFu); // list entries are never read before they are written
         start();
     }
-    void start(bool mark_coverage = true) {
-        buffer.upload(raycache::gpu_frame_start_words(layout, mark_coverage).data(), layout.start_bytes);
+    void start(bool mark_coverage = true, const std::vector<bool>& resting = {}) {
+        buffer.upload(raycache::gpu_frame_start_words(layout, mark_coverage, resting).data(), layout.start_bytes);
     }
     raycache::GpuFrameStatistics statistics() const { return raycache::read_gpu_statistics(buffer.as<std::uint32_t>(), layout); }
     // The entries listed this frame.

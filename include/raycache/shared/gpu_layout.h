@@ -21,10 +21,17 @@
  *   before every frame (raycache/gpu_frame.hpp: gpu_frame_start_words). Counters are order-independent:
  *   hits and misses per lookup (a CDCT search is one lookup), `stores` = stores that reached the pending
  *   word (C++'s stores plus its same-frame losers), `refused` = stores refused before it (not a direction,
- *   a value that cannot be stored, a texel already visible or outside the buffers); then the cube's
+ *   a value that cannot be stored, a texel already visible or outside the buffers), `rested` = rays the
+ *   cube let through without a lookup while resting, and the host's resting word (below); then the cube's
  *   coverage bits (RAYCACHE_COVERAGE_WORDS words: which of 1536 direction cells its lookups took,
  *   raycache/shared/coverage.h), which the host reads to choose adaptive face sizes, marked only while the
  *   header's flags hold RAYCACHE_FRAME_MARK_COVERAGE (a renderer with fixed face sizes leaves it off).
+ *
+ * Resting cubes (raycache/resting.hpp, as the Embree adapter's): a cube whose lookups answered fewer than a
+ * threshold of its rays in a frame rests the next. The host decides between frames from the counters
+ * (raycache/gpu_resting.hpp) and writes the cube's resting word before the frame; a shader asks
+ * raycache_cube_rests(cube, direction) before the lookup: true (the cube rests and the direction is not
+ * one of its probes, raycache_is_probe_direction) means trace the ray without lookup or store.
  *
  * Confidence test (optional: shaders that define RAYCACHE_CONFIDENCE; the rule is raycache/shared/edge_rule.h,
  * as in C++'s raycache::mark_doubtful_edges). Each technique has a doubtful-bit buffer (binding
@@ -117,10 +124,12 @@ namespace shared {
 #define RAYCACHE_FRAME_MARK_COVERAGE 1u
 /* Counters of one cube, after the header. */
 #define RAYCACHE_FRAME_HITS 0u
-#define RAYCACHE_FRAME_MISSES 1u
+#define RAYCACHE_FRAME_MISSES 1u   /* lookups that missed (the rays a resting cube let through are not among them) */
 #define RAYCACHE_FRAME_STORES 2u
 #define RAYCACHE_FRAME_REFUSED 3u
-#define RAYCACHE_FRAME_COVERAGE 4u /* RAYCACHE_COVERAGE_WORDS words: the direction cells its lookups took */
+#define RAYCACHE_FRAME_RESTED 4u   /* rays the resting cube let through untouched (raycache_cube_rests) */
+#define RAYCACHE_FRAME_RESTING 5u  /* written by the host: non-zero when the cube rests this frame */
+#define RAYCACHE_FRAME_COVERAGE 6u /* RAYCACHE_COVERAGE_WORDS words: the direction cells its lookups took */
 #define RAYCACHE_FRAME_CUBE_WORDS (RAYCACHE_FRAME_COVERAGE + RAYCACHE_COVERAGE_WORDS)
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
 #define RAYCACHE_FRAME_CDCT_ENTRY 0x80000000u

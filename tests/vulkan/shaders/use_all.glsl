@@ -30,6 +30,7 @@ void raycache_test_use_all() {
     c = raycache_cct_peek(cube, vec3(1.0, 0.5, -0.25));
     sum += vec4(c.color, c.hit ? 1.0 : 0.0);
     raycache_count_lookup(cube, true);
+    sum.w += raycache_cube_rests(cube, vec3(0.0, 0.6, 0.8)) ? 1.0 : 0.0;
     raycache_relief_result f = raycache_relief_search(cube, vec3(0.1), vec3(0.0, 1.0, 0.0), raycache_default_relief_parameters());
     sum += vec4(f.color + f.point, f.distance + float(f.texels_read) + (f.hit ? 1.0 : 0.0));
     f = raycache_cdct_secant_search(cube, vec3(0.1), vec3(0.0, 1.0, 0.0), raycache_default_relief_parameters());

@@ -167,10 +167,10 @@ struct SceneCacheSettings {
     std::optional<float> min_hit_rate;
 };
 
-// SceneCacheSettings::min_hit_rate unset: about where a cube starts to pay on the Embree example tracer,
-// whose traced leaving ray costs about twice a CCT lookup and store: 0.5 for the CCT, 0.6 for the CDCT,
-// whose search and store of a hit point cost more.
-inline float default_min_hit_rate(Technique technique) noexcept { return technique == Technique::cct ? 0.5f : 0.6f; }
+// SceneCacheSettings::min_hit_rate unset: 0.5 for the CCT, 0.6 for the CDCT (raycache/resting.hpp says why).
+inline float default_min_hit_rate(Technique technique) noexcept {
+    return technique == Technique::cct ? default_cct_min_hit_rate : default_cdct_min_hit_rate;
+}
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
 // (Embree reports RTC_INVALID_GEOMETRY_ID there for a plain hit); primID, which matters only for a

@@ -1,0 +1,133 @@
+// raycache/gpu_resting.hpp and the frame buffer's resting words (raycache/gpu_frame.hpp), against values
+// worked out by hand from the rule written in raycache/resting.hpp:
+// - the start words put 1 in word 8 + 54 k + 5 of each resting cube k and 0 elsewhere among the counters;
+// - a frame's rested rays are misses of reason `resting`, beside the lookups' own misses, so that the
+//   looked-up rays are hits + misses of lookups alone;
+// - with min_hit_rate 0.5: a cube's first frame (started empty) decides nothing whatever it hit; 10 hits of
+//   100 looked up then rest it; a resting frame whose 40 probes hit 30 times (0.75) makes it work again, and
+//   the frame after that (refilling) decides nothing even at 0 hits; 20 probes (< 32) decide nothing for 7
+//   frames and the 8th such frame makes it work again.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "raycache/gpu_adaptive.hpp"
+#include "raycache/gpu_resting.hpp"
+
+using namespace raycache;
+
+namespace {
+
+// A frame buffer read back with these counters for cube k (hits, misses of lookups, stores, rays rested).
+struct FrameWords {
+    explicit FrameWords(std::uint32_t cubes) : layout(gpu_frame_layout(cubes, 4)), words(gpu_frame_start_words(layout)) {}
+    FrameWords& cube(std::uint32_t k, std::uint32_t hits, std::uint32_t misses, std::uint32_t stores, std::uint32_t rested = 0) {
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)] = hits;
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)] = misses;
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_STORES)] = stores;
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTED)] = rested;
+        return *this;
+    }
+    GpuFrameStatistics read() const { return read_gpu_statistics(words.data(), layout); }
+    GpuFrameLayout layout;
+    std::vector<std::uint32_t> words;
+};
+
+} // namespace
+
+TEST_CASE("the start words carry each cube's resting flag in its resting word, and refuse another number of flags") {
+    const GpuFrameLayout f = gpu_frame_layout(3, 10);
+    const std::vector<std::uint32_t> w = gpu_frame_start_words(f, true, {true, false, true});
+    REQUIRE(w.size() == 8u + 3u * 54u);
+    for (std::size_t i = 8; i < w.size(); ++i) {
+        const bool resting_word = i == 8 + 5 || i == 8 + 2 * 54 + 5; // cubes 0 and 2
+        CHECK(w[i] == (resting_word ? 1u : 0u));
+    }
+    CHECK(gpu_frame_start_words(f, true, {}) == gpu_frame_start_words(f)); // none rests
+    CHECK_THROWS_AS(gpu_frame_start_words(f, true, {true, false}), std::invalid_argument);
+}
+
+TEST_CASE("GPU statistics count a resting cube's rays as misses of reason resting, apart from its lookups") {
+    FrameWords frame(2);
+    frame.cube(0, 30, 10, 4, 600).cube(1, 5, 5, 5, 0);
+    frame.words[shared::raycache_frame_counter_word(0, RAYCACHE_FRAME_RESTING)] = 1u;
+    const GpuFrameStatistics s = frame.read();
+    CHECK(s.resting == std::vector<bool>{true, false});
+    CHECK(s.cubes[0].lookups == 640u);
+    CHECK(s.cubes[0].misses == 610u);
+    CHECK(s.cubes[0].misses_by[static_cast<std::size_t>(MissReason::resting)] == 600u);
+    CHECK(s.cubes[0].looked_up() == 40u);
+    CHECK(s.cubes[1].looked_up() == 10u);
+    CHECK(s.total.lookups == 650u);
+    CHECK(s.total.misses_by[static_cast<std::size_t>(MissReason::resting)] == 600u);
+    CHECK(s.total.looked_up() == 50u);
+}
+
+TEST_CASE("GpuResting: a cube rests after a frame that answered too few, works again when its probes answer, as the rule says") {
+    GpuResting resting(2, 0.5f);
+    CHECK(resting.resting() == std::vector<bool>{false, false});
+    // Frame 1: both cubes started empty: nothing decided, though cube 0 hit nothing.
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read());
+    CHECK(resting.resting_count() == 0u);
+    // Frame 2: cube 0 answers 10 of 100 (rests), cube 1 60 of 100 (works).
+    resting.after_frame(FrameWords(2).cube(0, 10, 90, 90).cube(1, 60, 40, 40).read());
+    CHECK(resting.resting() == std::vector<bool>{true, false});
+    // Frame 3: cube 0's 40 probes hit 30 (0.75 >= 0.5): it works again, and refills first.
+    resting.after_frame(FrameWords(2).cube(0, 30, 10, 10, 560).cube(1, 60, 40, 40).read());
+    CHECK(resting.resting() == std::vector<bool>{false, false});
+    CHECK(resting.state(0).refilling);
+    // Frame 4, the refill: nothing decided even at 0 hits.
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 60, 40, 40).read());
+    CHECK(resting.resting() == std::vector<bool>{false, false});
+    // Frame 5: 10 of 100 again: rests. Then 7 frames of 20 probes (fewer than 32: unjudged) keep it resting,
+    // and the 8th makes it work.
+    resting.after_frame(FrameWords(2).cube(0, 10, 90, 90).cube(1, 60, 40, 40).read());
+    CHECK(resting.resting()[0]);
+    for (int f = 1; f <= resting_max_unjudged_frames; ++f) {
+        CAPTURE(f);
+        resting.after_frame(FrameWords(2).cube(0, 0, 20, 20, 500).cube(1, 60, 40, 40).read());
+        CHECK(resting.resting()[0] == (f < resting_max_unjudged_frames));
+    }
+    CHECK_THROWS_AS(resting.after_frame(FrameWords(3).read()), std::invalid_argument);
+}
+
+TEST_CASE("GpuResting: a cube that grew, or was cleared, starts empty, so its next frame decides nothing") {
+    GpuResting resting(2, 0.5f);
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read()); // both now hold texels
+    const GpuBufferLayout from = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
+    const GpuBufferLayout to = gpu_buffer_layout<CctTexel>({GpuCubeShape{32, {}}, GpuCubeShape{8, {}}});
+    resting.resized(from, to); // cube 0 grew (empty), cube 1 shrank (resampled: holds texels)
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read());
+    CHECK(resting.resting() == std::vector<bool>{false, true});
+    resting.holds_texels(1, false); // cleared: its next frame decides nothing; it keeps resting meanwhile
+    resting.after_frame(FrameWords(2).cube(0, 90, 10, 10).cube(1, 90, 10, 10).read());
+    CHECK(resting.resting() == std::vector<bool>{false, true});
+    const GpuBufferLayout three = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
+    CHECK_THROWS_AS(resting.resized(from, three), std::invalid_argument);
+    CHECK_THROWS_AS(resting.resized(three, three), std::invalid_argument); // index 2 is not one of its cubes
+    CHECK_THROWS_AS(resting.holds_texels(2, true), std::out_of_range);
+}
+
+TEST_CASE("GpuResting: min_hit_rate 0 never rests a cube, and a negative or NaN one is refused") {
+    GpuResting never(1, 0.0f);
+    for (int f = 0; f < 3; ++f) never.after_frame(FrameWords(1).cube(0, 0, 100, 100).read());
+    CHECK(never.resting_count() == 0u);
+    CHECK_THROWS_AS(GpuResting(1, -0.1f), std::invalid_argument);
+    CHECK_THROWS_AS(GpuResting(1, std::numeric_limits<float>::quiet_NaN()), std::invalid_argument);
+}
+
+TEST_CASE("a GPU cube that rested keeps its face size: its cells are its probes' alone") {
+    const GpuBufferLayout layout = gpu_buffer_layout<CctTexel>({GpuCubeShape{256, {}}, GpuCubeShape{256, {}}});
+    std::vector<bool> sized(2, true);
+    FrameWords frame(2);
+    frame.cube(0, 50, 50, 50, 1500).cube(1, 50, 50, 50, 1500); // the same counts, only cube 0 rested
+    frame.words[shared::raycache_frame_counter_word(0, RAYCACHE_FRAME_RESTING)] = 1u;
+    for (std::uint32_t w = 0; w < RAYCACHE_COVERAGE_WORDS; ++w)
+        frame.words[shared::raycache_frame_coverage_word(0, w)] = frame.words[shared::raycache_frame_coverage_word(1, w)] = 0xFFFFFFFFu;
+    const GpuFaceSizes next = next_gpu_face_sizes<CctTexel>(AdaptiveResolution{}, layout, frame.read(), sized, 1u << 30);
+    CHECK(next.face_sizes[0] == 256);
+    CHECK(next.face_sizes[1] <= 32); // 1600 rays over every cell: about 270 texels a face at one ray a texel
+}
