@@ -287,22 +287,13 @@ def main():
         with open(dynamic) as f:
             md += [f.read().rstrip("\n"), ""]
     md += rsh_results.section(results, rel)  # raycache_rsh_bench: the ray-space hierarchy
-    lent = os.path.join(results, "xeon16_h100", "README.md")
-    if os.path.exists(lent):  # written by hand from runs on a machine lent for one session
-        with open(lent) as f:
-            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/xeon16_h100/`]({rel}/xeon16_h100/).", ""]
-    gpu_adaptive = os.path.join(results, "vulkan_adaptive", "README.md")
-    if os.path.exists(gpu_adaptive):  # written by hand from raycache_vulkan_whitted runs kept beside it
-        with open(gpu_adaptive) as f:
-            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_adaptive/`]({rel}/vulkan_adaptive/).", ""]
-    gpu_single = os.path.join(results, "vulkan_single_image", "README.md")
-    if os.path.exists(gpu_single):  # written by hand from raycache_vulkan_whitted runs kept beside it
-        with open(gpu_single) as f:
-            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/vulkan_single_image/`]({rel}/vulkan_single_image/).", ""]
-    gpu_h200 = os.path.join(results, "h200_vulkan", "README.md")
-    if os.path.exists(gpu_h200):  # written by hand from raycache_vulkan_whitted runs on a lent GPU, kept beside it
-        with open(gpu_h200) as f:
-            md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/h200_vulkan/`]({rel}/h200_vulkan/).", ""]
+    # Sections kept beside their runs: written by hand (the lent machines', vulkan_adaptive) or by
+    # bench/vulkan_single_image.py and bench/vulkan_resting.py.
+    for folder in ["xeon16_h100", "vulkan_adaptive", "vulkan_single_image", "vulkan_resting", "h200_vulkan"]:
+        readme = os.path.join(results, folder, "README.md")
+        if os.path.exists(readme):
+            with open(readme) as f:
+                md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/{folder}/`]({rel}/{folder}/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")

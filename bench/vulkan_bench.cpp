@@ -99,6 +99,7 @@ void run(const Config& c, rcx::vk::Context& context) {
                 s.mode = mode;
                 s.face_size = c.face;
                 s.hybrid = hybrid;
+                s.min_hit_rate = 0.0f; // the thesis's caches: every cube answers every frame (no resting)
                 auto v = std::make_unique<Variant>(Variant{mode, hybrid, std::make_unique<rcx::gpu::Tracer>(context, scene, spirv, s), {}, {}, {}});
                 variants.push_back(std::move(v));
             }

@@ -17,6 +17,7 @@
 #include <raycache/gpu_adaptive.hpp>
 #include <raycache/gpu_buffers.hpp>
 #include <raycache/gpu_cache_file.hpp>
+#include <raycache/gpu_resting.hpp>
 #include <raycache/shared/gpu_layout.h>
 
 #include "gpu_scene.hpp"
@@ -51,7 +52,7 @@ struct Tracer::Impl {
     std::unique_ptr<vk::Buffer> doubtful, cube_table, zeros; // RayCache's confidence test: doubtful bits, cube table
     std::unique_ptr<vk::Buffer> origins; // the CCT's origin test: a record per tile (raycache/shared/origin_rule.h)
     raycache::GpuFrameLayout frame_layout;          // RayCache's frame buffer: counters, store list
-    std::vector<std::uint32_t> frame_start;         // its words before every frame
+    std::unique_ptr<raycache::GpuResting> resting;  // which cubes rest the next frame (cct, cdct)
     std::unique_ptr<Raster> raster;
     std::unique_ptr<RshFrame> rsh;          // --secondary rsh: secondary rays through the ray-space hierarchy
     std::unique_ptr<vk::Buffer> rsh_prims;  // ... its primitives (raycache_rsh_primitive, scene order)
@@ -139,8 +140,6 @@ void Tracer::Impl::place_layout(raycache::GpuBufferLayout next, bool move_old) {
     // The list holds every texel and every origin record (tiles are listed by stores and stale lookups).
     raycache::GpuFrameLayout new_frame_layout = raycache::gpu_frame_layout(
         cached, raycache::gpu_frame_list_capacity(cached, next.texels + next.origin_tiles, max_buffer), max_buffer);
-    // Lookups mark their direction cells only for adaptive sizes (fixed ones never read them).
-    std::vector<std::uint32_t> new_frame_start = raycache::gpu_frame_start_words(new_frame_layout, settings.adaptive);
     auto new_frame = std::make_unique<vk::Buffer>(context, std::max<std::uint64_t>(new_frame_layout.bytes, 16));
     std::unique_ptr<vk::Buffer> new_texels, new_pending, new_doubtful, new_table, new_origins;
     if (next.texels > 0) {
@@ -166,8 +165,8 @@ void Tracer::Impl::place_layout(raycache::GpuBufferLayout next, bool move_old) {
         }
     }
     cubes = std::move(new_cubes);
+    if (resting && move_old) resting->resized(layout, next); // cubes that grew start empty
     frame_layout = new_frame_layout;
-    frame_start = std::move(new_frame_start);
     frame = std::move(new_frame);
     texels = std::move(new_texels);
     pending = std::move(new_pending);
@@ -251,6 +250,12 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.shape_of = std::move(packed.shape_of);
     t.sized.assign(t.shapes.size(), false);
     t.place_cubes(std::vector<int>(t.shapes.size(), t.settings.face_size));
+    if (caching) {
+        // Negative: the technique's default; NaN passes on to GpuResting, which refuses it.
+        const float rate = settings.min_hit_rate < 0.0f ? (t.cdct ? raycache::default_cdct_min_hit_rate : raycache::default_cct_min_hit_rate)
+                                                        : settings.min_hit_rate;
+        t.resting = std::make_unique<raycache::GpuResting>(t.shapes.size(), rate);
+    }
 
     // Room for any binary BVH over these primitives (2n - 1 nodes), so set_scene uploads in place.
     t.nodes = std::make_unique<vk::Buffer>(context, std::max(t.bvh.nodes.size(), 2 * t.bvh.primitives.size()) * sizeof(BvhNode));
@@ -305,7 +310,10 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
         if (t.origins) t.origins->fill(RAYCACHE_GPU_CLEAR_WORD);
         raycache::write_gpu_cubes(cubes, t.layout, t.texels->as<std::uint32_t>(), static_cast<std::size_t>(t.layout.words),
                                   t.doubtful->as<std::uint32_t>(), t.origins ? t.origins->as<std::uint32_t>() : nullptr);
-        for (std::size_t k = 0; k < cubes.size(); ++k) t.sized[k] = cubes[k].cube->valid_texels() > 0;
+        for (std::size_t k = 0; k < cubes.size(); ++k) {
+            t.sized[k] = cubes[k].cube->valid_texels() > 0;
+            if (t.resting) t.resting->holds_texels(t.layout.cubes[k].index, t.sized[k]);
+        }
     });
 }
 
@@ -391,7 +399,13 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     p.origin_test[1] = t.settings.origin_parallax;
     t.params->upload(&p, sizeof p);
     // RayCache's frame buffer, started: before the frame, and again between a warm-up and the full pass.
-    auto start_frame_buffer = [&] { t.frame->upload(t.frame_start.data(), t.frame_start.size() * 4); };
+    // Lookups mark their direction cells only for adaptive sizes (fixed ones never read them); resting cubes
+    // pass their rays but probes by (raycache/gpu_resting.hpp).
+    auto start_frame_buffer = [&] {
+        const std::vector<std::uint32_t> words =
+            raycache::gpu_frame_start_words(t.frame_layout, t.settings.adaptive, t.resting ? t.resting->resting() : std::vector<bool>{});
+        t.frame->upload(words.data(), words.size() * 4);
+    };
     start_frame_buffer();
 
     const vk::Buffer& gbuffer = t.gbuffer ? *t.gbuffer : *t.dummy;
@@ -471,6 +485,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         if (frame_stats.overflow > 0)
             throw std::runtime_error("Vulkan tracer: more texels and tiles listed in one frame than RayCache's store list holds (" +
                                      std::to_string(t.frame_layout.list_capacity) + ")");
+        if (t.resting) t.resting->after_frame(frame_stats); // which cubes rest the next frame (or the full pass)
         return frame_stats;
     };
     // Adaptive cubes: each takes the size the rays just ended call for; cubes that change size are moved into
@@ -549,6 +564,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         stats->update_ms = t.update_ms;
         stats->resize_milliseconds = resize_ms;
         stats->resized_cubes = resized;
+        stats->resting_cubes = static_cast<std::size_t>(std::count(gpu_stats.resting.begin(), gpu_stats.resting.end(), true));
+        stats->rested = gpu_stats.total.misses_by[static_cast<std::size_t>(raycache::MissReason::resting)];
     }
     t.update_ms = 0.0;
     return image;

@@ -56,6 +56,10 @@ struct TracerSettings {
     // origin_parallax x the distance to the nearest surface its rays hit; origin_drift < 0: off.
     float origin_drift = 0.1f;
     float origin_parallax = 0.01f;
+    // cct, cdct: resting cubes (raycache/gpu_resting.hpp): a cube whose looked-up rays found fewer than this
+    // share of hits in a frame rests the next (its rays traced without lookup or store, but for its probe
+    // directions). < 0: the library's default for the technique (as the Embree tracer's); 0: never.
+    float min_hit_rate = -1.0f;
 };
 
 struct FrameStats {
@@ -74,6 +78,8 @@ struct FrameStats {
     std::uint64_t hits = 0;              // ... and were answered by it
     double resize_milliseconds = 0.0;    // adaptive: choosing the next face sizes and moving the cubes that changed
     std::size_t resized_cubes = 0;       // ... how many changed size after this frame (and after its warm-up)
+    std::size_t resting_cubes = 0;       // cubes that rested in this frame (their rays but probes traced alone)
+    std::uint64_t rested = 0;            // ... the rays they let through (counted in `lookups` as misses, not in `hits`)
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
                                          // --hybrid, for the primary rays) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces

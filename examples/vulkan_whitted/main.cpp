@@ -128,6 +128,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.edge_threshold = o.edge_threshold;
     settings.origin_drift = o.origin_drift;
     settings.origin_parallax = o.origin_parallax;
+    settings.min_hit_rate = o.min_hit_rate; // -1 unless given: the technique's default
     const std::string spirv = rcx::gpu::default_spirv_dir();
     std::unique_ptr<rcx::gpu::Tracer> tracer, reference;
     try {
@@ -256,6 +257,9 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
             if (warm_up > 1 && caching)
                 std::printf("   warm-up (stride %d): %.2f ms, %llu texels stored", warm_up, stats.warm_up_milliseconds,
                             static_cast<unsigned long long>(stats.warm_up_stored_texels));
+            if (stats.resting_cubes > 0)
+                std::printf("   %zu cubes rested (%.1f%% of the leaving rays traced alone)", stats.resting_cubes,
+                            100.0 * static_cast<double>(stats.rested) / static_cast<double>(std::max<std::uint64_t>(stats.lookups, 1)));
             if (stats.resized_cubes > 0) {
                 const std::vector<int> sizes = tracer->face_sizes();
                 std::printf("   %zu cubes resized in %.1f ms: faces %d..%d, cubes %.1f MiB", stats.resized_cubes,

@@ -11,6 +11,7 @@
 // loaded into a fresh tracer make the saving tracer's next frame. No validation error.
 // Exit 77 (CTest: skipped) only when there is no Vulkan device.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -46,12 +47,10 @@ std::string format(const char* pattern, double a, double b = 0.0) {
     return text;
 }
 
-// The Embree tracer's warm frame: one frame to fill the cubes, a second from the same camera, with the GPU
-// tracer's settings; or, warm_up_stride > 1, a single frame with a warm-up pass over every stride-th pixel.
-// CCT: nearest texels, as the GPU tracer reads them (it has no filtered lookups yet).
-// CDCT: the same search and parameters; the relief walk without a pyramid (GLSL has none).
-rcx::Image embree_warm(const rcx::Scene& scene, int size, const rcx::gpu::TracerSettings& gpu, int warm_up_stride = 0) {
-    const rcx::embree::Tracer tracer(scene);
+// The Embree tracer's caches with the GPU tracer's settings. CCT: nearest texels, as the GPU tracer reads
+// them (it has no filtered lookups yet). CDCT: the same search and parameters; the relief walk without a
+// pyramid (GLSL has none).
+raycache::embree::SceneCacheSettings embree_settings(const rcx::gpu::TracerSettings& gpu) {
     raycache::embree::SceneCacheSettings same; // stated: the comparison depends on it
     same.filtered = false;
     same.edge_threshold = gpu.edge_threshold; // the confidence test: the GPU's mark pass marks as C++ does
@@ -64,8 +63,19 @@ rcx::Image embree_warm(const rcx::Scene& scene, int size, const rcx::gpu::Tracer
     same.relief.max_gap = gpu.max_gap > 0.0f ? gpu.max_gap : std::numeric_limits<float>::infinity();
     same.relief.search = gpu.secant ? raycache::DepthSearch::secant : raycache::DepthSearch::relief;
     same.relief.max_reads = gpu.max_reads;
-    raycache::embree::SceneCache caches(
-        gpu.mode == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct, same);
+    if (gpu.min_hit_rate >= 0.0f) same.min_hit_rate = gpu.min_hit_rate; // resting cubes: the same rule
+    return same;
+}
+
+raycache::embree::Technique technique_of(rcx::CacheMode mode) {
+    return mode == rcx::CacheMode::cct ? raycache::embree::Technique::cct : raycache::embree::Technique::cdct;
+}
+
+// The Embree tracer's warm frame: one frame to fill the cubes, a second from the same camera, with the GPU
+// tracer's settings; or, warm_up_stride > 1, a single frame with a warm-up pass over every stride-th pixel.
+rcx::Image embree_warm(const rcx::Scene& scene, int size, const rcx::gpu::TracerSettings& gpu, int warm_up_stride = 0) {
+    const rcx::embree::Tracer tracer(scene);
+    raycache::embree::SceneCache caches(technique_of(gpu.mode), embree_settings(gpu));
     tracer.attach_caches(caches, gpu.face_size);
     rcx::embree::RenderSettings s;
     s.width = s.height = size;
@@ -186,6 +196,7 @@ void run_adaptive_case(rcx::vk::Context& context, const char* scene_name, rcx::C
     settings.mode = mode;
     settings.adaptive = true;
     settings.face_size = settings.adaptive_resolution.first_face_size;
+    settings.min_hit_rate = 0.0f; // every cube answers: the hit rates below are the cubes' own (run_resting_case rests them)
     const std::string name = std::string(scene_name) + " " + rcx::to_string(mode) + " adaptive";
     rcx::gpu::Tracer a(context, scene, spirv, settings), b(context, scene, spirv, settings);
     const std::vector<int> first = a.face_sizes();
@@ -364,6 +375,7 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
         settings.mode = mode;
         settings.adaptive = adaptive;
         settings.face_size = adaptive ? settings.adaptive_resolution.first_face_size : 48;
+        settings.min_hit_rate = 0.0f; // a file holds texels, not which cubes rest: no cube rests here
         rcx::gpu::Tracer saved(context, scene, spirv, settings);
         for (int f = 0; f < 3; ++f) saved.render(scene.camera_at(f), size, size);
         saved.save_caches(path, identity);
@@ -406,6 +418,74 @@ void run_cache_file_case(rcx::vk::Context& context, rcx::CacheMode mode) {
     std::remove(path.c_str());
 }
 
+// Resting cubes (raycache/gpu_resting.hpp), forced by a threshold no cube meets (min_hit_rate 2), from a
+// fixed camera: the cold frame decides nothing (its cubes started empty), the warm frame sends every cube
+// that looked up at least 32 rays to rest, and the third frame looks up only those cubes' probe directions
+// and traces their other rays alone. The Embree tracer, with the same settings over the same three frames,
+// applies the same rule and probes, and its third frame matches the GPU's as the warm frames do. It also
+// looks up the leaving rays nested in a missed ray's trace, which the GLSL tracer traces without a lookup,
+// so a cube seen only in reflections can be judged, and rest, there alone: it rests at least the GPU's
+// cubes, and with the CCT (warm hit rate above 95%, so few nested lookups) exactly as many, letting through
+// as many rays (from its own float directions: within 1%). Two tracers agree; with min_hit_rate 0 no cube
+// rests.
+void run_resting_case(rcx::vk::Context& context, rcx::CacheMode mode, double min_embree_psnr) {
+    const int size = 64;
+    const rcx::Scene scene = rcx::make_scene("behind-8");
+    const std::string spirv = rcx::gpu::default_spirv_dir();
+    const std::string name = std::string("resting, ") + rcx::to_string(mode);
+    rcx::gpu::TracerSettings settings;
+    settings.mode = mode;
+    settings.face_size = 32;
+    settings.min_hit_rate = 2.0f;
+    rcx::gpu::TracerSettings never = settings;
+    never.min_hit_rate = 0.0f;
+    rcx::gpu::Tracer a(context, scene, spirv, settings), b(context, scene, spirv, settings), c(context, scene, spirv, never);
+    rcx::gpu::FrameStats stats[3], twin, working;
+    rcx::Image image, twin_image;
+    for (int f = 0; f < 3; ++f) {
+        image = a.render(scene.camera, size, size, &stats[f]);
+        twin_image = b.render(scene.camera, size, size, &twin);
+        c.render(scene.camera, size, size, &working);
+    }
+    check(stats[0].resting_cubes == 0 && stats[0].rested == 0 && stats[1].resting_cubes == 0 && stats[1].rested == 0,
+          name + ": no cube rests in the cold frame, nor in the warm frame after it (a frame started empty decides nothing)");
+    check(stats[2].resting_cubes > 0 && stats[2].rested > 0 && stats[2].rested < stats[2].lookups,
+          name + format(": the third frame rests %.0f cubes, whose probes still look up (%.0f rays let through)",
+                        double(stats[2].resting_cubes), double(stats[2].rested)));
+    check(rcx::bit_identical(image, twin_image) && stats[2].hits == twin.hits && stats[2].rested == twin.rested,
+          name + ": two tracers give the same pixels, hits and rested rays");
+    check(working.resting_cubes == 0 && working.rested == 0 && working.hits > 0, name + ": min_hit_rate 0: no cube rests");
+
+    const rcx::embree::Tracer tracer(scene);
+    raycache::embree::SceneCache caches(technique_of(mode), embree_settings(settings));
+    tracer.attach_caches(caches, settings.face_size);
+    rcx::embree::RenderSettings s;
+    s.width = s.height = size;
+    s.mode = mode;
+    s.caches = &caches;
+    tracer.render(scene.camera, s);
+    caches.begin_frame();
+    tracer.render(scene.camera, s);
+    const raycache::embree::SceneCacheStatistics warm = caches.begin_frame();
+    const rcx::Image embree = tracer.render(scene.camera, s);
+    const raycache::embree::SceneCacheStatistics third = caches.statistics();
+    const double embree_rested = static_cast<double>(third.misses_by[static_cast<std::size_t>(raycache::MissReason::resting)]);
+    if (mode == rcx::CacheMode::cct) {
+        check(warm.resting_cubes == stats[2].resting_cubes,
+              name + format(": the Embree tracer rests as many cubes (%.0f and %.0f)", double(warm.resting_cubes), double(stats[2].resting_cubes)));
+        check(std::abs(embree_rested - double(stats[2].rested)) <= 0.01 * embree_rested,
+              name + format(": ... and lets through as many rays (%.0f and %.0f)", embree_rested, double(stats[2].rested)));
+    } else {
+        check(warm.resting_cubes >= stats[2].resting_cubes,
+              name + format(": the Embree tracer rests at least the GPU's cubes (%.0f and %.0f)", double(warm.resting_cubes),
+                            double(stats[2].resting_cubes)));
+        check(embree_rested >= 0.99 * double(stats[2].rested),
+              name + format(": ... and lets through at least its rays, within 1%% (%.0f and %.0f)", embree_rested, double(stats[2].rested)));
+    }
+    const double psnr = rcx::compare(image, embree).psnr_db;
+    check(psnr >= min_embree_psnr, name + format(": the third frame against the Embree tracer's %.2f dB >= %.0f dB", psnr, min_embree_psnr));
+}
+
 int main() {
     std::unique_ptr<rcx::vk::Context> context;
     try {
@@ -438,6 +518,8 @@ int main() {
     run_budget_case(*context);
     run_cache_file_case(*context, rcx::CacheMode::cct);
     run_cache_file_case(*context, rcx::CacheMode::cdct);
+    run_resting_case(*context, rcx::CacheMode::cct, 60.0);
+    run_resting_case(*context, rcx::CacheMode::cdct, 60.0);
     // A single image with a warm-up over every 4th pixel, measured on lavapipe (64 x 64, 16-texel faces): CCT
     // hits 0.122 at 30.68 dB, CDCT 0.028 at 38.59 dB; against the Embree tracer's image (the same origin
     // test) 89.03 dB for the CCT (one 8-bit value differs), inf for the CDCT. Few hits: the

@@ -167,7 +167,7 @@ CommandLine::CommandLine(const std::string& program)
     add_option("--min-hit-rate", "F",
                "a cube whose rays found fewer hits than this share in a frame\n"
                "rests: its rays are traced, but for a sixteenth of the directions,\n"
-               "which keep measuring it; 0: cubes never rest (Embree tracer)\n"
+               "which keep measuring it; 0: cubes never rest\n"
                "[CCT 0.5, CDCT 0.6]",
                [&o](const std::string& text) {
                    o.min_hit_rate = parse_float_value("--min-hit-rate", text, false);
