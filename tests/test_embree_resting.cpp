@@ -11,6 +11,7 @@
 #include <raycache/embree/scene_cache.hpp>
 
 #include "embree_spheres.hpp"
+#include "test_cache_files.hpp"
 
 using raycache::MissReason;
 using raycache::TracedRay;
@@ -146,6 +147,29 @@ TEST_CASE("a cube emptied by clear() is cold again: its next frame decides nothi
     CHECK(s.hits == 0);
     CHECK(s.resting_cubes == 0);
     CHECK(w.from(glm::vec3(1, 0, 0)).hits == 1536);
+}
+
+TEST_CASE("a cube loaded from a cache file works, and its first frame decides: it holds the file's texels") {
+    // A threshold no cube meets: the warm frame (all 1536 hit) sends the cube to rest.
+    WarmMirror w(2.0f);
+    REQUIRE(w.from(glm::vec3(0, 1, 0)).resting_cubes == 1);
+    ScratchFolder folder("resting-load");
+    const raycache::SceneIdentity identity{7, "mirror and ball"};
+    w.caches.save(folder.file("resting.rcc"), identity);
+    // Loaded into the cache that rests: it works again (a file holds texels, not resting).
+    w.caches.load(folder.file("resting.rcc"), identity);
+    SceneCacheStatistics s = w.from(glm::vec3(0, 1, 0));
+    CHECK(rested(s) == 0);
+    CHECK(s.hits == 1536);
+    CHECK(s.resting_cubes == 1); // that frame started with the file's texels, so it decided
+    // Loaded into a fresh cache: the same.
+    SceneCache fresh = resting_caches(2.0f);
+    fresh.attach(w.world.scene, {w.world.mirror}, 16);
+    fresh.load(folder.file("resting.rcc"), identity);
+    int traced = 0;
+    s = frame(fresh, w.world.mirror, glm::vec3(0, 1, 0), traced);
+    CHECK(traced == 0);
+    CHECK(s.resting_cubes == 1);
 }
 
 TEST_CASE("cubes emptied by a scene change, or replaced when path records start, decide nothing the next frame") {

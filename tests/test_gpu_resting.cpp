@@ -46,7 +46,8 @@ TEST_CASE("the start words carry each cube's resting flag in its resting word, a
         const bool resting_word = i == 8 + 5 || i == 8 + 2 * 54 + 5; // cubes 0 and 2
         CHECK(w[i] == (resting_word ? 1u : 0u));
     }
-    CHECK(gpu_frame_start_words(f, true, {}) == gpu_frame_start_words(f)); // none rests
+    const std::vector<std::uint32_t> none = gpu_frame_start_words(f, true, {false, false, false});
+    for (std::uint32_t k = 0; k < 3; ++k) CHECK(none[8 + 54 * k + 5] == 0u);
     CHECK_THROWS_AS(gpu_frame_start_words(f, true, {true, false}), std::invalid_argument);
 }
 
@@ -94,7 +95,7 @@ TEST_CASE("GpuResting: a cube rests after a frame that answered too few, works a
     CHECK_THROWS_AS(resting.after_frame(FrameWords(3).read()), std::invalid_argument);
 }
 
-TEST_CASE("GpuResting: a cube that grew, or was cleared, starts empty, so its next frame decides nothing") {
+TEST_CASE("GpuResting: a cube that grew, or was cleared, starts empty, so its next frame decides nothing, and a loaded one works") {
     GpuResting resting(2, 0.5f);
     resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read()); // both now hold texels
     const GpuBufferLayout from = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
@@ -102,13 +103,17 @@ TEST_CASE("GpuResting: a cube that grew, or was cleared, starts empty, so its ne
     resting.resized(from, to); // cube 0 grew (empty), cube 1 shrank (resampled: holds texels)
     resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read());
     CHECK(resting.resting() == std::vector<bool>{false, true});
-    resting.holds_texels(1, false); // cleared: its next frame decides nothing; it keeps resting meanwhile
-    resting.after_frame(FrameWords(2).cube(0, 90, 10, 10).cube(1, 90, 10, 10).read());
-    CHECK(resting.resting() == std::vector<bool>{false, true});
+    resting.restart(1, false); // cleared: it works again, and its next frame, started empty, decides nothing
+    CHECK(resting.resting() == std::vector<bool>{false, false});
+    resting.after_frame(FrameWords(2).cube(0, 90, 10, 10).cube(1, 0, 100, 100).read());
+    CHECK(resting.resting() == std::vector<bool>{false, false});
+    resting.restart(0, true); // loaded from a cache file with texels: it works, and its next frame decides
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 0, 100, 100).read());
+    CHECK(resting.resting() == std::vector<bool>{true, true});
     const GpuBufferLayout three = gpu_buffer_layout<CctTexel>({GpuCubeShape{16, {}}, GpuCubeShape{16, {}}, GpuCubeShape{16, {}}});
     CHECK_THROWS_AS(resting.resized(from, three), std::invalid_argument);
     CHECK_THROWS_AS(resting.resized(three, three), std::invalid_argument); // index 2 is not one of its cubes
-    CHECK_THROWS_AS(resting.holds_texels(2, true), std::out_of_range);
+    CHECK_THROWS_AS(resting.restart(2, true), std::out_of_range);
 }
 
 TEST_CASE("GpuResting: min_hit_rate 0 never rests a cube, and a negative or NaN one is refused") {

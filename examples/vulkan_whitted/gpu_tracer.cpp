@@ -252,8 +252,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.place_cubes(std::vector<int>(t.shapes.size(), t.settings.face_size));
     if (caching) {
         // Negative: the technique's default; NaN passes on to GpuResting, which refuses it.
-        const float rate = settings.min_hit_rate < 0.0f ? (t.cdct ? raycache::default_cdct_min_hit_rate : raycache::default_cct_min_hit_rate)
-                                                        : settings.min_hit_rate;
+        const float rate = settings.min_hit_rate < 0.0f ? raycache::default_min_hit_rate(t.cdct) : settings.min_hit_rate;
         t.resting = std::make_unique<raycache::GpuResting>(t.shapes.size(), rate);
     }
 
@@ -312,7 +311,7 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
                                   t.doubtful->as<std::uint32_t>(), t.origins ? t.origins->as<std::uint32_t>() : nullptr);
         for (std::size_t k = 0; k < cubes.size(); ++k) {
             t.sized[k] = cubes[k].cube->valid_texels() > 0;
-            if (t.resting) t.resting->holds_texels(t.layout.cubes[k].index, t.sized[k]);
+            if (t.resting) t.resting->restart(t.layout.cubes[k].index, t.sized[k]); // works, as the Embree adapter's
         }
     });
 }

@@ -74,11 +74,13 @@ struct FrameStats {
                                          // GPU (timestamps; 0 without them, and for --secondary rsh)
     double end_frame_milliseconds = 0.0; // ... and the end-of-frame passes (publish, then mark) over the texels stored
     std::uint64_t stored_texels = 0;     // texels stored this frame: what that pass published
-    std::uint64_t lookups = 0;           // rays leaving cached objects that looked into a cube (RayCache's GPU counters)
+    std::uint64_t lookups = 0;           // rays leaving cached objects that reached a cube, looked up or let through by
+                                         // a resting one (RayCache's GPU counters)
     std::uint64_t hits = 0;              // ... and were answered by it
     double resize_milliseconds = 0.0;    // adaptive: choosing the next face sizes and moving the cubes that changed
     std::size_t resized_cubes = 0;       // ... how many changed size after this frame (and after its warm-up)
-    std::size_t resting_cubes = 0;       // cubes that rested in this frame (their rays but probes traced alone)
+    std::size_t resting_cubes = 0;       // cubes that rested during this frame (their rays but probes traced alone;
+                                         // SceneCacheStatistics::resting_cubes counts those resting the next one)
     std::uint64_t rested = 0;            // ... the rays they let through (counted in `lookups` as misses, not in `hits`)
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
                                          // --hybrid, for the primary rays) or upload (rsh)

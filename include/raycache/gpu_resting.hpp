@@ -14,7 +14,10 @@
 //      rested keeps its size, as a CPU cube does) and, when cubes moved, resting.resized(old, new layout).
 // What the host must tell it beyond the counters: which cubes start a frame empty (a frame a cube starts
 // empty decides nothing, as in C++): all of them at first; resized() marks cubes that grew (they start
-// empty, raycache::move_gpu_cubes); holds_texels() says so for cubes cleared or loaded from a cache file.
+// empty, raycache::move_gpu_cubes); restart() a cube cleared or loaded from a cache file (it works again,
+// as SceneCache's after clear() or a load). The GPU counts no valid texels, so a cube is taken to hold
+// texels from its first frame with stores on: one whose every tile the origin test's drop pass emptied
+// still counts as holding texels, where C++ (which counts them) would let its next frame decide nothing.
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -34,8 +37,8 @@ namespace raycache {
 class GpuResting {
 public:
     // Cubes numbered 0 .. cube_count - 1 (their descriptors' `index`, the frame buffer's counters), all
-    // working and empty. min_hit_rate: 0 never rests a cube (default_cct_min_hit_rate,
-    // default_cdct_min_hit_rate: C++'s defaults). Throws std::invalid_argument when it is negative or NaN.
+    // working and empty. min_hit_rate: 0 never rests a cube (default_min_hit_rate(cdct): C++'s defaults).
+    // Throws std::invalid_argument when it is negative or NaN.
     GpuResting(std::size_t cube_count, float min_hit_rate)
         : min_hit_rate_(min_hit_rate), states_(cube_count), resting_(cube_count, false), holds_texels_(cube_count, false) {
         if (!(min_hit_rate >= 0.0f))
@@ -52,7 +55,8 @@ public:
         for (std::size_t k = 0; k < states_.size(); ++k) {
             states_[k] = next_resting_state(states_[k], frame.cubes[k], min_hit_rate_, !holds_texels_[k]);
             resting_[k] = states_[k].resting;
-            // Every store that reached the pending word is published at the frame's end (the texel was empty).
+            // A store that reached the pending word is published at the frame's end (its texel was empty;
+            // the drop pass may empty its tile again: see the top of this file).
             holds_texels_[k] = holds_texels_[k] || frame.cubes[k].stores > 0;
         }
     }
@@ -73,9 +77,14 @@ public:
         }
     }
 
-    // Tells whether cube `index` holds texels now (false after clearing it; a cube loaded from a cache file
-    // holds what the file gave it). Throws std::out_of_range for an index past the cubes.
-    void holds_texels(std::size_t index, bool holds) { holds_texels_.at(index) = holds; }
+    // Cube `index` was cleared (holds_texels false) or loaded from a cache file (true when the file gave it
+    // texels): it works the next frame, which decides nothing when it starts empty. Throws
+    // std::out_of_range for an index past the cubes.
+    void restart(std::size_t index, bool holds_texels) {
+        states_.at(index) = RestingState{};
+        resting_[index] = false;
+        holds_texels_[index] = holds_texels;
+    }
 
     // Per cube, by index: whether it rests the next frame (for gpu_frame_start_words).
     const std::vector<bool>& resting() const noexcept { return resting_; }

@@ -28,11 +28,10 @@ namespace raycache {
 // Whether a ray in unit `direction` looks up a resting cube (shared::raycache_is_probe_direction).
 inline bool is_probe_direction(const glm::vec3& direction) noexcept { return shared::raycache_is_probe_direction(direction); }
 
-// The thresholds a cache uses unless told otherwise: about where a cube starts to pay on the Embree example
-// tracer, whose traced leaving ray costs about twice a CCT lookup and store (README "Results" has the sweep).
-// A CDCT search costs more than a CCT lookup, so its cubes must answer more to pay.
-inline constexpr float default_cct_min_hit_rate = 0.5f;
-inline constexpr float default_cdct_min_hit_rate = 0.6f;
+// The threshold a cache uses unless told otherwise, CCT 0.5 and CDCT 0.6: about where a cube starts to pay
+// on the Embree example tracer, whose traced leaving ray costs about twice a CCT lookup and store (README
+// "Results" has the sweep). A CDCT search costs more than a CCT lookup, so its cubes must answer more to pay.
+inline constexpr float default_min_hit_rate(bool cdct) noexcept { return cdct ? 0.6f : 0.5f; }
 
 // Fewer looked-up rays in a frame than this decide nothing (the cube keeps resting or working).
 inline constexpr std::uint64_t resting_min_judged_lookups = 32;

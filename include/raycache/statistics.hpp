@@ -58,7 +58,7 @@ struct CubeStatistics {
     }
     // Lookups the cube made: its resting misses (raycache/resting.hpp) left out, since it read nothing for them.
     std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }
-    // The share of the lookups that missed for `why`, 0..1 (0 for every cause on GPU statistics).
+    // The share of the lookups that missed for `why`, 0..1 (on GPU statistics 0 for every cause but resting).
     double miss_share(MissReason why) const noexcept {
         return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;
     }

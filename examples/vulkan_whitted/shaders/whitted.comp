@@ -88,8 +88,8 @@ vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
 
 // The colour of a ray leaving cached object `object` from o in unit direction d (tracer.cpp's leaving()).
 // A ray its resting cube lets through is traced alone, through the same call as a missed ray's: lanes of
-// one SIMD group that take different calls run both, one after the other (on lavapipe a resting cube's
-// frame then took 1.13 uncached ones, with 1 ray in 16 still probing).
+// one SIMD group that take different calls would run both, one after the other (on lavapipe, with two
+// calls, a resting cube's frame took 1.13 uncached ones, with 1 ray in 16 still probing).
 vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
     raycache_gpu_cube cube = cubes[object];
     bool rests = raycache_cube_rests(cube, d);

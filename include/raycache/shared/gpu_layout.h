@@ -15,8 +15,8 @@
  *
  * Frame buffer (binding RAYCACHE_FRAME_BINDING, uint words), shared by both techniques:
  *   header (RAYCACHE_FRAME_HEADER_WORDS): list count, list capacity, cube count, overflow, the end-of-frame
- *   pass's VkDispatchIndirectCommand, flags; then RAYCACHE_FRAME_CUBE_WORDS words per cube (counters, coverage) (indexed by the
- *   descriptor's `index`); then the store list (list capacity entries: a texel element, with
+ *   pass's VkDispatchIndirectCommand, flags; then RAYCACHE_FRAME_CUBE_WORDS words per cube (counters, resting
+ *   word, coverage; indexed by the descriptor's `index`); then the store list (list capacity entries: a texel element, with
  *   RAYCACHE_FRAME_CDCT_ENTRY set for a CDCT texel). The host writes the header and zeroes the counters
  *   before every frame (raycache/gpu_frame.hpp: gpu_frame_start_words). Counters are order-independent:
  *   hits and misses per lookup (a CDCT search is one lookup), `stores` = stores that reached the pending

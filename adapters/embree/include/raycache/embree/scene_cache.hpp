@@ -169,7 +169,7 @@ struct SceneCacheSettings {
 
 // SceneCacheSettings::min_hit_rate unset: 0.5 for the CCT, 0.6 for the CDCT (raycache/resting.hpp says why).
 inline float default_min_hit_rate(Technique technique) noexcept {
-    return technique == Technique::cct ? default_cct_min_hit_rate : default_cdct_min_hit_rate;
+    return raycache::default_min_hit_rate(technique == Technique::cdct);
 }
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
@@ -1224,6 +1224,10 @@ private:
             // A cube that holds texels received rays, so its face size came from counting them: later
             // moves take the hysteresis, as in the cache that saved it (the file keeps no flag for that).
             e.sized = with_cube(e, [](const auto& cube) { return cube.valid_texels() > 0; });
+            // A file holds texels, not whether a cube rests: a loaded cube works, and its next frame decides
+            // unless it starts empty (as after begin_frame()).
+            e.rest = RestingState{};
+            e.cold = !e.sized;
             // A file with path records makes the cache keep them from now on (records_to_load()).
             path_records_ = path_records_ || with_cube(e, [](const auto& cube) { return cube.keeps_path_records(); });
         }
