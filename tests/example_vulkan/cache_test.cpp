@@ -455,6 +455,21 @@ void run_resting_case(rcx::vk::Context& context, rcx::CacheMode mode, double min
     check(rcx::bit_identical(image, twin_image) && stats[2].hits == twin.hits && stats[2].rested == twin.rested,
           name + ": two tracers give the same pixels, hits and rested rays");
     check(working.resting_cubes == 0 && working.rested == 0 && working.hits > 0, name + ": min_hit_rate 0: no cube rests");
+    // A tracer loaded from these cubes works (a file holds texels, not resting); its first frame starts with
+    // the file's texels, so it decides, and the frame after rests as many cubes.
+    const std::string path = "/tmp/raycache-vulkan-resting-test-" + std::to_string(::getpid()) + "-" + rcx::to_string(mode) + ".rcc";
+    const raycache::SceneIdentity identity{0xbe8, "behind-8"};
+    a.save_caches(path, identity);
+    rcx::gpu::Tracer loaded(context, scene, spirv, settings);
+    loaded.load_caches(path, identity);
+    std::remove(path.c_str());
+    rcx::gpu::FrameStats first_loaded, next_loaded;
+    loaded.render(scene.camera, size, size, &first_loaded);
+    loaded.render(scene.camera, size, size, &next_loaded);
+    check(first_loaded.resting_cubes == 0 && first_loaded.rested == 0 && first_loaded.hits > 0 &&
+              next_loaded.resting_cubes == stats[2].resting_cubes,
+          name + format(": a tracer loaded from a cache file works a frame, then rests %.0f cubes (%.0f)",
+                        double(next_loaded.resting_cubes), double(stats[2].resting_cubes)));
 
     const rcx::embree::Tracer tracer(scene);
     raycache::embree::SceneCache caches(technique_of(mode), embree_settings(settings));
