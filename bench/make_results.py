@@ -277,7 +277,7 @@ def main():
     else:
         tables += "\n## Table 5.1: the Vulkan tracer\n\nNot measured in this run (no Vulkan device or no Vulkan build).\n\n"
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 25 minutes on 2 cores). Every speed-up compares renders "
+          "Regenerate everything with `scripts/bench.sh` (about 30 minutes on 2 cores). Every speed-up compares renders "
           "interleaved in one process on the same frames: the walkthrough's are ratios of mean times over a camera path, "
           "the thesis tables' ratios of medians of repeated frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", ""]

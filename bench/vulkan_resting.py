@@ -10,11 +10,9 @@ each run 12 frames at 256x256 beside the uncached frames in the same process (`-
 import os
 import re
 import statistics
-import subprocess
 import sys
-import tempfile
 
-from vulkan_single_image import machine_name
+from vulkan_runs import machine_name, run_rotating
 
 SCENES = ["behind-32", "grid-32", "reflective-32"]
 PATHS = ["orbit", "pan"]
@@ -43,31 +41,17 @@ def main():
     tracer, out = sys.argv[1], sys.argv[2]
     runs = int(sys.argv[3]) if len(sys.argv) > 3 else 3
     variants = [(s, p, m, r) for s in SCENES for p in PATHS for m in MODES for r in RATES]
-    results = {v: [] for v in variants}
-    env = dict(os.environ, RCX_VULKAN_VALIDATION="0")
-    device = ""
-    png = tempfile.mkdtemp(prefix="raycache-vulkan-resting-")  # the images are not kept
-    log = []  # written with the table at the end, so a run that stops early leaves the old files
-    for run in range(runs):
-        for k in range(len(variants)):
-            v = variants[(k + run * 5) % len(variants)]
-            scene, path, mode, rate = v
-            command = [tracer, "--scene", scene, "--size", "256x256", "--path", path, "--frames", "12", "--cache", mode,
-                       "--face-size", "auto", "--compare", "--out", png]
-            if rate is not None:
-                command += ["--min-hit-rate", str(rate)]
-            print(f"[vulkan resting] run {run + 1}/{runs}: {scene} {path} {mode} min hit rate {rate}", flush=True)
-            done = subprocess.run(command, env=env, capture_output=True, text=True)
-            text = done.stdout + done.stderr
-            log.append(f"=== {scene}_{path}_{mode}_{rate}_run{run + 1}\n{' '.join(command)}\n{text}")
-            if done.returncode == 77:
-                print("[vulkan resting] no Vulkan device: nothing written")
-                return
-            if done.returncode != 0:
-                sys.exit(f"the tracer failed ({done.returncode}):\n{text}")
-            match = re.search(r"^device (.*?) \(validation", text, re.M)
-            device = match.group(1) if match else device
-            results[v].append(parse(text))
+
+    def arguments_of(v):
+        scene, path, mode, rate = v
+        return [tracer, "--scene", scene, "--size", "256x256", "--path", path, "--frames", "12", "--cache", mode,
+                "--face-size", "auto", "--compare"] + (["--min-hit-rate", str(rate)] if rate is not None else [])
+
+    # The log is written with the table at the end, so a run that stops early leaves the old files.
+    done = run_rotating("vulkan resting", variants, runs, 5, arguments_of, parse)
+    if done is None:
+        return
+    results, device, log = done
     rows = []
     for scene in SCENES:
         for path in PATHS:

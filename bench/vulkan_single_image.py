@@ -8,28 +8,16 @@ medians over the runs) into OUT. No plot: single lavapipe frames are too noisy f
     bench/vulkan_single_image.py build-release/examples/vulkan_whitted/raycache_vulkan_whitted OUT [RUNS]
 """
 import os
-import platform
 import re
 import statistics
-import subprocess
 import sys
-import tempfile
+
+from vulkan_runs import machine_name, run_rotating
 
 SCENES = ["behind-32", "grid-32", "reflective-32"]
 MODES = ["cct", "cdct"]
 FIRST_FACES = [256, 64]
 WARM_UPS = [0, 2, 4]
-
-
-def machine_name():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def parse(output):
@@ -50,29 +38,17 @@ def main():
     tracer, out = sys.argv[1], sys.argv[2]
     runs = int(sys.argv[3]) if len(sys.argv) > 3 else 3
     variants = [(s, m, f, w) for s in SCENES for m in MODES for f in FIRST_FACES for w in WARM_UPS]
-    results = {v: [] for v in variants}
-    env = dict(os.environ, RCX_VULKAN_VALIDATION="0")
-    device = ""
-    png = tempfile.mkdtemp(prefix="raycache-single-image-")  # the images are not kept
-    log = []  # written with the table at the end, so a run that stops early leaves the old files
-    for run in range(runs):
-        for k in range(len(variants)):
-            v = variants[(k + run * 7) % len(variants)]
-            scene, mode, first, warm = v
-            command = [tracer, "--scene", scene, "--size", "512x512", "--frames", "1", "--cache", mode, "--face-size", "auto",
-                       "--first-face-size", str(first), "--warm-up", str(warm), "--compare", "--out", png]
-            print(f"[vulkan single image] run {run + 1}/{runs}: {scene} {mode} first faces {first} warm-up {warm}", flush=True)
-            done = subprocess.run(command, env=env, capture_output=True, text=True)
-            text = done.stdout + done.stderr
-            log.append(f"=== {scene}_{mode}_first{first}_warmup{warm}_run{run + 1}\n{' '.join(command)}\n{text}")
-            if done.returncode == 77:
-                print("[vulkan single image] no Vulkan device: nothing written")
-                return
-            if done.returncode != 0:
-                sys.exit(f"the tracer failed ({done.returncode}):\n{text}")
-            match = re.search(r"^device (.*?) \(validation", text, re.M)
-            device = match.group(1) if match else device
-            results[v].append(parse(text))
+
+    def arguments_of(v):
+        scene, mode, first, warm = v
+        return [tracer, "--scene", scene, "--size", "512x512", "--frames", "1", "--cache", mode, "--face-size", "auto",
+                "--first-face-size", str(first), "--warm-up", str(warm), "--compare"]
+
+    # The log is written with the table at the end, so a run that stops early leaves the old files.
+    done = run_rotating("vulkan single image", variants, runs, 7, arguments_of, parse)
+    if done is None:
+        return
+    results, device, log = done
     rows = []
     for v in variants:
         scene, mode, first, warm = v

@@ -4,8 +4,9 @@
 # thesis's experiments on the Embree tracer (raycache_bench: Table 5.2 on grid-N and behind-N, Table 5.3,
 # Figure 5.9, quality), Table 5.1 and the ray-space hierarchy against a per-frame BVH on the Vulkan tracer
 # (raycache_vulkan_bench, raycache_rsh_bench; on lavapipe where there is no GPU), the Vulkan tracer's single
-# image (bench/vulkan_single_image.py), the micro-benchmarks (raycache_micro_bench), and the plots.
-#   scripts/bench.sh           the full run (about 25 minutes on 2 cores)
+# image and resting cubes (bench/vulkan_single_image.py, bench/vulkan_resting.py), the micro-benchmarks
+# (raycache_micro_bench), and the plots.
+#   scripts/bench.sh           the full run (about 30 minutes on 2 cores)
 #   scripts/bench.sh --quick   small images, one round: checks the pipeline, not results (writes to build-bench/quick)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -55,9 +56,11 @@ build-bench/bench/raycache_bench --out "$out"
 vulkan_bench raycache_vulkan_bench --out "$out"
 # dynamic-64, moving spheres analytic, then tessellated up to 145 k triangles, 128x128 (about 5 minutes on lavapipe).
 vulkan_bench raycache_rsh_bench --out "$out"
-# The Vulkan tracer's single image with and without a warm-up pass, on lavapipe (about 2 minutes).
+# The Vulkan tracer's single image with and without a warm-up pass (about 2 minutes on lavapipe), and its
+# walkthroughs with and without resting cubes (about 6 minutes).
 if [[ -x build-bench/examples/vulkan_whitted/raycache_vulkan_whitted ]]; then
   /usr/bin/python3 bench/vulkan_single_image.py build-bench/examples/vulkan_whitted/raycache_vulkan_whitted "$out/vulkan_single_image"
+  /usr/bin/python3 bench/vulkan_resting.py build-bench/examples/vulkan_whitted/raycache_vulkan_whitted "$out/vulkan_resting"
 fi
 build-bench/bench/raycache_micro_bench --benchmark_min_time=0.5 --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true --benchmark_out="$out/micro.json" --benchmark_out_format=json
