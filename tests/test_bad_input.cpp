@@ -32,15 +32,15 @@ using raycache::TexelAddress;
 constexpr float inf = std::numeric_limits<float>::infinity();
 constexpr float nan_value = std::numeric_limits<float>::quiet_NaN();
 constexpr float largest_subnormal = 1.1754942e-38f;  // 0x007FFFFF
-constexpr float smallest_normal = 1.17549435e-38f;  // 2^-126 = 0x00800000
-const float two_to_125 = std::ldexp(1.0f, 125);      // 4.2535296e37, the largest allowed major magnitude
+constexpr float smallest_major = 0x1p-64f;           // 5.421011e-20, the smallest allowed major magnitude
+constexpr float largest_major = 0x1p64f;             // 1.8446744e19, the largest
 
 struct NamedVector {
     const char* name;
     glm::vec3 v;
 };
 
-// Vectors that are not directions: zero, NaN, infinite, too short (subnormal), too long (major above 2^125).
+// Vectors that are not directions: zero, NaN, infinite, too short (major below 2^-64), too long (above 2^64).
 const NamedVector not_directions[] = {
     {"zero", {0.0f, 0.0f, 0.0f}},
     {"-0", {-0.0f, -0.0f, -0.0f}},
@@ -60,10 +60,12 @@ const NamedVector not_directions[] = {
     {"all inf", {inf, inf, inf}},
     {"subnormal x", {1e-40f, 0.0f, 0.0f}},
     {"subnormals", {-1e-40f, 1e-45f, largest_subnormal}},
-    {"major above 4.25e37 (x)", {5e37f, 0.0f, 0.0f}},
-    {"major above 4.25e37 (y)", {1.0f, -4.3e37f, 0.0f}},
-    {"major above 4.25e37 (z)", {0.0f, 0.0f, std::numeric_limits<float>::max()}},
-    {"just above 2^125", {std::nextafter(std::ldexp(1.0f, 125), inf), 0.0f, 0.0f}},
+    {"normal but below 2^-64", {1.17549435e-38f, 1e-30f, -5e-20f}},
+    {"just below 2^-64", {0.0f, std::nextafter(0x1p-64f, 0.0f), 0.0f}},
+    {"major above 1.85e19 (x)", {5e37f, 0.0f, 0.0f}},
+    {"major above 1.85e19 (y)", {1.0f, -1.9e19f, 0.0f}},
+    {"major above 1.85e19 (z)", {0.0f, 0.0f, std::numeric_limits<float>::max()}},
+    {"just above 2^64", {std::nextafter(0x1p64f, inf), 0.0f, 0.0f}},
 };
 
 int failures_now() { return assertion_failures.load(); }
@@ -147,15 +149,16 @@ TEST_CASE("texel_of returns no texel for vectors that are not directions") {
     CHECK(failures_now() == before);
 }
 
-TEST_CASE("the limits of a direction: 2^-126 and 2^125 are directions, just beyond them are not") {
-    CHECK(raycache::is_direction(glm::vec3(smallest_normal, 0.0f, 0.0f)));
-    CHECK(raycache::is_direction(glm::vec3(0.0f, -two_to_125, 0.0f)));
-    CHECK_FALSE(raycache::is_direction(glm::vec3(largest_subnormal, 0.0f, 0.0f)));
-    CHECK_FALSE(raycache::is_direction(glm::vec3(0.0f, -std::nextafter(two_to_125, inf), 0.0f)));
+TEST_CASE("the limits of a direction: 2^-64 and 2^64 are directions, just beyond them are not") {
+    CHECK(raycache::is_direction(glm::vec3(smallest_major, 0.0f, 0.0f)));
+    CHECK(raycache::is_direction(glm::vec3(0.0f, -largest_major, 0.0f)));
+    CHECK_FALSE(raycache::is_direction(glm::vec3(std::nextafter(smallest_major, 0.0f), 0.0f, 0.0f)));
+    CHECK_FALSE(raycache::is_direction(glm::vec3(0.0f, -std::nextafter(largest_major, inf), 0.0f)));
     // A tiny or huge direction still lands on the texel of its face's centre: +X on N = 2, tu = tv = 0.5 -> (1, 1).
+    // Subnormal minor components (which GPUs flush to zero) change nothing there.
     CctCube cube(2);
-    CHECK(cube.store(glm::vec3(smallest_normal, 0.0f, 0.0f), glm::vec3(1.0f)));
-    CHECK(cube.store(glm::vec3(-two_to_125, 0.0f, 0.0f), glm::vec3(0.5f)));
+    CHECK(cube.store(glm::vec3(smallest_major, largest_subnormal, -1e-45f), glm::vec3(1.0f)));
+    CHECK(cube.store(glm::vec3(-largest_major, 0.0f, 0.0f), glm::vec3(0.5f)));
     CHECK(cube.load(TexelAddress{0, 1, 1}).has_value());
     CHECK(cube.load(TexelAddress{1, 1, 1}).has_value());
     CHECK(cube.valid_texels() == 2u);

@@ -225,6 +225,10 @@ TEST_CASE("vectors that are not directions have no texel") {
         CHECK_FALSE(texel_of(d, 16).has_value());
     }
     // The edges of the accepted magnitude range are directions.
-    CHECK(texel_of(glm::vec3(0x1p-126f, 0, 0), 16).has_value());
-    CHECK(texel_of(glm::vec3(0, 0x1p125f, 0), 16).has_value());
+    CHECK(texel_of(glm::vec3(0x1p-64f, 0, 0), 16).has_value());
+    CHECK(texel_of(glm::vec3(0, 0x1p64f, 0), 16).has_value());
+    // Just beyond them, and a normal but short vector, are not.
+    CHECK_FALSE(texel_of(glm::vec3(std::nextafter(0x1p-64f, 0.0f), 0, 0), 16).has_value());
+    CHECK_FALSE(texel_of(glm::vec3(0, 0, std::nextafter(0x1p64f, 1e30f)), 16).has_value());
+    CHECK_FALSE(texel_of(glm::vec3(1e-30f, 0, 0), 16).has_value());
 }

@@ -35,7 +35,7 @@ struct TexelAddress {
     friend bool operator!=(const TexelAddress& a, const TexelAddress& b) { return !(a == b); }
 };
 
-// True when `direction` can be looked up: finite components, largest magnitude in [2^-126, 2^125].
+// True when `direction` can be looked up: finite components, largest magnitude in [2^-64, 2^64].
 inline bool is_direction(const glm::vec3& direction) noexcept { return shared::raycache_is_direction(direction); }
 
 // True when `face_size` is a valid number of texels along a face's edge (1..4096).

@@ -21,6 +21,7 @@
 #define RAYCACHE_SHARED_CUBE_FACE_H
 
 #include "raycache/shared/language.h"
+#include "raycache/shared/rounding.h"
 
 #ifdef __cplusplus
 namespace raycache {
@@ -42,9 +43,11 @@ namespace shared {
 #define RAYCACHE_MAX_FACE_SIZE 4096
 
 /* A vector is a direction when its components are finite and its largest magnitude lies in
- * [2^-126, 2^125]: below, 0.5/|m| overflows; above, it becomes subnormal, which GPUs flush to zero. */
-#define RAYCACHE_MIN_MAJOR_MAGNITUDE 1.17549435e-38
-#define RAYCACHE_MAX_MAJOR_MAGNITUDE 4.25352959e+37
+ * [2^-64, 2^64]. There 0.5/|m| is rounded alike on every device (raycache/shared/rounding.h), and a
+ * subnormal component, which GPUs flush to zero, moves no texel: times 0.5/|m| it stays below 2^-27,
+ * which vanishes when 0.5 is added. */
+#define RAYCACHE_MIN_MAJOR_MAGNITUDE 5.42101086e-20 /* 2^-64 */
+#define RAYCACHE_MAX_MAJOR_MAGNITUDE 1.84467441e+19 /* 2^64 */
 
 /* A texel of the cube; face == RAYCACHE_NO_FACE when the vector it came from was not a direction. */
 struct raycache_texel_address {
@@ -126,7 +129,7 @@ RAYCACHE_HOT_FN raycache_texel_address raycache_texel_of(vec3 s, int face_size) 
     address.row = 0;
     if (address.face == RAYCACHE_NO_FACE) return address;
     vec2 st = raycache_face_coordinates(s, address.face);
-    float scale = 0.5f / raycache_major_magnitude(s, address.face);
+    float scale = raycache_divide(0.5f, raycache_major_magnitude(s, address.face));
     address.column = raycache_texel_index(st.x, scale, face_size);
     address.row = raycache_texel_index(st.y, scale, face_size);
     return address;
@@ -151,8 +154,8 @@ RAYCACHE_FN vec3 raycache_face_point(int face, float m, float sc, float tc) {
 /* The direction through the centre of a texel, with major component +-1 (not unit length).
  * Inverse of raycache_texel_of: raycache_texel_of(raycache_texel_direction(a, N), N) == a. */
 RAYCACHE_FN vec3 raycache_texel_direction(raycache_texel_address a, int face_size) {
-    float sc = 2.0f * ((float(a.column) + 0.5f) / float(face_size)) - 1.0f;
-    float tc = 2.0f * ((float(a.row) + 0.5f) / float(face_size)) - 1.0f;
+    float sc = 2.0f * raycache_divide(float(a.column) + 0.5f, float(face_size)) - 1.0f;
+    float tc = 2.0f * raycache_divide(float(a.row) + 0.5f, float(face_size)) - 1.0f;
     return raycache_face_point(a.face, 1.0f, sc, tc);
 }
 

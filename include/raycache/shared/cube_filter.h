@@ -84,7 +84,7 @@ RAYCACHE_FN raycache_filter_taps raycache_filter_taps_of(vec3 s, int face_size) 
     if (face == RAYCACHE_NO_FACE || face_size < RAYCACHE_MIN_FACE_SIZE || face_size > RAYCACHE_MAX_FACE_SIZE)
         return taps;
     vec2 st = raycache_face_coordinates(s, face);
-    float scale = 0.5f / raycache_major_magnitude(s, face);
+    float scale = raycache_divide(0.5f, raycache_major_magnitude(s, face));
     RAYCACHE_PRECISE float u = raycache_texel_position(st.x, scale, face_size) - 0.5f;
     RAYCACHE_PRECISE float v = raycache_texel_position(st.y, scale, face_size) - 0.5f;
     float u0 = floor(u);
@@ -169,7 +169,8 @@ RAYCACHE_FN bool raycache_filter_sum_found(raycache_filter_sum sum, float min_we
 /* The filtered value: the weighted mean of the texels found, their weights renormalised to sum 1, so
  * that an empty tap does not darken it. Only for a sum that raycache_filter_sum_found accepts. */
 RAYCACHE_FN vec3 raycache_filter_sum_mean(raycache_filter_sum sum) {
-    RAYCACHE_PRECISE vec3 mean = sum.color / sum.weight;
+    vec3 mean = vec3(raycache_divide(sum.color.x, sum.weight), raycache_divide(sum.color.y, sum.weight),
+                     raycache_divide(sum.color.z, sum.weight));
     return mean;
 }
 

@@ -77,7 +77,7 @@ RAYCACHE_FN float raycache_sphere_exit(vec3 start, vec3 d, float radius) {
     float b = raycache_dot_no_fma(start, d);
     RAYCACHE_PRECISE float c = raycache_dot_no_fma(start, start) - raycache_no_fma(radius * radius);
     RAYCACHE_PRECISE float disc = raycache_no_fma(b * b) - c;
-    RAYCACHE_PRECISE float t = sqrt(max(disc, 0.0f)) - b;
+    RAYCACHE_PRECISE float t = raycache_sqrt(max(disc, 0.0f)) - b;
     return max(t, 0.0f);
 }
 
@@ -165,7 +165,8 @@ RAYCACHE_FN void raycache_secant_advance(RAYCACHE_INOUT(raycache_secant_search) 
     if (s.bracketed) {
         /* False position between lo (f < 0) and hi (f >= 0). */
         RAYCACHE_PRECISE float span = s.hi_t - s.lo_t;
-        RAYCACHE_PRECISE float fraction = (-s.lo_f) / (s.hi_f - s.lo_f);
+        RAYCACHE_PRECISE float f_span = s.hi_f - s.lo_f;
+        float fraction = raycache_divide(-s.lo_f, f_span);
         RAYCACHE_PRECISE float step = raycache_no_fma(span * fraction);
         next = s.lo_t + step;
     } else {

@@ -21,7 +21,7 @@ RAYCACHE_FN bool raycache_is_finite3(vec3 v) {
 /* |v| as glm::length computes it: sqrt((x*x + y*y) + z*z). */
 RAYCACHE_FN float raycache_length(vec3 v) {
     RAYCACHE_PRECISE float squared = (raycache_no_fma(v.x * v.x) + raycache_no_fma(v.y * v.y)) + raycache_no_fma(v.z * v.z);
-    RAYCACHE_PRECISE float length = sqrt(squared);
+    float length = raycache_sqrt(squared);
     return length;
 }
 
@@ -42,8 +42,9 @@ RAYCACHE_FN vec3 raycache_ray_from_centre(vec3 o, vec3 d, float t, vec3 centre) 
 RAYCACHE_FN vec3 raycache_unit(vec3 direction) {
     vec3 a = abs(direction);
     float major = max(a.x, max(a.y, a.z));
-    RAYCACHE_PRECISE vec3 scaled = direction / major;
-    RAYCACHE_PRECISE vec3 unit = scaled / raycache_length(scaled);
+    vec3 scaled = vec3(raycache_divide(direction.x, major), raycache_divide(direction.y, major), raycache_divide(direction.z, major));
+    float length = raycache_length(scaled);
+    vec3 unit = vec3(raycache_divide(scaled.x, length), raycache_divide(scaled.y, length), raycache_divide(scaled.z, length));
     return unit;
 }
 
@@ -59,7 +60,8 @@ RAYCACHE_FN float raycache_box_exit_distance(vec3 o, vec3 d, vec3 centre, float 
     for (int axis = 0; axis < 3; ++axis) {
         if (d[axis] == 0.0f) continue; /* parallel to this slab: it never bounds the exit */
         RAYCACHE_PRECISE float face = centre[axis] + (d[axis] > 0.0f ? half_size : -half_size);
-        RAYCACHE_PRECISE float t = (face - o[axis]) / d[axis];
+        RAYCACHE_PRECISE float from_origin = face - o[axis];
+        float t = raycache_divide(from_origin, d[axis]);
         exit = (t < exit) ? t : exit;
     }
     return (exit < 0.0f) ? 0.0f : exit;
