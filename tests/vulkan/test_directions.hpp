@@ -115,13 +115,22 @@ inline std::vector<Direction> directions_for(int n, std::uint32_t seed) {
                 }
             }
 
-    // The limits of a direction: major magnitude 2^-126 and 2^125 (directions) and one float beyond
+    // The limits of a direction: major magnitude 2^-64 and 2^64 (directions) and one float beyond
     // (not directions); zero, infinite and NaN vectors (not directions).
-    const float lowest = std::ldexp(1.0f, -126), highest = std::ldexp(1.0f, 125);
+    const float lowest = std::ldexp(1.0f, -64), highest = std::ldexp(1.0f, 64);
     for (int i = 0; i < 100; ++i) {
         const float u = 2.0f * unit(rng) - 1.0f, w = 2.0f * unit(rng) - 1.0f;
         for (float m : {lowest, next_up(lowest, 1), next_up(lowest, -1), highest, next_up(highest, -1), next_up(highest, 1)})
             for (int f = 0; f < 6; ++f) out.push_back({on_face(f, m, u * m, w * m), "limits"});
+    }
+    // Subnormal minor components, which GPUs may flush to zero, next to majors from the smallest up.
+    for (int i = 0; i < 100; ++i) {
+        const float tiny = std::ldexp(2.0f * unit(rng) - 1.0f, -127 - i % 22);
+        for (float m : {lowest, 1.0f, highest})
+            for (int f = 0; f < 6; ++f) {
+                out.push_back({on_face(f, m, tiny, (2.0f * unit(rng) - 1.0f) * m), "subnormal minor"});
+                out.push_back({on_face(f, m, -tiny, tiny), "subnormal minor"});
+            }
     }
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
     for (glm::vec3 v : {glm::vec3(0.0f), glm::vec3(-0.0f), glm::vec3(inf, 0, 0), glm::vec3(1, -inf, 0),

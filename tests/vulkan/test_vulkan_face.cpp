@@ -24,6 +24,20 @@ namespace {
 
 using rcx_test::Direction;
 
+// True when a direction's position on its face, (c / |m| + 1) / 2 * N in texels along either face axis,
+// lies within eps texels of a texel edge (the face's own edges, where two majors nearly tie, included),
+// worked out in double precision.
+bool near_texel_edge(glm::vec3 v, int n, double eps) {
+    const double a[3] = {std::abs(static_cast<double>(v.x)), std::abs(static_cast<double>(v.y)), std::abs(static_cast<double>(v.z))};
+    const int major = a[2] >= a[1] && a[2] >= a[0] ? 2 : (a[1] >= a[0] ? 1 : 0);
+    for (int k = 0; k < 3; ++k) {
+        if (k == major) continue;
+        const double u = (a[k] / a[major] + 1.0) / 2.0 * n; // the sign of c mirrors u about n / 2: same distance
+        if (std::abs(u - std::round(u)) < eps) return true;
+    }
+    return false;
+}
+
 void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, int n) {
     const std::vector<Direction> directions = rcx_test::directions_for(n, 1234u + static_cast<std::uint32_t>(n));
     const std::size_t count = directions.size();
@@ -52,7 +66,8 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
 
     const std::int32_t* glsl = texels.as<std::int32_t>();
     const std::uint32_t* index = linear.as<std::uint32_t>();
-    std::size_t include_agrees = 0, cube_texel_agrees = 0, sampler_agrees = 0, sampled = 0, reported = 0;
+    std::size_t include_agrees = 0, cube_texel_agrees = 0, sampler_agrees = 0, sampled = 0, reported = 0, excused = 0;
+    const int fraction_bits = rcx_test::sampler_fraction_bits(vk);
     for (std::size_t i = 0; i < count; ++i) {
         const glm::vec3 v = directions[i].v;
         const std::optional<raycache::TexelAddress> cpu = raycache::texel_of(v, n);
@@ -65,6 +80,11 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
         if (raycache::is_direction(v)) {
             ++sampled;
             sampler_ok = index[2 * i + 1] == expected_index;
+            // A fixed-point sampler may pick the neighbour of a direction this close to a texel edge.
+            if (!sampler_ok && fraction_bits > 0 && near_texel_edge(v, n, std::ldexp(1.0, -fraction_bits))) {
+                sampler_ok = true;
+                ++excused;
+            }
             sampler_agrees += sampler_ok;
         }
         include_agrees += include_ok;
@@ -78,9 +98,13 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
     }
     std::printf("face size %4d: %zu directions: GLSL raycache_texel_of = C++ texel_of for %zu, "
                 "raycache_cube_texel = C++ for %zu; %s sampler = C++ for %zu of %zu directions "
-                "(the other %zu are not directions)\n",
+                "(the other %zu are not directions)",
                 n, count, include_agrees, cube_texel_agrees, vk.device_name().c_str(), sampler_agrees, sampled,
                 count - sampled);
+    if (fraction_bits > 0)
+        std::printf("; its fixed-point coordinates picked a neighbour for %zu of them, all within 2^-%d texel of an edge",
+                    excused, fraction_bits);
+    std::printf("\n");
     std::fflush(stdout);
     CHECK(count >= 100000);
     CHECK(include_agrees == count);

@@ -11,7 +11,8 @@
 // weights agree, but it blends with lerps (a + w (b - a), twice, plus the corner share) where the library
 // takes a weighted sum, a different order of about 8 roundings of at most 2^-24 each: 2^-21, doubled
 // for margin. (A driver that rounded the position differently would move weights by up to 2^-24 N
-// and need a tolerance growing with N.) A wrong tap or corner rule errs by the difference between random
+// and need a tolerance growing with N.) A GPU's sampler rounds the position to a few fractional bits of a
+// texel (subTexelPrecisionBits, 8 on NVIDIA's): there the tolerance is 2^-bits. A wrong tap or corner rule errs by the difference between random
 // texels, about 0.3 on average; dropping the corner tap and renormalising instead errs by up to 0.02.
 #include <doctest/doctest.h>
 
@@ -139,7 +140,10 @@ void check_face_size(rcx::vk::Context& vk, rcx::vk::ComputePipeline& pipeline, i
         return gpu.w == 1.0f && glm::floatBitsToUint(glm::vec3(gpu)) == glm::floatBitsToUint(*cpu);
     };
 
-    const double tolerance = 0x1p-20;
+    // A fixed-point sampler (rcx_test::sampler_fraction_bits) rounds each weight to within 2^-(bits+1),
+    // which moves a blend of values in [0, 1] by up to 2^-bits.
+    const int fraction_bits = rcx_test::sampler_fraction_bits(vk);
+    const double tolerance = fraction_bits > 0 ? std::ldexp(1.0, -fraction_bits) + 0x1p-20 : 0x1p-20;
     const glm::uvec4* gpu_taps = taps.as<glm::uvec4>();
     const glm::vec4* gpu_full = full_values.as<glm::vec4>();
     const glm::vec4* gpu_holes = holes_values.as<glm::vec4>();

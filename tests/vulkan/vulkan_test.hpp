@@ -53,6 +53,16 @@ void for_face_sizes(const std::string& shader, const std::vector<VkDescriptorTyp
 // Bindings of the cross-check shaders (shaders/*_cross.comp: six storage buffers, the frame buffer last), of
 // the sweep (shaders/end_frame.comp: texels and pending) and of the library's end-of-frame pass
 // (shaders/end_frame_listed.comp: CCT texels and pending, CDCT texels and pending, frame).
+// A device's sampler as an oracle: a software device (lavapipe) computes sampling coordinates in float,
+// as RayCache does, so it must agree exactly; a GPU rounds them to subTexelPrecisionBits fractional bits
+// of a texel (8 on NVIDIA's, a fixed-point unit), which moves texel choices and filter weights within that
+// much. Returns those bits, or 0 for a device whose sampler is exact.
+inline int sampler_fraction_bits(const rcx::vk::Context& vk) {
+    return vk.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU
+               ? 0
+               : static_cast<int>(vk.properties().limits.subTexelPrecisionBits);
+}
+
 inline const std::vector<VkDescriptorType> cross_bindings(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 inline const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 inline const std::vector<VkDescriptorType> listed_end_frame_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
