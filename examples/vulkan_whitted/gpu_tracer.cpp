@@ -550,6 +550,11 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     Image image(width, height);
     const float* out = t.output->as<float>();
     for (std::size_t i = 0; i < pixels; ++i) image.pixels[i] = glm::vec3(out[4 * i], out[4 * i + 1], out[4 * i + 2]);
+    if (stats && t.ends_frames() && t.settings.secondary == Secondary::bvh) {
+        std::vector<std::uint32_t> outcomes(pixels); // whitted.comp's bits, in the alpha channel
+        for (std::size_t i = 0; i < pixels; ++i) outcomes[i] = static_cast<std::uint32_t>(out[4 * i + 3]);
+        stats->warps = simd_group_statistics(outcomes, width, height, 32);
+    }
     if (stats) {
         stats->warm_up_milliseconds = warm_up_ms;
         stats->warm_up_stored_texels = warm_up_stored;

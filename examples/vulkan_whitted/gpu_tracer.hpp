@@ -21,6 +21,7 @@
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
 #include "rsh_frame.hpp"
+#include "simd_groups.hpp"
 
 namespace rcx::gpu {
 
@@ -82,6 +83,9 @@ struct FrameStats {
     std::size_t resting_cubes = 0;       // cubes that rested during this frame (their rays but probes traced alone;
                                          // SceneCacheStatistics::resting_cubes counts those resting the next one)
     std::uint64_t rested = 0;            // ... the rays they let through (counted in `lookups` as misses, not in `hits`)
+    SimdGroupStatistics warps;           // the tracing dispatch's groups of 32 lanes (8 x 4 pixels) with leaving rays
+                                         // of cached objects, and those whose such rays all hit (simd_groups.hpp;
+                                         // cct and cdct through the BVH, else empty)
     double update_ms = 0.0;              // set_scene before this frame: BVH rebuild and upload (bvh; rsh without
                                          // --hybrid, for the primary rays) or upload (rsh)
     RshFrameStats rsh;                   // rsh: the frame's traces

@@ -195,6 +195,9 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // hold what both pay alike (submitting, waiting, the image written to host memory).
     double warm_gpu = 0.0, warm_gpu_plain = 0.0;
     bool gpu_times = true;
+    // After the first frame: the lookups, their hits, and the 32-lane groups with lookups and with hits alone.
+    std::uint64_t warm_lookups = 0, warm_hits = 0;
+    std::size_t warm_warps = 0, warm_warps_all_hit = 0;
     for (int f = 0; f < frames; ++f) {
         const rcx::Camera camera = scene.camera_at(f);
         if (scene.dynamic() && f > 0) { // objects move: the BVH is rebuilt, the ray-space hierarchy needs nothing
@@ -210,7 +213,13 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         // A cached frame's cost: its warm-up pass, tracing and end-of-frame passes, resizing the cubes after it.
         const double ms = stats.warm_up_milliseconds + stats.milliseconds + stats.resize_milliseconds;
         sum_ms += ms;
-        if (f > 0) warm_ms += ms;
+        if (f > 0) {
+            warm_ms += ms;
+            warm_lookups += stats.lookups;
+            warm_hits += stats.hits;
+            warm_warps += stats.warps.with_lookups;
+            warm_warps_all_hit += stats.warps.all_hit;
+        }
         double plain_ms = 0.0, plain_gpu_ms = 0.0, psnr = 0.0;
         if (o.compare) {
             rcx::gpu::FrameStats plain_stats;
@@ -286,6 +295,11 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame; PSNR min %s dB\n",
                     sum_plain / n, frames > 1 ? warm_plain / warm : sum_plain / n,
                     frames > 1 ? warm_plain / warm_ms : sum_plain / sum_ms, rcx::psnr_text(psnr_min).c_str());
+    if (warm_warps > 0 && warm_lookups > 0)
+        std::printf("summary after the first frame: %.1f%% of the lookups hit; in %.1f%% of the 32-lane groups "
+                    "(8 x 4 pixels) with lookups all of them hit (only then does a GPU's group skip the traces)\n",
+                    100.0 * static_cast<double>(warm_hits) / static_cast<double>(warm_lookups),
+                    100.0 * static_cast<double>(warm_warps_all_hit) / static_cast<double>(warm_warps));
     if (o.compare && frames > 1 && gpu_times && warm_gpu > 0.0)
         std::printf("summary GPU time after the first frame (tracing, end-of-frame passes and resizing; uncached: tracing): "
                     "%.3f ms against %.3f ms uncached; speed-up %.2fx\n",

@@ -28,6 +28,7 @@
 
 #include "gpu_tracer.hpp"
 #include "rcx/image.hpp"
+#include "simd_groups.hpp"
 #include "rcx/options.hpp"
 #include "rcx/scene.hpp"
 #include "tracer.hpp"
@@ -111,6 +112,7 @@ void run_case(rcx::vk::Context& context, const Case& c) {
     rcx::gpu::FrameStats uncached_stats;
     const rcx::Image uncached = reference.render(scene.camera, size, size, &uncached_stats);
     check(uncached_stats.end_frame_milliseconds == 0.0, std::string(c.scene) + ": an uncached frame has no end-of-frame passes to time");
+    check(uncached_stats.warps.with_lookups == 0, std::string(c.scene) + ": an uncached frame counts no SIMD groups with lookups");
 
     // CCT; CDCT with the relief walk; CDCT with the secant search.
     for (int run = 0; run < 3; ++run) {
@@ -145,6 +147,15 @@ void run_case(rcx::vk::Context& context, const Case& c) {
         check(rcx::bit_identical(cold, uncached), name + ": the cold frame equals the uncached frame bit for bit" +
                                                  format(" (%.0f pixels differ, PSNR %.2f dB)", double(cold_difference.differing_pixels), cold_difference.psnr_db));
         check(cold_stats.lookups > 0 && cold_stats.hits == 0, name + ": the cold frame looked up and hit nothing");
+        // Each pixel's alpha says what its lookups met: 64 x 64 pixels are 128 groups of 8 x 4.
+        check(cold_stats.warps.with_lookups > 0 && cold_stats.warps.with_lookups <= 128 && cold_stats.warps.all_hit == 0,
+              name + format(": the cold frame's %.0f groups with lookups had a miss each (%.0f all hit)",
+                            double(cold_stats.warps.with_lookups), double(cold_stats.warps.all_hit)));
+        // The same camera sends leaving rays from the same pixels; hits come in groups too (the CCT's warm
+        // frame hits over 95% of its lookups).
+        check(warm_stats.warps.with_lookups == cold_stats.warps.with_lookups && warm_stats.warps.all_hit <= warm_stats.warps.with_lookups &&
+                  (mode != rcx::CacheMode::cct || warm_stats.warps.all_hit > 0),
+              name + format(": the warm frame looks up in the same groups, %.0f of them hit alone", double(warm_stats.warps.all_hit)));
         const double hit_rate = warm_stats.lookups > 0 ? double(warm_stats.hits) / double(warm_stats.lookups) : 0.0;
         const double psnr = rcx::compare(warm, uncached).psnr_db;
         if (mode == rcx::CacheMode::cct) {
@@ -501,7 +512,37 @@ void run_resting_case(rcx::vk::Context& context, rcx::CacheMode mode, double min
     check(psnr >= min_embree_psnr, name + format(": the third frame against the Embree tracer's %.2f dB >= %.0f dB", psnr, min_embree_psnr));
 }
 
+// simd_group_statistics over hand-placed pixel bits: a 16 x 10 image is two 8 x 8 workgroups across and
+// two (cut at row 10) down; a group of 32 lanes is rows 0-3 or 4-7 of a workgroup, of 8 lanes one row.
+void run_simd_group_case() {
+    std::vector<std::uint32_t> bits(16 * 10, 0u);
+    auto at = [&](int x, int y) -> std::uint32_t& { return bits[static_cast<std::size_t>(y) * 16 + x]; };
+    at(0, 0) = rcx::gpu::lookup_hit;      // workgroup (0, 0), rows 0-3: a hit and a miss
+    at(7, 3) = rcx::gpu::lookup_missed;
+    at(3, 5) = rcx::gpu::lookup_hit;      // workgroup (0, 0), rows 4-7: hits alone
+    at(4, 7) = rcx::gpu::lookup_hit;
+    at(10, 2) = rcx::gpu::lookup_rested;  // workgroup (1, 0), rows 0-3: a ray let through
+    at(9, 9) = rcx::gpu::lookup_hit | rcx::gpu::lookup_missed; // workgroup (1, 1), row 9 (rows 8-9 exist)
+    const rcx::gpu::SimdGroupStatistics g32 = rcx::gpu::simd_group_statistics(bits, 16, 10, 32);
+    check(g32.with_lookups == 4 && g32.all_hit == 1, format("32 lanes: 4 groups with lookups (%.0f), 1 all hit (%.0f)",
+                                                            double(g32.with_lookups), double(g32.all_hit)));
+    const rcx::gpu::SimdGroupStatistics g64 = rcx::gpu::simd_group_statistics(bits, 16, 10, 64);
+    check(g64.with_lookups == 3 && g64.all_hit == 0, format("64 lanes: 3 groups with lookups (%.0f), none all hit (%.0f)",
+                                                            double(g64.with_lookups), double(g64.all_hit)));
+    const rcx::gpu::SimdGroupStatistics g8 = rcx::gpu::simd_group_statistics(bits, 16, 10, 8);
+    check(g8.with_lookups == 6 && g8.all_hit == 3, format("8 lanes (rows): 6 with lookups (%.0f), 3 all hit (%.0f)",
+                                                          double(g8.with_lookups), double(g8.all_hit)));
+    bool refused = false;
+    try {
+        rcx::gpu::simd_group_statistics(bits, 16, 10, 24);
+    } catch (const std::invalid_argument&) {
+        refused = true;
+    }
+    check(refused, "24 lanes (not a power of two) are refused");
+}
+
 int main() {
+    run_simd_group_case();
     std::unique_ptr<rcx::vk::Context> context;
     try {
         rcx::vk::ContextOptions options;

@@ -86,18 +86,24 @@ vec4 trace_subtree(vec3 o0, vec3 d0, int depth0) {
     return vec4(sum, first_t);
 }
 
+// What a pixel's leaving rays met, or-ed into its alpha for the host's SIMD-group statistics
+// (simd_groups.hpp): a lookup that hit, one that missed, a ray a resting cube let through.
+const uint LOOKUP_HIT = 1u, LOOKUP_MISSED = 2u, LOOKUP_RESTED = 4u;
+
 // The colour of a ray leaving cached object `object` from o in unit direction d (tracer.cpp's leaving()).
 // A ray its resting cube lets through is traced alone, through the same call as a missed ray's: lanes of
 // one SIMD group that take different calls would run both, one after the other (on lavapipe, with two
 // calls, a resting cube's frame took 1.13 uncached ones, with 1 ray in 16 still probing).
-vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
+vec3 leaving(uint object, vec3 o, vec3 d, int depth, inout uint outcome) {
     raycache_gpu_cube cube = cubes[object];
     bool rests = raycache_cube_rests(cube, d);
+    outcome |= rests ? LOOKUP_RESTED : 0u;
 #ifdef WHITTED_CDCT
     raycache_relief_parameters rp = raycache_relief_parameters(relief.x, relief.y, relief_i.x, relief.z, relief.w,
                                                                relief_i.y, relief_i.z);
     if (!rests) {
         raycache_relief_result f = raycache_cdct_search(cube, o, d, rp); // secant or relief walk, as rp.search says
+        outcome |= f.hit ? LOOKUP_HIT : LOOKUP_MISSED;
         if (f.hit) return f.color;
     }
     vec4 r = trace_subtree(o, d, depth + 1);
@@ -114,6 +120,7 @@ vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
     raycache_origin_tolerance tolerance = raycache_origin_tolerance(origin_test.x * cube.half_size, origin_test.y);
     if (!rests) {
         raycache_cct_result c = origins ? raycache_cct_lookup_from(cube, d, o, tolerance) : raycache_cct_lookup(cube, d);
+        outcome |= c.hit ? LOOKUP_HIT : LOOKUP_MISSED;
         if (c.hit) return c.color;
     }
     vec4 r = trace_subtree(o, d, depth + 1);
@@ -125,8 +132,9 @@ vec3 leaving(uint object, vec3 o, vec3 d, int depth) {
 }
 
 // A primary ray's tree: as trace_subtree, but rays leaving cached objects go through their cubes (and
-// their subtrees are summed separately in every mode).
-vec3 trace_primary(vec3 o0, vec3 d0, uint pixel) {
+// their subtrees are summed separately in every mode); `outcome` gathers what their lookups met.
+vec3 trace_primary(vec3 o0, vec3 d0, uint pixel, out uint outcome) {
+    outcome = 0u;
     vec3 so[STACK], sd[STACK], sw[STACK];
     int sdepth[STACK];
     int top = 0;
@@ -165,7 +173,7 @@ vec3 trace_primary(vec3 o0, vec3 d0, uint pixel) {
 #else
                 else if (mode == MODE_CCT)
 #endif
-                    sum += w * c[i].w * leaving(object, c[i].o, c[i].d, depth);
+                    sum += w * c[i].w * leaving(object, c[i].o, c[i].d, depth, outcome);
                 continue;
             }
             if (top < STACK) { so[top] = c[i].o; sd[top] = c[i].d; sw[top] = w * c[i].w; sdepth[top] = depth + 1; ++top; }
@@ -184,6 +192,7 @@ void main() {
     if (x >= width || y >= height) return;
     if (done > 0 && x % done == 0 && y % done == 0) return;
     vec3 d = primary_direction(x, y);
-    vec3 color = trace_primary(eye.xyz, d, uint(y * width + x));
-    pixels[y * width + x] = vec4(color, 1.0);
+    uint outcome;
+    vec3 color = trace_primary(eye.xyz, d, uint(y * width + x), outcome);
+    pixels[y * width + x] = vec4(color, float(outcome));
 }
