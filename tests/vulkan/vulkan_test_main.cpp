@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 
 #include "vulkan_test.hpp"
@@ -32,7 +33,11 @@ rcx::vk::Context* context() {
     return g_context.get();
 }
 
-std::string spirv(const std::string& name) { return std::string(RCX_TEST_SPIRV_DIR) + "/" + name + ".spv"; }
+// The tests' shaders: built beside them, or where RAYCACHE_TEST_SHADERS says (a bundle run on another machine).
+std::string spirv(const std::string& name) {
+    const char* moved = std::getenv("RAYCACHE_TEST_SHADERS");
+    return std::string(moved && *moved ? moved : RCX_TEST_SPIRV_DIR) + "/" + name + ".spv";
+}
 
 } // namespace rcx_test
 
