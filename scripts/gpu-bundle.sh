@@ -2,10 +2,10 @@
 # gpu-bundle.sh: packs what checks RayCache's GLSL on another machine's Vulkan device (a GPU lent without
 # this machine's compilers and packages) into build-bundle/: the Vulkan tests and the example tracer's
 # cache tests (RelWithDebInfo, from build/), the Vulkan tracer (Release, from build-release/), their SPIR-V,
-# the shared libraries they load that are not the C library's, and run.sh, which runs the tests and the
+# the shared libraries they load that are not the C and C++ runtimes, the validation layer, and run.sh, which runs the tests and the
 # tracer's walkthroughs there and writes their output to the folder it is given (default: ./gpu-results).
 # Build first: the README's test command (build/) and the Vulkan tracer (build-release/). The bundle is
-# about 20 MiB; libraries the other machine's driver needs (glvnd's dispatch library for NVIDIA's) are
+# about 24 MiB; libraries the other machine's driver needs (glvnd's dispatch library for NVIDIA's) are
 # carried too and used only where that machine lacks them.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -14,7 +14,7 @@ tracer=build-release/examples/vulkan_whitted/raycache_vulkan_whitted
 for f in "$tracer" build/tests/vulkan/raycache_test_vulkan_face build/tests/example_vulkan/raycache_test_example_vulkan_cache; do
   [[ -x $f ]] || { echo "gpu-bundle.sh: $f is missing: build it first (README)" >&2; exit 1; }
 done
-rm -rf "$out" && mkdir -p "$out"/{bin,tests,shaders/tracer,shaders/tests,lib,lib-fallback}
+rm -rf "$out" && mkdir -p "$out"/{bin,tests,shaders/tracer,shaders/tests,lib,lib-fallback,layers}
 cp "$tracer" "$out/bin/"
 cp build-release/examples/vulkan_whitted/shaders/*.spv "$out/shaders/tracer/"
 cp build/tests/vulkan/shaders/*.spv "$out/shaders/tests/"
@@ -44,6 +44,8 @@ ldconfig -p 2>/dev/null | grep -q libGLdispatch.so.0 || export LD_LIBRARY_PATH="
 [[ -z ${VK_DRIVER_FILES:-} && -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]] &&
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export RAYCACHE_TEST_SHADERS="$here/shaders/tests" RAYCACHE_VULKAN_WHITTED_SHADERS="$here/shaders/tracer"
+# The tests run with the carried validation layer (any error it reports fails them); the walkthroughs without.
+export VK_LAYER_PATH="$libraries/layers${VK_LAYER_PATH:+:$VK_LAYER_PATH}"
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$results/device.txt"
 run_log=$(mktemp)
 for t in "$here"/tests/*; do
@@ -55,7 +57,7 @@ for t in "$here"/tests/*; do
 done | tee "$results/tests.txt"
 for scene in behind-32 grid-32 reflective-32; do
   for mode in cct cdct ceiling; do
-    timeout 120 "$here/bin/raycache_vulkan_whitted" --scene "$scene" --size "${SIZE:-1024x1024}" --path orbit \
+    RCX_VULKAN_VALIDATION=0 timeout 120 "$here/bin/raycache_vulkan_whitted" --scene "$scene" --size "${SIZE:-1024x1024}" --path orbit \
       --frames "${FRAMES:-20}" --cache "$mode" --compare --out "$libraries/png" > "$run_log" 2>&1
     { echo "\$ raycache_vulkan_whitted --scene $scene --cache $mode: exit $?"; cat "$run_log"; } >> "$results/walkthroughs.txt"
     echo "$scene $mode: $(grep -E '^summary (GPU|after)' "$run_log" | sed 's/^summary //' | tr '\n' ' ')"
@@ -63,6 +65,14 @@ for scene in behind-32 grid-32 reflective-32; do
 done | tee "$results/summary.txt"
 RUN
 chmod +x "$out/run.sh"
+# The validation layer, so that the tests check the other driver's use too (two of them require it).
+layer_json=/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json
+if [[ -f $layer_json ]]; then
+  layer_library=$(ldconfig -p | awk '$1 == "libVkLayer_khronos_validation.so" {print $NF; exit}')
+  layer_library=${layer_library:-/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so}
+  cp -L "$layer_library" "$out/layers/"
+  sed 's|"library_path": *"[^"]*"|"library_path": "./libVkLayer_khronos_validation.so"|' "$layer_json" > "$out/layers/VkLayer_khronos_validation.json"
+fi
 # Compressed, the libraries (Embree is most of them) take a quarter of the room; run.sh unpacks them.
-tar cJf "$out/libraries.tar.xz" -C "$out" lib lib-fallback && rm -rf "$out/lib" "$out/lib-fallback"
+tar cJf "$out/libraries.tar.xz" -C "$out" lib lib-fallback layers && rm -rf "$out/lib" "$out/lib-fallback" "$out/layers"
 du -sh "$out"
