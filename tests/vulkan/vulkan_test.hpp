@@ -50,9 +50,6 @@ void for_face_sizes(const std::string& shader, const std::vector<VkDescriptorTyp
     }
 }
 
-// Bindings of the cross-check shaders (shaders/*_cross.comp: six storage buffers, the frame buffer last), of
-// the sweep (shaders/end_frame.comp: texels and pending) and of the library's end-of-frame pass
-// (shaders/end_frame_listed.comp: CCT texels and pending, CDCT texels and pending, frame).
 // A device's sampler as an oracle: a software device (lavapipe) computes sampling coordinates in float,
 // as RayCache does, so it must agree exactly; a GPU rounds them to subTexelPrecisionBits fractional bits
 // of a texel (8 on NVIDIA's, a fixed-point unit), which moves texel choices and filter weights within that
@@ -63,6 +60,9 @@ inline int sampler_fraction_bits(const rcx::vk::Context& vk) {
                : static_cast<int>(vk.properties().limits.subTexelPrecisionBits);
 }
 
+// Bindings of the cross-check shaders (shaders/*_cross.comp: six storage buffers, the frame buffer last), of
+// the sweep (shaders/end_frame.comp: texels and pending) and of the library's end-of-frame pass
+// (shaders/end_frame_listed.comp: CCT texels and pending, CDCT texels and pending, frame).
 inline const std::vector<VkDescriptorType> cross_bindings(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 inline const std::vector<VkDescriptorType> end_frame_bindings(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
 inline const std::vector<VkDescriptorType> listed_end_frame_bindings(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
