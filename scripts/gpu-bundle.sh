@@ -58,9 +58,9 @@ done | tee "$results/tests.txt"
 for scene in behind-32 grid-32 reflective-32; do
   for mode in cct cdct ceiling; do
     RCX_VULKAN_VALIDATION=0 timeout 120 "$here/bin/raycache_vulkan_whitted" --scene "$scene" --size "${SIZE:-1024x1024}" --path orbit \
-      --frames "${FRAMES:-20}" --cache "$mode" --compare --out "$libraries/png" > "$run_log" 2>&1
+      --frames "${FRAMES:-20}" --cache "$mode" --compare --shader-stats --out "$libraries/png" > "$run_log" 2>&1
     { echo "\$ raycache_vulkan_whitted --scene $scene --cache $mode: exit $?"; cat "$run_log"; } >> "$results/walkthroughs.txt"
-    echo "$scene $mode: $(grep -E '^summary (GPU|after)' "$run_log" | sed 's/^summary //' | tr '\n' ' ')"
+    echo "$scene $mode: $(grep -E '^(summary (GPU|after)|tracing shader)' "$run_log" | sed 's/^summary //' | tr '\n' ' ')"
   done
 done | tee "$results/summary.txt"
 RUN

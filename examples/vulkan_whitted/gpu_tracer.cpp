@@ -367,6 +367,10 @@ VkMemoryPropertyFlags Tracer::cube_memory_flags() const noexcept {
     return impl_->texels ? impl_->texels->memory_flags() : 0;
 }
 
+std::vector<std::string> Tracer::shader_statistics() const {
+    return impl_->whitted ? impl_->whitted->statistics() : std::vector<std::string>{};
+}
+
 Image Tracer::render(const Camera& camera, int width, int height, FrameStats* stats, int warm_up_stride) {
     if (width < 1 || height < 1)
         throw std::invalid_argument("Vulkan tracer: image size must be at least 1x1");

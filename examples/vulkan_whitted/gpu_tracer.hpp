@@ -136,6 +136,10 @@ public:
     // The property flags of the memory the BVH nodes and the cube texels were placed in (0: no cubes).
     VkMemoryPropertyFlags scene_memory_flags() const noexcept;
     VkMemoryPropertyFlags cube_memory_flags() const noexcept;
+    // The driver's statistics of the tracing shader's compiled code ("name value" each: registers,
+    // memory, instructions, as the driver names them); empty unless the context captures them
+    // (ContextOptions::shader_statistics) and for --secondary rsh.
+    std::vector<std::string> shader_statistics() const;
 
     struct Impl;
 

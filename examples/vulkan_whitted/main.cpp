@@ -52,6 +52,7 @@ struct VulkanOptions {
     rcx::gpu::Secondary secondary = rcx::gpu::Secondary::bvh;
     std::uint32_t pair_capacity = 1u << 21;
     rcx::vk::BufferMemory buffer_memory = rcx::vk::BufferMemory::host; // --buffer-memory
+    bool shader_statistics = false;                                     // --shader-stats
 };
 
 int run(const rcx::Options& o, const VulkanOptions& v) {
@@ -77,6 +78,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     rcx::vk::ContextOptions context_options;
     context_options.require_int64_atomics = o.cache == rcx::CacheMode::cdct || v.secondary == rcx::gpu::Secondary::rsh;
     context_options.buffer_memory = v.buffer_memory;
+    context_options.shader_statistics = v.shader_statistics;
     std::unique_ptr<rcx::vk::Context> context;
     try {
         context = std::make_unique<rcx::vk::Context>(context_options);
@@ -186,6 +188,19 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
         std::printf("; PNGs in %s\n", o.out.c_str());
         std::printf("frame         ms  GPU: trace  end-frame  hit rate%s\n",
                     o.compare ? "    uncached ms  speed-up   PSNR dB  GPU: uncached" : "");
+        std::fflush(stdout);
+    }
+
+    if (v.shader_statistics) {
+        auto print_statistics = [&](const char* which, const rcx::gpu::Tracer& t) {
+            const std::vector<std::string> statistics = t.shader_statistics();
+            std::printf("tracing shader, %s: ", which);
+            if (statistics.empty()) std::printf("no statistics (%s has no VK_KHR_pipeline_executable_properties)", context->device_name().c_str());
+            for (std::size_t i = 0; i < statistics.size(); ++i) std::printf("%s%s", i ? ", " : "", statistics[i].c_str());
+            std::printf("\n");
+        };
+        print_statistics(rcx::to_string(o.cache), *tracer);
+        if (reference) print_statistics("uncached", *reference);
         std::fflush(stdout);
     }
 
@@ -355,6 +370,11 @@ int main(int argc, char** argv) {
                                 else if (text == "device") vulkan.buffer_memory = rcx::vk::BufferMemory::device_local;
                                 else throw rcx::UsageError("--buffer-memory: '" + text + "' is not host, cached or device");
                             });
+    command_line.add_flag("--shader-stats", vulkan.shader_statistics,
+                          "print the driver's statistics of the tracing shader's compiled code\n"
+                          "(registers, memory, instructions; where the device has\n"
+                          "VK_KHR_pipeline_executable_properties), for the cached and the\n"
+                          "uncached pipeline");
     command_line.add_note("Vulkan tracer: --threads is ignored; the options marked (Embree tracer), --prefill,\n"
                           "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"
                           "the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv\n"

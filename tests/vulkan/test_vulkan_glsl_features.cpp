@@ -67,3 +67,46 @@ TEST_CASE("a CCT-only shader runs without shaderInt64 and no validation error: f
     }
     CHECK(vk.validation_errors() == errors_before);
 }
+
+TEST_CASE("shader statistics are captured exactly where the device offers VK_KHR_pipeline_executable_properties") {
+    if (!rcx_test::context()) return; // no Vulkan device: skipped
+    rcx::vk::ContextOptions options;
+    options.shader_statistics = true;
+    rcx::vk::Context vk(options);
+    const std::uint64_t errors_before = vk.validation_errors();
+    // Whether the device offers the extension and its feature, asked here rather than of the harness.
+    std::uint32_t count = 0;
+    vkEnumerateDeviceExtensionProperties(vk.physical_device(), nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> extensions(count);
+    vkEnumerateDeviceExtensionProperties(vk.physical_device(), nullptr, &count, extensions.data());
+    bool offered = false;
+    for (const VkExtensionProperties& e : extensions)
+        offered = offered || std::string(e.extensionName) == VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME;
+    if (offered) {
+        VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR feature{};
+        feature.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR;
+        VkPhysicalDeviceFeatures2 features{};
+        features.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+        features.pNext = &feature;
+        vkGetPhysicalDeviceFeatures2(vk.physical_device(), &features);
+        offered = feature.pipelineExecutableInfo == VK_TRUE;
+    }
+    CHECK(vk.shader_statistics() == offered);
+    rcx::vk::ComputePipeline pipeline(vk, rcx_test::spirv("cct_only"),
+                                      std::vector<VkDescriptorType>(4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+                                      sizeof(raycache::shared::raycache_gpu_cube));
+    const std::vector<std::string> statistics = pipeline.statistics();
+    std::string listed;
+    for (const std::string& s : statistics) listed += (listed.empty() ? "" : ", ") + s;
+    MESSAGE(vk.device_name() << std::string(offered ? " offers" : " does not offer") << " the extension; statistics: " << listed);
+    CHECK(statistics.empty() == !offered);
+    for (const std::string& s : statistics) CHECK(s.front() != '('); // no call failed
+    // Without asking, nothing is captured, whatever the device offers.
+    rcx::vk::Context plain;
+    CHECK_FALSE(plain.shader_statistics());
+    CHECK(rcx::vk::ComputePipeline(plain, rcx_test::spirv("cct_only"), std::vector<VkDescriptorType>(4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+                                   sizeof(raycache::shared::raycache_gpu_cube))
+              .statistics()
+              .empty());
+    CHECK(vk.validation_errors() == errors_before);
+}

@@ -270,6 +270,17 @@ Context::Context(const ContextOptions& options)
         std::vector<const char*> device_extensions;
         if (int64_atomics_ && properties_.apiVersion < VK_API_VERSION_1_2)
             device_extensions.push_back(VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
+        VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR executable_info{};
+        executable_info.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR;
+        if (options.shader_statistics && has_device_extension(physical_device_, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME)) {
+            VkPhysicalDeviceFeatures2 query{};
+            query.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+            query.pNext = &executable_info;
+            vkGetPhysicalDeviceFeatures2(physical_device_, &query);
+            shader_statistics_ = executable_info.pipelineExecutableInfo == VK_TRUE;
+            executable_info.pNext = nullptr;
+            if (shader_statistics_) device_extensions.push_back(VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
+        }
 
         VkPhysicalDeviceShaderAtomicInt64Features enable_atomics{};
         enable_atomics.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES;
@@ -277,6 +288,10 @@ Context::Context(const ContextOptions& options)
         VkPhysicalDeviceFeatures2 enable{};
         enable.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
         enable.pNext = int64_atomics_ ? &enable_atomics : nullptr;
+        if (shader_statistics_) { // pipelineExecutableInfo is VK_TRUE from the query above
+            executable_info.pNext = enable.pNext;
+            enable.pNext = &executable_info;
+        }
         enable.features.shaderInt64 = int64_atomics_;
         enable.features.fragmentStoresAndAtomics = supported.fragmentStoresAndAtomics;
 
@@ -812,6 +827,53 @@ VkShaderModule create_shader_module(Context& context, const std::string& path) {
     return module;
 }
 
+std::vector<std::string> ComputePipeline::statistics() const {
+    std::vector<std::string> out;
+    if (!context_.shader_statistics()) return out;
+    // A report, not a frame's work: a failure is named in the list rather than thrown.
+    auto failed = [&out](const char* call, VkResult result) {
+        out.push_back(std::string("(") + call + ": " + to_string(result) + ")");
+        return out;
+    };
+    const VkDevice device = context_.device();
+    const auto executables = reinterpret_cast<PFN_vkGetPipelineExecutablePropertiesKHR>(
+        vkGetDeviceProcAddr(device, "vkGetPipelineExecutablePropertiesKHR"));
+    const auto statistics = reinterpret_cast<PFN_vkGetPipelineExecutableStatisticsKHR>(
+        vkGetDeviceProcAddr(device, "vkGetPipelineExecutableStatisticsKHR"));
+    if (!executables || !statistics) return failed("vkGetDeviceProcAddr", VK_ERROR_EXTENSION_NOT_PRESENT);
+    VkPipelineInfoKHR pipeline{};
+    pipeline.sType = VK_STRUCTURE_TYPE_PIPELINE_INFO_KHR;
+    pipeline.pipeline = pipeline_;
+    std::uint32_t executable_count = 0;
+    if (const VkResult r = executables(device, &pipeline, &executable_count, nullptr); r != VK_SUCCESS)
+        return failed("vkGetPipelineExecutablePropertiesKHR", r);
+    for (std::uint32_t e = 0; e < executable_count; ++e) {
+        VkPipelineExecutableInfoKHR which{};
+        which.sType = VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR;
+        which.pipeline = pipeline_;
+        which.executableIndex = e;
+        std::uint32_t count = 0;
+        if (const VkResult r = statistics(device, &which, &count, nullptr); r != VK_SUCCESS)
+            return failed("vkGetPipelineExecutableStatisticsKHR", r);
+        std::vector<VkPipelineExecutableStatisticKHR> values(count);
+        for (VkPipelineExecutableStatisticKHR& v : values) v.sType = VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR;
+        if (const VkResult r = statistics(device, &which, &count, values.data()); r != VK_SUCCESS && r != VK_INCOMPLETE)
+            return failed("vkGetPipelineExecutableStatisticsKHR", r);
+        for (std::uint32_t i = 0; i < count; ++i) {
+            const VkPipelineExecutableStatisticKHR& v = values[i];
+            std::string value;
+            switch (v.format) {
+            case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: value = v.value.b32 ? "true" : "false"; break;
+            case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: value = std::to_string(v.value.i64); break;
+            case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: value = std::to_string(v.value.u64); break;
+            default: value = std::to_string(v.value.f64); break;
+            }
+            out.push_back(std::string(v.name) + " " + value);
+        }
+    }
+    return out;
+}
+
 ComputePipeline::ComputePipeline(Context& context, const std::string& spirv_path, std::vector<VkDescriptorType> bindings,
                                  std::uint32_t push_constant_bytes)
     : context_(context), bindings_(std::move(bindings)), push_constant_bytes_(push_constant_bytes) {
@@ -843,6 +905,7 @@ ComputePipeline::ComputePipeline(Context& context, const std::string& spirv_path
         pipeline_info.stage.module = module;
         pipeline_info.stage.pName = "main";
         pipeline_info.layout = layout_;
+        if (context.shader_statistics()) pipeline_info.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
         check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline_),
               ("vkCreateComputePipelines(" + spirv_path + ")").c_str());
         vkDestroyShaderModule(device, module, nullptr);

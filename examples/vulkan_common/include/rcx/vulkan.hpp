@@ -74,6 +74,9 @@ struct ContextOptions {
     bool enable_int64 = true;
     // Where buffers of BufferUse::device go (BufferMemory).
     BufferMemory buffer_memory = BufferMemory::host;
+    // Let compute pipelines report the driver's statistics of their compiled code (registers, memory,
+    // instructions: ComputePipeline::statistics()) where the device has VK_KHR_pipeline_executable_properties.
+    bool shader_statistics = false;
 };
 
 // "device-local, host-visible, host-coherent" and so on: the property flags' names, for messages.
@@ -243,6 +246,8 @@ public:
     std::uint64_t validation_errors() const noexcept;
     // Whether shaderInt64 + shaderBufferInt64Atomics were enabled (64-bit atomicMin on storage buffers).
     bool int64_atomics() const noexcept { return int64_atomics_; }
+    // Whether pipelines capture the driver's statistics (ContextOptions::shader_statistics, where supported).
+    bool shader_statistics() const noexcept { return shader_statistics_; }
 
     // Records commands with `record`, submits them to the compute queue and waits until they finished.
     void submit(const std::function<void(Commands&)>& record);
@@ -279,6 +284,7 @@ private:
     VkCommandPool command_pool_ = VK_NULL_HANDLE;
     bool validation_ = false;
     bool int64_atomics_ = false;
+    bool shader_statistics_ = false;
     BufferMemory buffer_memory_ = BufferMemory::host;
     std::uint64_t submissions_ = 0;
 };
@@ -331,6 +337,10 @@ public:
     VkDescriptorSetLayout set_layout() const noexcept { return set_layout_; }
     const std::vector<VkDescriptorType>& bindings() const noexcept { return bindings_; }
     std::uint32_t push_constant_bytes() const noexcept { return push_constant_bytes_; }
+
+    // The driver's statistics of the compiled shader, "name value" each (VK_KHR_pipeline_executable_properties;
+    // the names are the driver's, e.g. NVIDIA's register count); empty unless context.shader_statistics().
+    std::vector<std::string> statistics() const;
 
 private:
     void destroy() noexcept;
