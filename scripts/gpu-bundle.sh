@@ -55,10 +55,13 @@ for t in "$here"/tests/*; do
   { echo "== $(basename "$t"): exit $rc"; cat "$run_log"; } >> "$results/tests-full.txt"
   echo "$(basename "$t"): exit $rc $(grep -E '^\[doctest\] test cases' "$run_log")"
 done | tee "$results/tests.txt"
+# Each scene with each cache, then with every cube resting from the second frame on (--min-hit-rate 2:
+# nearly every ray traced, so the cached shader's own cost shows against the uncached one).
 for scene in behind-32 grid-32 reflective-32; do
-  for mode in cct cdct ceiling; do
+  for mode in cct cdct ceiling "cct --min-hit-rate 2" "cdct --min-hit-rate 2"; do
+    # shellcheck disable=SC2086 # $mode holds options
     RCX_VULKAN_VALIDATION=0 timeout 120 "$here/bin/raycache_vulkan_whitted" --scene "$scene" --size "${SIZE:-1024x1024}" --path orbit \
-      --frames "${FRAMES:-20}" --cache "$mode" --compare --shader-stats --out "$libraries/png" > "$run_log" 2>&1
+      --frames "${FRAMES:-20}" --cache $mode --compare --shader-stats --out "$libraries/png" > "$run_log" 2>&1
     { echo "\$ raycache_vulkan_whitted --scene $scene --cache $mode: exit $?"; cat "$run_log"; } >> "$results/walkthroughs.txt"
     echo "$scene $mode: $(grep -E '^(summary (GPU|after)|tracing shader)' "$run_log" | sed 's/^summary //' | tr '\n' ' ')"
   done
