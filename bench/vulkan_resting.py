@@ -10,9 +10,8 @@ each run 12 frames at 256x256 beside the uncached frames in the same process (`-
 import os
 import re
 import statistics
-import sys
 
-from vulkan_runs import machine_name, run_rotating
+from vulkan_runs import command_line, machine_name, run_rotating, speedup_cell, write_results
 
 SCENES = ["behind-32", "grid-32", "reflective-32"]
 PATHS = ["orbit", "pan"]
@@ -36,10 +35,7 @@ def parse(output):
 
 
 def main():
-    if len(sys.argv) < 3:
-        sys.exit(__doc__)
-    tracer, out = sys.argv[1], sys.argv[2]
-    runs = int(sys.argv[3]) if len(sys.argv) > 3 else 3
+    tracer, out, runs = command_line(__doc__)
     variants = [(s, p, m, r) for s in SCENES for p in PATHS for m in MODES for r in RATES]
 
     def arguments_of(v):
@@ -59,16 +55,11 @@ def main():
                 cells = []
                 for rate in RATES:
                     r = results[(scene, path, mode, rate)]
-                    speedups = [x[0] for x in r]
-                    cells.append(f"{statistics.median(speedups):.2f}x ({', '.join(f'{s:.2f}' for s in speedups)}); "
+                    cells.append(f"{speedup_cell([x[0] for x in r])}; "
                                  f"GPU {statistics.median(x[1] for x in r):.2f}x; {r[0][2]:.1f} / {r[0][3]:.1f} dB")
                 rested = results[(scene, path, mode, None)][0]
                 rows.append(f"| {scene} | {path} | {mode.upper()} | {cells[0]} | {rested[4]} of 11; {rested[5]:.0f}% | {cells[1]} |")
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "runs.txt"), "w") as f:
-        f.write("".join(log))
-    with open(os.path.join(out, "README.md"), "w") as f:
-        f.write(f"""## Resting cubes on the Vulkan tracer (lavapipe)
+    write_results(out, log, f"""## Resting cubes on the Vulkan tracer (lavapipe)
 
 Written by `bench/vulkan_resting.py` from `raycache_vulkan_whitted` runs (`runs.txt` beside this file holds
 every run's full output and command line). Machine: {machine_name()}, {os.cpu_count()} hardware threads,
@@ -82,9 +73,7 @@ Resting: frames with at least one resting cube, and the mean share of the leavin
 
 | scene | path | mode | resting (default) | resting: frames; rays let through | never resting |
 |---|---|---|---|---|---|
-""")
-        f.write("\n".join(rows) + "\n")
-    print(f"wrote {os.path.join(out, 'README.md')}")
+""" + "\n".join(rows) + "\n")
 
 
 if __name__ == "__main__":

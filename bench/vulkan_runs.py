@@ -1,12 +1,36 @@
 """What the Vulkan tracer's benchmark scripts share (bench/vulkan_single_image.py, bench/vulkan_resting.py):
-the machine's name, and running every variant RUNS times in a rotating order, so a slow stretch of a shared
-machine hits every variant, with the validation layer off."""
+their command line (TRACER OUT [RUNS]), the machine's name, running every variant RUNS times in a rotating
+order, so a slow stretch of a shared machine hits every variant, with the validation layer off, the
+speed-up cell of their tables, and writing OUT/runs.txt and OUT/README.md."""
 import os
 import platform
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
+
+
+def command_line(doc):
+    """(tracer, out, runs) from `script TRACER OUT [RUNS]` (runs: 3 unless given); exits with `doc` otherwise."""
+    if len(sys.argv) < 3:
+        sys.exit(doc)
+    return sys.argv[1], sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 3
+
+
+def speedup_cell(speedups):
+    """'1.02x (1.01, 1.02, 1.04)': the median of the runs' speed-ups, and each run's."""
+    return f"{statistics.median(speedups):.2f}x ({', '.join(f'{s:.2f}' for s in speedups)})"
+
+
+def write_results(out, log, readme):
+    """OUT/runs.txt (every run's command and output) and OUT/README.md (`readme`)."""
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "runs.txt"), "w") as f:
+        f.write("".join(log))
+    with open(os.path.join(out, "README.md"), "w") as f:
+        f.write(readme)
+    print(f"wrote {os.path.join(out, 'README.md')}")
 
 
 def machine_name():

@@ -10,9 +10,8 @@ medians over the runs) into OUT. No plot: single lavapipe frames are too noisy f
 import os
 import re
 import statistics
-import sys
 
-from vulkan_runs import machine_name, run_rotating
+from vulkan_runs import command_line, machine_name, run_rotating, speedup_cell, write_results
 
 SCENES = ["behind-32", "grid-32", "reflective-32"]
 MODES = ["cct", "cdct"]
@@ -33,10 +32,7 @@ def parse(output):
 
 
 def main():
-    if len(sys.argv) < 3:
-        sys.exit(__doc__)
-    tracer, out = sys.argv[1], sys.argv[2]
-    runs = int(sys.argv[3]) if len(sys.argv) > 3 else 3
+    tracer, out, runs = command_line(__doc__)
     variants = [(s, m, f, w) for s in SCENES for m in MODES for f in FIRST_FACES for w in WARM_UPS]
 
     def arguments_of(v):
@@ -53,16 +49,11 @@ def main():
     for v in variants:
         scene, mode, first, warm = v
         r = results[v]
-        speedups = [x[0] for x in r]
-        rows.append(f"| {scene} | {mode.upper()} | {first} | {warm or 'none'} | {statistics.median(speedups):.2f}x "
-                    f"({', '.join(f'{s:.2f}' for s in speedups)}) | {r[0][1]:.1f}% | {r[0][2]} | "
+        rows.append(f"| {scene} | {mode.upper()} | {first} | {warm or 'none'} | {speedup_cell([x[0] for x in r])} | "
+                    f"{r[0][1]:.1f}% | {r[0][2]} | "
                     f"{statistics.median(x[3] for x in r):.0f} | {statistics.median(x[4] for x in r):.0f} | "
                     f"{statistics.median(x[5] for x in r):.0f} |")
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "runs.txt"), "w") as f:
-        f.write("".join(log))
-    with open(os.path.join(out, "README.md"), "w") as f:
-        f.write(f"""## A single image on the Vulkan tracer: the warm-up pass (lavapipe)
+    write_results(out, log, f"""## A single image on the Vulkan tracer: the warm-up pass (lavapipe)
 
 Written by `bench/vulkan_single_image.py` from `raycache_vulkan_whitted` runs (`runs.txt` beside this file
 holds every run's full output and command line). Machine: {machine_name()}, {os.cpu_count()} hardware threads,
@@ -76,9 +67,7 @@ that uncached frame.
 
 | scene | mode | first faces | warm-up | speed-up (runs) | hit rate | PSNR dB | warm-up ms | frame ms | uncached ms |
 |---|---|---|---|---|---|---|---|---|---|
-""")
-        f.write("\n".join(rows) + "\n")
-    print(f"wrote {os.path.join(out, 'README.md')}")
+""" + "\n".join(rows) + "\n")
 
 
 if __name__ == "__main__":
