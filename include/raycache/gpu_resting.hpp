@@ -40,7 +40,7 @@ public:
     // working and empty. min_hit_rate: 0 never rests a cube (default_min_hit_rate(cdct): C++'s defaults).
     // Throws std::invalid_argument when it is negative or NaN.
     GpuResting(std::size_t cube_count, float min_hit_rate)
-        : min_hit_rate_(min_hit_rate), states_(cube_count), resting_(cube_count, false), holds_texels_(cube_count, false) {
+        : min_hit_rate_(min_hit_rate), states_(cube_count), holds_texels_(cube_count, false) {
         if (!(min_hit_rate >= 0.0f))
             throw std::invalid_argument("RayCache: GpuResting's min_hit_rate must be >= 0 (0: cubes never rest), got " +
                                         std::to_string(min_hit_rate));
@@ -54,7 +54,6 @@ public:
                                         std::to_string(frame.cubes.size()));
         for (std::size_t k = 0; k < states_.size(); ++k) {
             states_[k] = next_resting_state(states_[k], frame.cubes[k], min_hit_rate_, !holds_texels_[k]);
-            resting_[k] = states_[k].resting;
             // A store that reached the pending word is published at the frame's end (its texel was empty;
             // the drop pass may empty its tile again: see the top of this file).
             holds_texels_[k] = holds_texels_[k] || frame.cubes[k].stores > 0;
@@ -82,15 +81,18 @@ public:
     // std::out_of_range for an index past the cubes.
     void restart(std::size_t index, bool holds_texels) {
         states_.at(index) = RestingState{};
-        resting_[index] = false;
         holds_texels_[index] = holds_texels;
     }
 
     // Per cube, by index: whether it rests the next frame (for gpu_frame_start_words).
-    const std::vector<bool>& resting() const noexcept { return resting_; }
+    std::vector<bool> resting() const {
+        std::vector<bool> r(states_.size());
+        for (std::size_t k = 0; k < states_.size(); ++k) r[k] = states_[k].resting;
+        return r;
+    }
     std::size_t resting_count() const noexcept {
         std::size_t n = 0;
-        for (const bool r : resting_) n += r ? 1 : 0;
+        for (const RestingState& s : states_) n += s.resting ? 1 : 0;
         return n;
     }
     const RestingState& state(std::size_t index) const { return states_.at(index); }
@@ -99,7 +101,6 @@ public:
 private:
     float min_hit_rate_;
     std::vector<RestingState> states_;
-    std::vector<bool> resting_;      // states_[k].resting, in the form gpu_frame_start_words takes
     std::vector<bool> holds_texels_; // whether the cube starts the next frame with texels
 };
 
