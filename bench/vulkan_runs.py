@@ -1,4 +1,5 @@
-"""What the Vulkan tracer's benchmark scripts share (bench/vulkan_single_image.py, bench/vulkan_resting.py):
+"""What the tracers' benchmark scripts share (bench/vulkan_single_image.py, bench/vulkan_resting.py, and the
+Embree tracer's bench/costly_rays.py):
 their command line (TRACER OUT [RUNS]), the machine's name, running every variant RUNS times in a rotating
 order, so a slow stretch of a shared machine hits every variant, with the validation layer off, the
 speed-up cell of their tables, and writing OUT/runs.txt and OUT/README.md."""

@@ -58,6 +58,16 @@ TEST_CASE("options parse in both spellings and keep their defaults otherwise") {
     CHECK(scene.path.frames == 3);
     CHECK(scene.path.kind == rcx::CameraPath::Kind::pan);
     CHECK(scene.max_depth == 2);
+    CHECK(scene.light.samples == 1); // a point light unless asked
+    CHECK(scene.light.radius == 0.0f);
+
+    const rcx::Options soft = parse({"--light-samples", "16", "--light-radius=0.5"});
+    rcx::apply_options(scene, soft);
+    CHECK(scene.light.samples == 16);
+    CHECK(scene.light.radius == 0.5f);
+    rcx::apply_options(scene, parse({"--light-radius", "0.5"})); // a radius alone keeps the point light
+    CHECK(scene.light.samples == 1);
+    CHECK(scene.light.radius == 0.0f);
 }
 
 TEST_CASE("bad command lines throw UsageError naming the option") {
@@ -66,6 +76,9 @@ TEST_CASE("bad command lines throw UsageError naming the option") {
         CHECK_THROWS_WITH_AS(parse(args), doctest::Contains(mentioned), rcx::UsageError);
     };
     fails({"--bogus"}, "--bogus");
+    fails({"--light-samples", "0"}, "--light-samples");
+    fails({"--light-samples", "257"}, "--light-samples");
+    fails({"--light-radius", "0"}, "--light-radius");
     fails({"--frames"}, "--frames");
     fails({"--frames", "ten"}, "ten");
     fails({"--frames", "0"}, "--frames");

@@ -79,6 +79,51 @@ TEST_CASE("the centre pixel of a diffuse sphere is its analytic Lambert shade") 
     CHECK(stats.rays == 49u * 49u);                  // a diffuse sphere spawns no secondary ray
 }
 
+TEST_CASE("a disc light's sample points see the share of its area an occluder's shadow leaves") {
+    // The centre pixel shades (0, 0, -4) with normal (0, 0, 1); the light's centre lies L = sqrt(50) away in
+    // l = (3, 4, 5) / L. A small sphere of radius rho centred on that line, D from the point, hides the
+    // light's points within L tan(asin(rho / D)) of its centre, in the disc facing the point. With the disc
+    // radius R, the visible share of its area is 1 - (r / R)^2: derived from the geometry alone, not from the
+    // tracer's sample pattern, which must match it within about a sample of the N.
+    rcx::Material m;
+    m.diffuse = {0.8f, 0.5f, 0.2f};
+    rcx::Scene scene = one_sphere(m);
+    const glm::vec3 p(0.0f, 0.0f, -4.0f);
+    const float L = std::sqrt(50.0f);
+    const glm::vec3 l = (scene.light.position - p) / L;
+    const double R = 1.0, r = 0.6, D = 3.0;
+    const double rho = D * std::sin(std::atan(r / L)); // tan(asin(rho / D)) = r / L
+    rcx::Material dark;
+    dark.diffuse = glm::vec3(0.0f);
+    scene.spheres.push_back(rcx::Sphere{p + static_cast<float>(D) * l, static_cast<float>(rho), dark});
+    const float n_dot_l = 5.0f / L;
+    auto visible_share = [&](int samples) {
+        scene.light.samples = samples;
+        scene.light.radius = static_cast<float>(R);
+        const rcx::embree::Tracer tracer(scene);
+        const glm::vec3 got = tracer.render(scene.camera, tiny(49, 49)).at(24, 24);
+        return (got.x - scene.ambient * m.diffuse.x) / (n_dot_l * scene.light.intensity.x * m.diffuse.x);
+    };
+    const double area_share = 1.0 - (r / R) * (r / R); // 0.64
+    for (int samples : {16, 64, 256}) {
+        CAPTURE(samples);
+        CHECK(std::abs(visible_share(samples) - area_share) <= 1.5 / samples + 1e-4);
+    }
+    // A point light at the disc's centre is hidden; more samples do not change an unoccluded pixel's shade.
+    CHECK(visible_share(1) == doctest::Approx(0.0).epsilon(1e-6));
+    scene.spheres.pop_back();
+    CHECK(visible_share(64) == doctest::Approx(1.0).epsilon(1e-6));
+}
+
+TEST_CASE("a point light's pixels do not depend on the radius a disc light would have") {
+    const rcx::Scene scene = rcx::make_scene("behind-4");
+    rcx::Scene with_radius = scene;
+    with_radius.light.radius = 2.0f; // samples stays 1: ignored
+    const rcx::Image a = rcx::embree::Tracer(scene).render(scene.camera, tiny(40, 40));
+    const rcx::Image b = rcx::embree::Tracer(with_radius).render(scene.camera, tiny(40, 40));
+    CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(a.pixels[0])) == 0);
+}
+
 TEST_CASE("the centre pixel of a mirror sphere adds the environment seen straight back") {
     rcx::Material m;
     m.diffuse = {0.8f, 0.5f, 0.2f};

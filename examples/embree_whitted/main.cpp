@@ -82,6 +82,10 @@ int run(const rcx::Options& o) {
     } catch (const std::exception& e) {
         throw InputError(e.what());
     }
+    // Exact invalidation tests shadow rays against point lights (SceneChange::lights): a disc light's rays
+    // would escape its cones.
+    if (scene.dynamic() && scene.light.samples > 1 && rcx::uses_caches(o.cache) && o.invalidate == rcx::InvalidationPolicy::exact)
+        throw InputError("--light-samples > 1 cannot be used with --invalidate exact on a dynamic scene: exact invalidation knows point lights only");
     try {
         rcx::check_memory({rcx::cpu_cubes(o.cache, scene.cached_object_count(), o.face_size, o.pyramid && !o.secant, scene.dynamic()), rcx::frame_images(o)});
     } catch (const std::runtime_error& e) {

@@ -173,6 +173,29 @@ struct Shader {
         return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
     }
 
+    // The share of the light seen from `above` (a point lifted off the surface, facing normal nf), whose
+    // centre lies `distance` away in unit direction l: 0 or 1 for a point light; for a disc light
+    // (PointLight::samples > 1) the share of its sample points not occluded. The points are the same for
+    // every shaded point (a Vogel spiral on the disc facing it): no noise, so an image differs from another
+    // renderer's only where their rays differ, and soft shadows only make each traced ray costlier.
+    float light_visible(const glm::vec3& above, const glm::vec3& nf, const glm::vec3& l, float distance, float eps) {
+        const PointLight& light = t.scene.light;
+        if (light.samples <= 1) return occluded(above, l, distance - eps) ? 0.0f : 1.0f;
+        const glm::vec3 helper = std::abs(l.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+        const glm::vec3 u = glm::normalize(glm::cross(l, helper)), v = glm::cross(l, u);
+        constexpr float golden_angle = 2.39996322972865332f;
+        int seen = 0;
+        for (int k = 0; k < light.samples; ++k) {
+            const float r = light.radius * std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(light.samples));
+            const float angle = golden_angle * static_cast<float>(k);
+            const glm::vec3 to_point = light.position + r * (std::cos(angle) * u + std::sin(angle) * v) - above;
+            const float length = glm::length(to_point);
+            const glm::vec3 direction = to_point / length;
+            if (glm::dot(nf, direction) > 0.0f && !occluded(above, direction, length - eps)) ++seen;
+        }
+        return static_cast<float>(seen) / static_cast<float>(light.samples);
+    }
+
     // The colour brought back by the ray leaving object `geom` from `origin` in unit `direction`: the one
     // place where the cache plugs in.
     glm::vec3 leaving(unsigned geom, unsigned inst, const Material& m, const glm::vec3& origin,
@@ -249,11 +272,12 @@ struct Shader {
             const float distance = glm::length(to_light);
             const glm::vec3 l = to_light / distance;
             const float n_dot_l = glm::dot(n, l);
-            if (n_dot_l > 0.0f && glm::dot(nf, l) > 0.0f && !occluded(above, l, distance - eps)) {
-                color += scene.light.intensity * (local * n_dot_l) * base;
+            const float visible = n_dot_l > 0.0f && glm::dot(nf, l) > 0.0f ? light_visible(above, nf, l, distance, eps) : 0.0f;
+            if (visible > 0.0f) { // times 1 for a point light: its pixels are those of a tracer without soft shadows
+                color += scene.light.intensity * (local * n_dot_l * visible) * base;
                 if (m.specular > 0.0f) {
                     const float r_dot_v = glm::dot(glm::reflect(-l, n), -d);
-                    if (r_dot_v > 0.0f) color += scene.light.intensity * (m.specular * std::pow(r_dot_v, m.shininess));
+                    if (r_dot_v > 0.0f) color += scene.light.intensity * (m.specular * std::pow(r_dot_v, m.shininess) * visible);
                 }
             }
         }

@@ -61,6 +61,8 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // What the GPU side does not do yet: refused rather than ignored.
     const rcx::Options defaults;
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (o.light_samples > 1)
+        throw InputError("--light-samples is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (!o.pyramid)
         throw InputError("--no-pyramid is not supported by the Vulkan tracer: its relief walk never uses a depth pyramid");
     if (o.invalidate != defaults.invalidate)

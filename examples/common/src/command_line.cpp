@@ -132,6 +132,12 @@ CommandLine::CommandLine(const std::string& program)
                });
     add_option("--depth", "N", "maximum recursion depth (primary rays are depth 0) [5]",
                [&o](const std::string& text) { o.depth = static_cast<int>(parse_int_value("--depth", text, 0, 64)); });
+    add_option("--light-samples", "N",
+               "soft shadows: N shadow rays per shaded hit to a disc-shaped light,\n"
+               "1..256; makes every traced ray costlier (Embree tracer) " + shown_default(std::to_string(d.light_samples)),
+               integer("--light-samples", o.light_samples, 1, 256));
+    add_option("--light-radius", "F", "the light's disc radius with --light-samples > 1 " + shown_default(d.light_radius),
+               number("--light-radius", o.light_radius, true));
 
     section("Cache");
     add_option("--cache", "MODE",

@@ -52,6 +52,8 @@ void apply_options(Scene& scene, const Options& options) {
     if (options.step_degrees) scene.path.step_degrees = *options.step_degrees;
     if (options.path) scene.path.kind = *options.path;
     if (options.depth) scene.max_depth = *options.depth;
+    scene.light.samples = options.light_samples;
+    scene.light.radius = options.light_samples > 1 ? options.light_radius : 0.0f;
 }
 
 Scene scene_from_options(const Options& options) {

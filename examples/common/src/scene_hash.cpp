@@ -45,6 +45,7 @@ std::uint64_t scene_hash(const Scene& scene) {
     h.add(static_cast<std::uint64_t>(scene.meshes.size()));
     for (const Mesh& m : scene.meshes) h.add(m.positions), h.add(m.normals), h.add(m.triangles), h.add(m.material);
     h.add(scene.light.position), h.add(scene.light.intensity);
+    if (scene.light.samples > 1) h.add(static_cast<std::uint64_t>(scene.light.samples)), h.add(scene.light.radius); // soft shadows shade otherwise
     h.add(scene.environment), h.add(scene.ambient), h.add(scene.max_depth);
     return h.hash;
 }

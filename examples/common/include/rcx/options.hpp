@@ -71,6 +71,8 @@ struct Options {
     std::optional<float> step_degrees;
     std::optional<CameraPath::Kind> path;
     std::optional<int> depth;         // max recursion depth; unset: the scene's (5)
+    int light_samples = 1;            // shadow rays per shaded hit (> 1: soft shadows, Embree tracer only)
+    float light_radius = 1.0f;        // the light's disc radius when light_samples > 1, world units
     int threads = 0;                  // 0 = all cores
     std::string out = "out";          // folder for the PNGs
     bool compare = false;             // also render each frame uncached: speed-up, PSNR, difference PNG

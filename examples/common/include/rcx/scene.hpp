@@ -45,6 +45,11 @@ struct Mesh {
 struct PointLight {
     glm::vec3 position{0.0f, 10.0f, 0.0f};
     glm::vec3 intensity{1.0f};        // no fall-off with distance
+    // Soft shadows (the Embree tracer only): `samples` > 1 shadow rays to points of a disc of `radius`
+    // around `position`, facing the shaded point, whose visible share scales the light. 1: a point light.
+    // They make every shaded hit, and so every traced ray, costlier: what a cache saves grows with them.
+    int samples = 1;
+    float radius = 0.0f;
 };
 
 // A pinhole camera; the image's aspect ratio comes from the image size.
