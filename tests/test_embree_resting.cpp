@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -127,6 +128,46 @@ TEST_CASE("a cube whose rays all missed rests: the next frame looks up its probe
     CHECK(s.resting_cubes == 0);
 }
 
+TEST_CASE("left unset, the threshold is each cube's break-even from the work its traced rays reported") {
+    // Frame 0 (cold) stores the directions of faces 0 and 1 alone; frame 1, from the same point, looks up all
+    // of them: a third hit, and 1024 misses are traced, each reporting `work` rays. CCT's default lookup_work
+    // is 1 ray, so the cube pays from 1 / work hits on: it rests after frame 1 when work is 2 (needs 50%),
+    // not when it is 4 (25%). A min_hit_rate given, or lookup_work 2, is obeyed whatever the work.
+    struct Case {
+        std::optional<float> min_hit_rate, lookup_work;
+        std::uint32_t work;
+        bool rests;
+    };
+    for (const Case& c : {Case{std::nullopt, std::nullopt, 4, false}, Case{std::nullopt, std::nullopt, 2, true},
+                          Case{std::nullopt, std::nullopt, 0, true}, // no work reported: CCT's fixed 0.5
+                          Case{0.5f, std::nullopt, 4, true}, Case{std::nullopt, 2.0f, 4, true}, Case{0.3f, std::nullopt, 2, false}}) {
+        CAPTURE(c.work);
+        CAPTURE(c.min_hit_rate.value_or(-1.0f));
+        CAPTURE(c.lookup_work.value_or(-1.0f));
+        MirrorAndBall world;
+        SceneCacheSettings settings;
+        settings.edge_threshold = -1.0f;
+        settings.min_hit_rate = c.min_hit_rate;
+        settings.lookup_work = c.lookup_work;
+        SceneCache caches(Technique::cct, settings);
+        caches.attach(world.scene, {world.mirror}, 16);
+        const glm::vec3 top(0.0f, 1.0f, 0.0f);
+        auto run = [&](bool first_faces_only) {
+            for (const glm::vec3& d : cell_directions()) {
+                if (first_faces_only && raycache::texel_of(d, 16)->face > 1) continue;
+                caches.leaving_ray({world.mirror}, top, d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, c.work}; });
+            }
+            return caches.begin_frame();
+        };
+        run(true);
+        const SceneCacheStatistics s = run(false);
+        CHECK(s.hits == 512);
+        CHECK(s.work_reports == (c.work ? 1024u : 0u));
+        CHECK(s.traced_work == 1024u * c.work);
+        CHECK(s.resting_cubes == (c.rests ? 1u : 0u));
+    }
+}
+
 TEST_CASE("with min_hit_rate 0 a cube never rests, whatever its hit rate") {
     WarmMirror w(0.0f);
     for (int f = 0; f < 3; ++f) {
@@ -199,7 +240,7 @@ TEST_CASE("cubes emptied by a scene change, or replaced when path records start,
     CHECK(s.resting_cubes == 0);
 }
 
-TEST_CASE("min_hit_rate must be a number >= 0") {
+TEST_CASE("min_hit_rate must be a number >= 0, lookup_work a finite number") {
     for (const float bad : {-0.1f, std::numeric_limits<float>::quiet_NaN()}) {
         SceneCacheSettings s;
         s.min_hit_rate = bad;
@@ -208,6 +249,14 @@ TEST_CASE("min_hit_rate must be a number >= 0") {
     SceneCacheSettings s;
     s.min_hit_rate = 2.0f; // above any hit rate: every cube rests once warm (a measurement aid)
     CHECK_NOTHROW(SceneCache(Technique::cdct, s));
+    for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        SceneCacheSettings w;
+        w.lookup_work = bad;
+        CHECK_THROWS_WITH_AS(SceneCache(Technique::cct, w), doctest::Contains("lookup_work"), std::invalid_argument);
+    }
+    SceneCacheSettings off;
+    off.lookup_work = -1.0f; // thresholds ignore work
+    CHECK_NOTHROW(SceneCache(Technique::cct, off));
 }
 
 TEST_CASE("texels a CDCT search read are counted over the rays looked up, not over the rays a resting cube let through") {

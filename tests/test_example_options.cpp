@@ -61,6 +61,10 @@ TEST_CASE("options parse in both spellings and keep their defaults otherwise") {
     CHECK(scene.light.samples == 1); // a point light unless asked
     CHECK(scene.light.radius == 0.0f);
 
+    CHECK_FALSE(d.lookup_work.has_value());
+    CHECK(*parse({"--lookup-work", "2.5"}).lookup_work == 2.5f);
+    CHECK(*parse({"--lookup-work=-1"}).lookup_work == -1.0f); // thresholds ignore work
+
     const rcx::Options soft = parse({"--light-samples", "16", "--light-radius=0.5"});
     rcx::apply_options(scene, soft);
     CHECK(scene.light.samples == 16);
@@ -79,6 +83,7 @@ TEST_CASE("bad command lines throw UsageError naming the option") {
     fails({"--light-samples", "0"}, "--light-samples");
     fails({"--light-samples", "257"}, "--light-samples");
     fails({"--light-radius", "0"}, "--light-radius");
+    fails({"--lookup-work", "nan"}, "--lookup-work");
     fails({"--frames"}, "--frames");
     fails({"--frames", "ten"}, "ten");
     fails({"--frames", "0"}, "--frames");

@@ -44,6 +44,7 @@ struct FrameRecord {
     double invalidate_ms = 0.0;
     std::uint64_t lookups = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{}; // by raycache::MissReason
+    std::uint64_t traced_work = 0, work_reports = 0; // rays the traced leaving rays took, and how many reported it
 };
 
 raycache::embree::Invalidation invalidation_of(rcx::InvalidationPolicy p) {
@@ -118,6 +119,7 @@ int run(const rcx::Options& o) {
             cache_settings.filtered = o.filtered;
             cache_settings.trace_hits = o.trace_hits;
             if (o.min_hit_rate >= 0.0f) cache_settings.min_hit_rate = o.min_hit_rate;
+            cache_settings.lookup_work = o.lookup_work;
             cache_settings.edge_threshold = o.edge_threshold;
             cache_settings.origin_drift = o.origin_drift;
             cache_settings.origin_parallax = o.origin_parallax;
@@ -207,6 +209,8 @@ int run(const rcx::Options& o) {
             r.hit_rate = s.hit_rate();
             r.lookups = s.lookups;
             r.misses_by = s.misses_by;
+            r.traced_work = s.traced_work;
+            r.work_reports = s.work_reports;
             filled = s.valid_fraction();
             cache_bytes = s.allocated_bytes + s.pyramid_bytes;
         }
@@ -274,9 +278,12 @@ int run(const rcx::Options& o) {
     // Why the lookups of the frames after the first missed (all frames' when there is one): what to change.
     std::uint64_t lookups = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
+    std::uint64_t traced_work = 0, work_reports = 0;
     for (std::size_t i = records.size() > 1 ? 1 : 0; i < records.size(); ++i) {
         lookups += records[i].lookups;
         for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += records[i].misses_by[k];
+        traced_work += records[i].traced_work;
+        work_reports += records[i].work_reports;
     }
     if (lookups) {
         std::printf("summary misses, share of lookups:");
@@ -287,6 +294,11 @@ int run(const rcx::Options& o) {
                     " origin: left too far from the tile's origins; search: no consistent CDCT crossing;"
                     " outside: not answerable; resting: a cube that did not pay, traced)\n");
     }
+    // What a traced leaving ray cost, which sets how many hits a cube needs to pay (resting cubes).
+    if (work_reports)
+        std::printf("summary a traced leaving ray took %.2f rays (intersections and shadow rays), mean over %llu\n",
+                    static_cast<double>(traced_work) / static_cast<double>(work_reports),
+                    static_cast<unsigned long long>(work_reports));
     if (o.compare) {
         const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame;"

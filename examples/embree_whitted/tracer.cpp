@@ -200,7 +200,13 @@ struct Shader {
     // place where the cache plugs in.
     glm::vec3 leaving(unsigned geom, unsigned inst, const Material& m, const glm::vec3& origin,
                       const glm::vec3& direction, int depth) {
-        auto trace_leaving = [&] { return trace(origin, direction, depth + 1); };
+        // What tracing it cost, in rays (its own, its shadow rays, its bounces): resting cubes weigh it.
+        auto trace_leaving = [&] {
+            const std::uint64_t before = stats.rays + stats.shadow_rays;
+            raycache::TracedRay traced = trace(origin, direction, depth + 1);
+            traced.work = static_cast<std::uint32_t>(std::min<std::uint64_t>(stats.rays + stats.shadow_rays - before, UINT32_MAX));
+            return traced;
+        };
         if (!m.cached) return trace_leaving().color;
         ++stats.leaving_rays;
         switch (mode) {

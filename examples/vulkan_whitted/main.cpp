@@ -61,6 +61,8 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // What the GPU side does not do yet: refused rather than ignored.
     const rcx::Options defaults;
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (o.lookup_work)
+        throw InputError("--lookup-work is not supported by the Vulkan tracer: its cubes rest at a fixed --min-hit-rate");
     if (o.light_samples > 1)
         throw InputError("--light-samples is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
     if (!o.pyramid)

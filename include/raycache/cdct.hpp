@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -152,9 +153,14 @@ inline bool store_escape(CacheCube<CdctTexel>& cube, const glm::vec3& direction,
 // What a secondary-ray trace returns to the CDCT: its colour, and the distance along the unit ray
 // direction to what it hit (infinity or NaN when it escaped to the environment). A negative distance
 // (a hit behind the ray's origin) is never stored: the colour is used, the cube left alone.
+// `work`: what tracing it cost, in units of the caller's choice (rays it traced, say: the ray itself, its
+// shadow rays and bounces), as a whole number so that sums do not depend on the order threads add them
+// in; 0: not reported. The Embree adapter's resting cubes weigh their hit rates against it
+// (raycache/resting.hpp, resting_threshold).
 struct TracedRay {
     glm::vec3 color{0.0f};
     float distance = std::numeric_limits<float>::infinity();
+    std::uint32_t work = 0;
 };
 
 // Stores what a ray traced from `origin` along `direction` brought back (shared/cdct_store.h): its hit

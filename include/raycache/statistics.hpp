@@ -49,12 +49,20 @@ struct CubeStatistics {
     std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie
     std::size_t valid_texels = 0;       // texels holding a value now (including this frame's stores)
     std::size_t texel_count = 0;        // 6 * N * N
+    // What the rays traced on misses (resting ones included) reported they cost (TracedRay::work), and how
+    // many reported it; the Embree adapter counts them (raycache/resting.hpp).
+    std::uint64_t traced_work = 0;
+    std::uint64_t work_reports = 0;
 
     double valid_fraction() const noexcept {
         return texel_count ? static_cast<double>(valid_texels) / static_cast<double>(texel_count) : 0.0;
     }
     double hit_rate() const noexcept {
         return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
+    }
+    // The mean work of a traced ray that reported it; 0 when none did.
+    double mean_traced_work() const noexcept {
+        return work_reports ? static_cast<double>(traced_work) / static_cast<double>(work_reports) : 0.0;
     }
     // Lookups the cube made: its resting misses (raycache/resting.hpp) left out, since it read nothing for them.
     std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }
@@ -86,7 +94,7 @@ namespace detail {
 // numbered below owned_slots own a slot and bump it with a plain load and store (no locked instruction on
 // the lookup path); the rest (more counting threads alive at once) share the last slot and bump it with
 // fetch_add. Sums are exact; a snapshot taken while other threads count is a moment's approximation. The
-// slots sit inside the counters (no pointer to follow on every count): 17 x 128 bytes for a cube's ten
+// slots sit inside the counters (no pointer to follow on every count): 17 x 128 bytes for a cube's thirteen
 // counters, which a scene holds once per cube.
 template <std::size_t CounterCount>
 class StripedCounters {

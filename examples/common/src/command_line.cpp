@@ -173,12 +173,18 @@ CommandLine::CommandLine(const std::string& program)
     add_option("--min-hit-rate", "F",
                "a cube whose rays found fewer hits than this share in a frame\n"
                "rests: its rays are traced, but for a sixteenth of the directions,\n"
-               "which keep measuring it; 0: cubes never rest\n"
-               "[CCT 0.5, CDCT 0.6]",
+               "which keep measuring it; 0: cubes never rest [Embree tracer: each\n"
+               "cube's break-even, --lookup-work / the rays its traced rays took;\n"
+               "Vulkan tracer: CCT 0.5, CDCT 0.6]",
                [&o](const std::string& text) {
                    o.min_hit_rate = parse_float_value("--min-hit-rate", text, false);
                    if (!(o.min_hit_rate >= 0.0f)) throw UsageError("--min-hit-rate: must be >= 0, got '" + text + "'");
                });
+    add_option("--lookup-work", "F",
+               "what a lookup costs, in rays traced: a cube pays when its hits save\n"
+               "more than its lookups cost; <= 0: CCT 0.5, CDCT 0.6 whatever rays\n"
+               "cost (Embree tracer) [CCT 1, CDCT 1.2]",
+               [&o](const std::string& text) { o.lookup_work = parse_float_value("--lookup-work", text, false); });
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"
                "traced, not answered (CCT and CDCT); negative: off " + shown_default(d.edge_threshold),

@@ -51,7 +51,9 @@ struct Options {
     bool filtered = false;            // CCT: bilinear lookups instead of the nearest texel
     bool trace_hits = false;          // diagnostics: answered rays traced anyway (SceneCacheSettings::trace_hits)
     float min_hit_rate = -1.0f;       // cubes answering fewer of their rays rest (SceneCacheSettings::min_hit_rate);
-                                      // negative: the technique's default; 0: never
+                                      // negative: unset (Embree tracer: each cube's break-even from the rays
+                                      // its traced rays took; Vulkan: the technique's default); 0: never
+    std::optional<float> lookup_work; // Embree: what a lookup costs in rays (SceneCacheSettings::lookup_work)
     int warm_up = 0;                  // warm-up pass over every warm_up-th pixel before the first frame; 0: off
     float edge_threshold = 0.1f;      // CCT confidence test: neighbours differing by more are traced; < 0 off
     InvalidationPolicy invalidate = InvalidationPolicy::exact; // dynamic scenes: texels dropped when objects move

@@ -163,14 +163,26 @@ struct SceneCacheSettings {
     // Resting cubes (raycache/resting.hpp): a cube whose looked-up rays found fewer than this share of hits
     // in a frame rests the next frame (its rays are traced without lookup or store, but for a sixteenth of
     // the directions, which keep measuring it) and works again once those find this share. Unset: the
-    // technique's default_min_hit_rate(). 0: cubes never rest.
+    // technique's default_min_hit_rate(), or, when the trace callbacks report what their rays cost
+    // (TracedRay::work), each cube's own break-even from it (lookup_work). 0: cubes never rest.
     std::optional<float> min_hit_rate;
+    // What one lookup costs, with its share of stores and end-of-frame work, in the units the trace callbacks
+    // report TracedRay::work in. While min_hit_rate is unset and a cube's traced rays reported their work, the
+    // cube rests when its hit rate is below lookup_work / (the mean work of the rays it traced)
+    // (raycache/resting.hpp, resting_threshold). Unset: default_lookup_work(), for work counted in rays
+    // (each intersection and shadow ray one). <= 0: the fixed default_min_hit_rate() alone.
+    std::optional<float> lookup_work;
 };
 
 // SceneCacheSettings::min_hit_rate unset: 0.5 for the CCT, 0.6 for the CDCT (raycache/resting.hpp says why).
 inline float default_min_hit_rate(Technique technique) noexcept {
     return raycache::default_min_hit_rate(technique == Technique::cdct);
 }
+
+// SceneCacheSettings::lookup_work unset, for work counted in rays traced (intersections and shadow rays
+// alike): CCT 1.0, CDCT 1.2. Where the fixed thresholds were measured (the Embree example tracer, one point
+// light), a traced leaving ray took 1.75 to 2.1 rays, which these turn into about its 0.5 and 0.6.
+inline float default_lookup_work(Technique technique) noexcept { return technique == Technique::cdct ? 1.2f : 1.0f; }
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
 // (Embree reports RTC_INVALID_GEOMETRY_ID there for a plain hit); primID, which matters only for a
@@ -245,6 +257,13 @@ struct SceneCacheStatistics {
     std::size_t doubtful_texels = 0; // texels the confidence test does not answer (their rays are traced)
     std::size_t emptied_for_origins = 0; // cubes emptied: rays left further out than an invalidation checked
     std::size_t resting_cubes = 0;   // cubes that rest during the next frame (SceneCacheSettings::min_hit_rate)
+    std::uint64_t traced_work = 0;   // what the rays traced on misses reported they cost (TracedRay::work) ...
+    std::uint64_t work_reports = 0;  // ... and how many reported it
+
+    // The mean work of a traced ray that reported it; 0 when none did.
+    double mean_traced_work() const noexcept {
+        return work_reports ? static_cast<double>(traced_work) / static_cast<double>(work_reports) : 0.0;
+    }
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
     // The share of the lookups that missed for `why`, 0..1.
@@ -422,6 +441,7 @@ public:
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax), path_records_(settings.path_records == PathRecords::always),
           record_policy_(settings.path_records), trace_hits_(settings.trace_hits), min_hit_rate_(settings.min_hit_rate.value_or(default_min_hit_rate(technique))),
+          threshold_from_work_(!settings.min_hit_rate), lookup_work_(settings.lookup_work.value_or(default_lookup_work(technique))),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
         validate(adaptive_);
@@ -433,6 +453,8 @@ public:
         if (!(min_hit_rate_ >= 0.0f))
             throw std::invalid_argument("RayCache SceneCacheSettings::min_hit_rate must be >= 0 (0: cubes never rest), got " +
                                         std::to_string(min_hit_rate_));
+        if (!std::isfinite(lookup_work_))
+            throw std::invalid_argument("RayCache SceneCacheSettings::lookup_work must be a finite number (<= 0: thresholds ignore work)");
     }
 
     Technique technique() const noexcept { return technique_; }
@@ -560,10 +582,18 @@ private:
 
     // leaving_ray() through the cube: looked up, and on a miss traced and stored.
     template <class Trace>
-    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
+    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& untallied) {
         const int index = find(id);
-        if (index < 0) return trace_alone(trace);
+        if (index < 0) return trace_alone(untallied);
         Entry& e = entries_[static_cast<std::size_t>(index)];
+        // A ray the cube traced counts what it reported it cost, for the cube's resting threshold.
+        // (Its return type keeps the form `untallied` lacks out of overloads, as leaving_ray's wrapper does.)
+        auto trace = [&](auto&... path) -> decltype(untallied(path...)) {
+            decltype(untallied(path...)) traced = untallied(path...);
+            const std::uint32_t work = TracedRay(traced).work;
+            with_cube(e, [work](auto& cube) { cube.record_traced_work(work); });
+            return traced;
+        };
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
         // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
@@ -746,7 +776,8 @@ public:
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
-        for (std::size_t i = 0; i < entries_.size(); ++i) entries_[i].rest = next_resting_state(entries_[i].rest, frames[i], min_hit_rate_, entries_[i].cold);
+        for (std::size_t i = 0; i < entries_.size(); ++i)
+            entries_[i].rest = next_resting_state(entries_[i].rest, frames[i], resting_threshold_of(frames[i]), entries_[i].cold);
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
         for (Entry& e : entries_)
             if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
@@ -1089,6 +1120,12 @@ private:
         return resizes;
     }
 
+    // The hit rate below which a cube with frame counters `frame` rests next frame (raycache/resting.hpp).
+    float resting_threshold_of(const CubeStatistics& frame) const noexcept {
+        if (!(min_hit_rate_ > 0.0f)) return 0.0f; // never resting
+        return threshold_from_work_ ? resting_threshold(frame, lookup_work_, min_hit_rate_) : min_hit_rate_;
+    }
+
     // Gives each entry of `resizes` (plan_resizes()) its new cube: a smaller one filled from the old (resampling,
     // records, confidence test, pyramid), a larger one empty. The resizes run on the caller's threads when the
     // budget has room for every new cube with all its tiles allocated: then no allocation can be refused,
@@ -1247,6 +1284,8 @@ private:
         to.misses += from.misses;
         for (std::size_t k = 0; k < miss_reason_count; ++k) to.misses_by[k] += from.misses_by[k];
         to.stores += from.stores;
+        to.traced_work += from.traced_work;
+        to.work_reports += from.work_reports;
         if constexpr (std::is_same_v<Totals, CubeStatistics>) to.refused_stores += from.refused_stores;
     }
     void carry_counts(Entry& e) { add_counts(e.carried, with_cube(e, [](const auto& cube) { return cube.statistics(); })); }
@@ -1268,7 +1307,9 @@ private:
     bool path_records_;          // the cubes keep path records now (SceneCacheSettings::path_records)
     PathRecords record_policy_;
     bool trace_hits_;            // SceneCacheSettings::trace_hits
-    float min_hit_rate_;         // SceneCacheSettings::min_hit_rate
+    float min_hit_rate_;         // SceneCacheSettings::min_hit_rate, or the technique's default
+    bool threshold_from_work_;   // min_hit_rate unset: each cube's threshold from its rays' work where reported
+    float lookup_work_;          // SceneCacheSettings::lookup_work
     std::shared_ptr<MemoryBudget> budget_; // shared with every cube
     int first_face_size_;                  // adaptive cubes start here (shrink_first_face_size)
     std::vector<Entry> entries_;
