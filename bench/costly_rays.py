@@ -8,10 +8,12 @@ default, and with the fixed ones, `--lookup-work 0`; the ceiling) is one process
 ceiling's gain, (off/mode - 1) / (off/ceiling - 1), from the medians) and, with matplotlib, share.png.
 
     bench/costly_rays.py build-release/examples/embree_whitted/raycache_embree_whitted OUT [RUNS]
+    bench/costly_rays.py --replot OUT      (share.png again from OUT/runs.txt)
 """
 import os
 import re
 import statistics
+import sys
 
 from vulkan_runs import command_line, machine_name, run_rotating, write_results
 
@@ -52,19 +54,35 @@ def plot(results, out):
         for path in PATHS:
             for mode, style in (("cct", "-o"), ("cdct", "-s"), ("cct-fixed", ":o"), ("cdct-fixed", ":s")):
                 y = [share(results[(scene, path, n, mode)], results[(scene, path, n, "ceiling")]) for n in SAMPLES]
-                ax.plot(SAMPLES, y, style, label=f"{mode.upper().replace('-FIXED', ', fixed')}, {path}")
+                technique, _, fixed = mode.partition("-")
+                threshold = "fixed threshold" if fixed else "threshold from work"
+                camera = "fixed camera" if path == "fixed" else path
+                ax.plot(SAMPLES, y, style, label=f"{technique.upper()}, {camera}, {threshold}")
         ax.axhline(0.0, color="grey", linewidth=0.8)
         ax.set_xscale("log", base=2)
         ax.set_xticks(SAMPLES, [str(n) for n in SAMPLES])
         ax.set_xlabel("shadow rays a shaded hit")
         ax.set_title(scene)
     axes[0].set_ylabel("share of the ceiling's gain")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "share.png"), dpi=110)
 
 
+def replot(out):
+    """share.png again from OUT/runs.txt (each run's output under a `=== scene_path_samples_mode_runN` line)."""
+    speeds = {}
+    with open(os.path.join(out, "runs.txt")) as f:
+        for block in f.read().split("=== ")[1:]:
+            scene, path, samples, mode, _ = block.split("\n", 1)[0].split("_")
+            speeds.setdefault((scene, path, int(samples), mode), []).append(parse(block)[0])
+    plot({v: statistics.median(s) for v, s in speeds.items()}, out)
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--replot":
+        replot(sys.argv[2])
+        return
     tracer, out, runs = command_line(__doc__)
     variants = [(s, p, n, m) for s in SCENES for p in PATHS for n in SAMPLES for m in MODES]
 

@@ -13,6 +13,7 @@ import csv
 import json
 import math
 import os
+import re
 import sys
 
 import matplotlib
@@ -277,7 +278,7 @@ def main():
     else:
         tables += "\n## Table 5.1: the Vulkan tracer\n\nNot measured in this run (no Vulkan device or no Vulkan build).\n\n"
     md = ["# RayCache results", "",
-          "Regenerate everything with `scripts/bench.sh` (about 30 minutes on 2 cores). Every speed-up compares renders "
+          "Regenerate everything with `scripts/bench.sh` (about 45 minutes on 2 cores). Every speed-up compares renders "
           "interleaved in one process on the same frames: the walkthrough's are ratios of mean times over a camera path, "
           "the thesis tables' ratios of medians of repeated frames; files (CSV, PNG) are in "
           f"[`{rel}/`]({rel}/).", ""]
@@ -288,12 +289,14 @@ def main():
             md += [f.read().rstrip("\n"), ""]
     md += rsh_results.section(results, rel)  # raycache_rsh_bench: the ray-space hierarchy
     # Sections kept beside their runs: written by hand (the lent machines', vulkan_adaptive) or by
-    # bench/vulkan_single_image.py and bench/vulkan_resting.py.
-    for folder in ["xeon16_h100", "vulkan_adaptive", "vulkan_single_image", "vulkan_resting", "h200_vulkan"]:
+    # bench/vulkan_single_image.py, bench/vulkan_resting.py and bench/costly_rays.py. Images they name by file
+    # name alone are beside them.
+    for folder in ["costly_rays", "xeon16_h100", "vulkan_adaptive", "vulkan_single_image", "vulkan_resting", "h200_vulkan"]:
         readme = os.path.join(results, folder, "README.md")
         if os.path.exists(readme):
             with open(readme) as f:
-                md += [f.read().rstrip("\n"), "", f"Files: [`{rel}/{folder}/`]({rel}/{folder}/).", ""]
+                text = re.sub(r"\]\(([\w.-]+\.png)\)", lambda m: f"]({rel}/{folder}/{m.group(1)})", f.read())
+                md += [text.rstrip("\n"), "", f"Files: [`{rel}/{folder}/`]({rel}/{folder}/).", ""]
     md += ["## Targets", "", "| target | measured | met |", "|---|---|---|"]
     for target, measured, met in targets(results):
         md.append(f"| {target} | {measured} | {'yes' if met else '**no**'} |")

@@ -4,9 +4,10 @@
 # thesis's experiments on the Embree tracer (raycache_bench: Table 5.2 on grid-N and behind-N, Table 5.3,
 # Figure 5.9, quality), Table 5.1 and the ray-space hierarchy against a per-frame BVH on the Vulkan tracer
 # (raycache_vulkan_bench, raycache_rsh_bench; on lavapipe where there is no GPU), the Vulkan tracer's single
-# image and resting cubes (bench/vulkan_single_image.py, bench/vulkan_resting.py), the micro-benchmarks
+# image and resting cubes (bench/vulkan_single_image.py, bench/vulkan_resting.py), the Embree tracer with
+# costlier rays (bench/costly_rays.py), the micro-benchmarks
 # (raycache_micro_bench), and the plots.
-#   scripts/bench.sh           the full run (about 30 minutes on 2 cores)
+#   scripts/bench.sh           the full run (about 45 minutes on 2 cores)
 #   scripts/bench.sh --quick   small images, one round: checks the pipeline, not results (writes to build-bench/quick)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -62,6 +63,8 @@ if [[ -x build-bench/examples/vulkan_whitted/raycache_vulkan_whitted ]]; then
   /usr/bin/python3 bench/vulkan_single_image.py build-bench/examples/vulkan_whitted/raycache_vulkan_whitted "$out/vulkan_single_image"
   /usr/bin/python3 bench/vulkan_resting.py build-bench/examples/vulkan_whitted/raycache_vulkan_whitted "$out/vulkan_resting"
 fi
+# Where the cache pays as rays get costlier: soft shadows of 1, 4 and 16 shadow rays (about 13 minutes).
+/usr/bin/python3 bench/costly_rays.py build-bench/examples/embree_whitted/raycache_embree_whitted "$out/costly_rays" 2
 build-bench/bench/raycache_micro_bench --benchmark_min_time=0.5 --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true --benchmark_out="$out/micro.json" --benchmark_out_format=json
 # Debian's python: the one python3-matplotlib installs into.
