@@ -256,6 +256,18 @@ TEST_CASE("a trace reporting a negative hit distance gives its colour and stores
     CHECK(cube.valid_texels() == 0);
 }
 
+TEST_CASE("a traced ray's reported work is counted when it fills a texel, and not when it stores nothing") {
+    CdctCube cube(16);
+    const ReliefParameters p{0.1f, 0.01f, 1000, 100.0f};
+    cdct_cached_trace(cube, bounds, centre, glm::vec3(1, 0, 0), p, [&] { return TracedRay{glm::vec3(0.5f), 3.0f, 7}; });
+    cdct_cached_trace(cube, bounds, centre, glm::vec3(0, 1, 0), p, [&] { return TracedRay{glm::vec3(0.5f), -1.0f, 5}; }); // not stored
+    cdct_cached_trace(cube, bounds, centre, glm::vec3(0, 0, 1), p, [&] { return TracedRay{glm::vec3(0.5f), 3.0f}; });     // no work given
+    const raycache::CubeStatistics s = cube.statistics();
+    CHECK(s.stores == 2);
+    CHECK(s.filled_work == 7);
+    CHECK(s.work_reports == 1);
+}
+
 TEST_CASE("bad origins, directions and boxes make the search a miss without reading the cube") {
     CdctCube cube(8);
     fill(cube, [](const glm::vec3&) { return 5.0f; });

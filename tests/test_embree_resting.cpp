@@ -128,11 +128,12 @@ TEST_CASE("a cube whose rays all missed rests: the next frame looks up its probe
     CHECK(s.resting_cubes == 0);
 }
 
-TEST_CASE("left unset, the threshold is each cube's break-even from the work its traced rays reported") {
+TEST_CASE("left unset, the threshold is each cube's break-even from the work of the rays that filled its texels") {
     // Frame 0 (cold) stores the directions of faces 0 and 1 alone; frame 1, from the same point, looks up all
-    // of them: a third hit, and 1024 misses are traced, each reporting `work` rays. CCT's default lookup_work
-    // is 1 ray, so the cube pays from 1 / work hits on: it rests after frame 1 when work is 2 (needs 50%),
-    // not when it is 4 (25%). A min_hit_rate given, or lookup_work 2, is obeyed whatever the work.
+    // of them twice: a third hit, and 1024 misses are traced and stored, each reporting `work` rays (their
+    // second lookups are traced too, but store nothing, so they do not count). CCT's default lookup_work is
+    // 1 ray, so the cube pays from 1 / work hits on: it rests after frame 1 when work is 2 (needs 50%), not
+    // when it is 4 (25%). A min_hit_rate given, or lookup_work 2, is obeyed whatever the work.
     struct Case {
         std::optional<float> min_hit_rate, lookup_work;
         std::uint32_t work;
@@ -155,17 +156,43 @@ TEST_CASE("left unset, the threshold is each cube's break-even from the work its
         auto run = [&](bool first_faces_only) {
             for (const glm::vec3& d : cell_directions()) {
                 if (first_faces_only && raycache::texel_of(d, 16)->face > 1) continue;
-                caches.leaving_ray({world.mirror}, top, d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, c.work}; });
+                for (int twice = first_faces_only ? 1 : 2; twice > 0; --twice)
+                    caches.leaving_ray({world.mirror}, top, d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, c.work}; });
             }
             return caches.begin_frame();
         };
         run(true);
         const SceneCacheStatistics s = run(false);
-        CHECK(s.hits == 512);
+        CHECK(s.hits == 1024);
+        CHECK(s.misses_by[static_cast<std::size_t>(MissReason::fresh)] == 1024);
         CHECK(s.work_reports == (c.work ? 1024u : 0u));
-        CHECK(s.traced_work == 1024u * c.work);
+        CHECK(s.filled_work == 1024u * c.work);
         CHECK(s.resting_cubes == (c.rests ? 1u : 0u));
     }
+}
+
+TEST_CASE("a warm cube that stores nothing keeps the work its texels' rays reported in earlier frames") {
+    // Frames 0 and 1 fill every texel from the top, each ray reporting 4 rays. Frame 2 stores nothing: a third
+    // of its rays hit, the others leave from the side and fail the origin test. Its threshold is 1 / 4 from the
+    // earlier frames' work (it keeps working), not the fixed 0.5 a frame without reports would fall back to.
+    MirrorAndBall world;
+    SceneCacheSettings settings;
+    settings.edge_threshold = -1.0f;
+    SceneCache caches(Technique::cct, settings);
+    caches.attach(world.scene, {world.mirror}, 16);
+    const glm::vec3 top(0.0f, 1.0f, 0.0f), side(1.0f, 0.0f, 0.0f);
+    auto frame_from = [&](auto origin_of) {
+        for (const glm::vec3& d : cell_directions())
+            caches.leaving_ray({world.mirror}, origin_of(d), d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, 4}; });
+        return caches.begin_frame();
+    };
+    frame_from([&](const glm::vec3&) { return top; });
+    CHECK(frame_from([&](const glm::vec3&) { return top; }).hits == 1536);
+    const SceneCacheStatistics s = frame_from([&](const glm::vec3& d) { return raycache::texel_of(d, 16)->face <= 1 ? top : side; });
+    CHECK(s.hits == 512);
+    CHECK(s.misses_by[static_cast<std::size_t>(MissReason::origin)] == 1024);
+    CHECK(s.work_reports == 0);
+    CHECK(s.resting_cubes == 0);
 }
 
 TEST_CASE("with min_hit_rate 0 a cube never rests, whatever its hit rate") {

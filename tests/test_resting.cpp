@@ -175,37 +175,32 @@ TEST_CASE("a resting miss has a name and a counter slot of its own") {
     CHECK(s.miss_share(MissReason::resting) == doctest::Approx(2.0 / 3.0));
 }
 
-TEST_CASE("with reported work, a cube pays from lookup_work / (mean work of a traced ray) on, clamped") {
-    // work_reports rays traced, traced_work in all: thresholds worked out by hand.
-    auto with_work = [](std::uint64_t reports, std::uint64_t work) {
-        CubeStatistics s = frame(1000, 300);
-        s.work_reports = reports;
-        s.traced_work = work;
-        return s;
-    };
-    CHECK(raycache::resting_threshold(with_work(100, 400), 1.0f, 0.5f) == doctest::Approx(0.25)); // 4 rays a trace
-    CHECK(raycache::resting_threshold(with_work(100, 400), 1.5f, 0.5f) == doctest::Approx(0.375));
-    CHECK(raycache::resting_threshold(with_work(64, 128), 1.2f, 0.5f) == doctest::Approx(0.6));
+TEST_CASE("with reported work, a cube pays from lookup_work / (mean work of a ray that filled a texel) on, clamped") {
+    using raycache::resting_threshold;
+    // `reports` rays filled texels, `work` rays in all: thresholds worked out by hand.
+    CHECK(resting_threshold(400, 100, 1.0f, 0.5f) == doctest::Approx(0.25)); // 4 rays a trace
+    CHECK(resting_threshold(400, 100, 1.5f, 0.5f) == doctest::Approx(0.375));
+    CHECK(resting_threshold(128, 64, 1.2f, 0.5f) == doctest::Approx(0.6));
     // Clamped: rays 100 times a lookup still need 5% hits; rays cheaper than a lookup 90%.
-    CHECK(raycache::resting_threshold(with_work(100, 10000), 1.0f, 0.5f) == raycache::resting_threshold_floor);
-    CHECK(raycache::resting_threshold(with_work(100, 50), 1.0f, 0.5f) == raycache::resting_threshold_ceiling);
+    CHECK(resting_threshold(10000, 100, 1.0f, 0.5f) == raycache::resting_threshold_floor);
+    CHECK(resting_threshold(50, 100, 1.0f, 0.5f) == raycache::resting_threshold_ceiling);
     // Too few reports to tell, no report, or no lookup_work: the fallback.
-    CHECK(raycache::resting_threshold(with_work(raycache::resting_min_judged_lookups - 1, 400), 1.0f, 0.5f) == 0.5f);
-    CHECK(raycache::resting_threshold(with_work(raycache::resting_min_judged_lookups, 4 * raycache::resting_min_judged_lookups), 1.0f, 0.5f) ==
-          doctest::Approx(0.25));
-    CHECK(raycache::resting_threshold(with_work(0, 0), 1.0f, 0.6f) == 0.6f);
-    CHECK(raycache::resting_threshold(with_work(100, 400), 0.0f, 0.6f) == 0.6f);
-    CHECK(raycache::resting_threshold(with_work(100, 400), std::numeric_limits<float>::quiet_NaN(), 0.6f) == 0.6f);
+    const std::uint64_t few = raycache::resting_min_judged_lookups;
+    CHECK(resting_threshold(400, few - 1, 1.0f, 0.5f) == 0.5f);
+    CHECK(resting_threshold(4 * few, few, 1.0f, 0.5f) == doctest::Approx(0.25));
+    CHECK(resting_threshold(0, 0, 1.0f, 0.6f) == 0.6f);
+    CHECK(resting_threshold(400, 100, 0.0f, 0.6f) == 0.6f);
+    CHECK(resting_threshold(400, 100, std::numeric_limits<float>::quiet_NaN(), 0.6f) == 0.6f);
 }
 
-TEST_CASE("a cube counts the work its traced rays report, and not a ray that reported none") {
+TEST_CASE("a cube counts the work the rays that filled its texels report, and not a ray that reported none") {
     raycache::CctCube cube(8);
-    cube.record_traced_work(3);
-    cube.record_traced_work(0);
-    cube.record_traced_work(5);
+    cube.record_filled_work(3);
+    cube.record_filled_work(0);
+    cube.record_filled_work(5);
     const CubeStatistics s = cube.statistics();
-    CHECK(s.traced_work == 8);
+    CHECK(s.filled_work == 8);
     CHECK(s.work_reports == 2);
-    CHECK(s.mean_traced_work() == doctest::Approx(4.0));
-    CHECK(CubeStatistics{}.mean_traced_work() == 0.0);
+    CHECK(s.mean_filled_work() == doctest::Approx(4.0));
+    CHECK(CubeStatistics{}.mean_filled_work() == 0.0);
 }

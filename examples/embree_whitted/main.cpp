@@ -44,7 +44,7 @@ struct FrameRecord {
     double invalidate_ms = 0.0;
     std::uint64_t lookups = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{}; // by raycache::MissReason
-    std::uint64_t traced_work = 0, work_reports = 0; // rays the traced leaving rays took, and how many reported it
+    std::uint64_t filled_work = 0, work_reports = 0; // rays the leaving rays that filled texels took, and how many
 };
 
 raycache::embree::Invalidation invalidation_of(rcx::InvalidationPolicy p) {
@@ -209,7 +209,7 @@ int run(const rcx::Options& o) {
             r.hit_rate = s.hit_rate();
             r.lookups = s.lookups;
             r.misses_by = s.misses_by;
-            r.traced_work = s.traced_work;
+            r.filled_work = s.filled_work;
             r.work_reports = s.work_reports;
             filled = s.valid_fraction();
             cache_bytes = s.allocated_bytes + s.pyramid_bytes;
@@ -278,11 +278,11 @@ int run(const rcx::Options& o) {
     // Why the lookups of the frames after the first missed (all frames' when there is one): what to change.
     std::uint64_t lookups = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
-    std::uint64_t traced_work = 0, work_reports = 0;
+    std::uint64_t filled_work = 0, work_reports = 0;
     for (std::size_t i = records.size() > 1 ? 1 : 0; i < records.size(); ++i) {
         lookups += records[i].lookups;
         for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += records[i].misses_by[k];
-        traced_work += records[i].traced_work;
+        filled_work += records[i].filled_work;
         work_reports += records[i].work_reports;
     }
     if (lookups) {
@@ -294,10 +294,10 @@ int run(const rcx::Options& o) {
                     " origin: left too far from the tile's origins; search: no consistent CDCT crossing;"
                     " outside: not answerable; resting: a cube that did not pay, traced)\n");
     }
-    // What a traced leaving ray cost, which sets how many hits a cube needs to pay (resting cubes).
+    // What a leaving ray that filled a texel cost, which sets how many hits a cube needs to pay (resting cubes).
     if (work_reports)
-        std::printf("summary a traced leaving ray took %.2f rays (intersections and shadow rays), mean over %llu\n",
-                    static_cast<double>(traced_work) / static_cast<double>(work_reports),
+        std::printf("summary a leaving ray that filled a texel took %.2f rays (intersections and shadow rays), mean over %llu\n",
+                    static_cast<double>(filled_work) / static_cast<double>(work_reports),
                     static_cast<unsigned long long>(work_reports));
     if (o.compare) {
         const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;

@@ -290,11 +290,11 @@ public:
     // texel whose read found nothing). Thread-safe, wait-free.
     void record_hit() noexcept { state_->counters.add(hits); }
     void record_miss(MissReason why) noexcept { state_->counters.add(first_miss + static_cast<std::size_t>(why)); }
-    // Count what a ray traced on a miss reported it cost (TracedRay::work; 0: not reported, not counted).
-    // Thread-safe, wait-free.
-    void record_traced_work(std::uint32_t work) noexcept {
+    // Count what a ray that filled a texel reported it cost (TracedRay::work; 0: not reported, not counted):
+    // cached_trace's helpers call it after a store that wrote. Thread-safe, wait-free.
+    void record_filled_work(std::uint32_t work) noexcept {
         if (!work) return;
-        state_->counters.add(traced_work, work);
+        state_->counters.add(filled_work, work);
         state_->counters.add(work_reports);
     }
     // record_hit(), or record_miss(MissReason::search): a miss with no cause given counts as a search's.
@@ -712,7 +712,7 @@ public:
         s.lookups = s.hits + s.misses;
         s.stores = state_->counters.sum(stores);
         s.refused_stores = state_->counters.sum(refused_stores);
-        s.traced_work = state_->counters.sum(traced_work);
+        s.filled_work = state_->counters.sum(filled_work);
         s.work_reports = state_->counters.sum(work_reports);
         s.valid_texels = valid_texels();
         s.texel_count = texel_count();
@@ -777,7 +777,7 @@ public:
 
 private:
     // A miss is counted under its reason: counter first_miss + MissReason.
-    enum Counter : std::size_t { hits, stores, refused_stores, new_values, traced_work, work_reports, first_miss,
+    enum Counter : std::size_t { hits, stores, refused_stores, new_values, filled_work, work_reports, first_miss,
                                  counter_count = first_miss + miss_reason_count };
 
     // Zeroes the counters, the texels stores gave a value kept in valid_texels. Not concurrent with stores.

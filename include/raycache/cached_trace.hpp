@@ -3,6 +3,7 @@
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <cstdint>
 #include <optional>
 #include <type_traits>
 #include <utility>
@@ -12,6 +13,7 @@
 #include "raycache/cache_cube.hpp"
 #include "raycache/filtered_lookup.hpp"
 #include "raycache/path_record.hpp"
+#include "raycache/traced_ray.hpp"
 
 namespace raycache {
 
@@ -32,6 +34,13 @@ typename Texel::Value cached_trace(CacheCube<Texel>& cube, const glm::vec3& dire
 }
 
 namespace detail {
+// TracedRay::work of a traced result, 0 for a result type without it (nothing reported).
+template <class Traced>
+std::uint32_t reported_work(const Traced& traced) noexcept {
+    if constexpr (std::is_convertible_v<Traced, TracedRay>) return TracedRay(traced).work;
+    else return 0;
+}
+
 // The answer of a filtered CCT lookup whose own texel is visible: the bilinear mean of the visible texels
 // around `direction` (never empty, since the own texel is one of them).
 inline glm::vec3 filtered_answer(const CctCube& cube, const glm::vec3& direction) noexcept {
@@ -84,9 +93,12 @@ glm::vec3 cct_cached_trace_at(CctCube& cube, const std::optional<TexelAddress>& 
                         : *cached;
     const auto traced = run();
     const glm::vec3 colour = traced.color;
-    if (tolerance) cube.store_at(*texel, colour, origin, traced.distance, *tolerance, records ? &path : nullptr);
-    else if (records) cube.store_at(*texel, colour, path);
-    else cube.store_at(*texel, colour);
+    bool stored = false;
+    if (tolerance) stored = cube.store_at(*texel, colour, origin, traced.distance, *tolerance, records ? &path : nullptr);
+    else if (records) stored = cube.store_at(*texel, colour, path);
+    else stored = cube.store_at(*texel, colour);
+    // A ray that filled a texel stands for what the texel's hits will save (raycache/resting.hpp).
+    if (stored) cube.record_filled_work(detail::reported_work(traced));
     return colour;
 }
 

@@ -23,6 +23,7 @@
 #include "raycache/shared/depth_secant.h"
 #include "raycache/shared/relief_walk.h"
 #include "raycache/shared/search_parameters.h"
+#include "raycache/traced_ray.hpp"
 
 namespace raycache {
 
@@ -150,19 +151,6 @@ inline bool store_escape(CacheCube<CdctTexel>& cube, const glm::vec3& direction,
     return cube.store(k.key, DepthSample{color, k.distance});
 }
 
-// What a secondary-ray trace returns to the CDCT: its colour, and the distance along the unit ray
-// direction to what it hit (infinity or NaN when it escaped to the environment). A negative distance
-// (a hit behind the ray's origin) is never stored: the colour is used, the cube left alone.
-// `work`: what tracing it cost, in units of the caller's choice (rays it traced, say: the ray itself, its
-// shadow rays and bounces), as a whole number so that sums do not depend on the order threads add them
-// in; 0: not reported. The Embree adapter's resting cubes weigh their hit rates against it
-// (raycache/resting.hpp, resting_threshold).
-struct TracedRay {
-    glm::vec3 color{0.0f};
-    float distance = std::numeric_limits<float>::infinity();
-    std::uint32_t work = 0;
-};
-
 // Stores what a ray traced from `origin` along `direction` brought back (shared/cdct_store.h): its hit
 // (store_hit at origin + distance * unit(direction)), or, for an infinite or NaN distance, an escape
 // (store_escape). Nothing for a negative distance or a direction that is not one (false, no store made).
@@ -202,7 +190,8 @@ glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds
         if constexpr (records) return trace(path);
         else return trace();
     }();
-    store_traced(cube, bounds, origin, direction, traced, p, records ? &path : nullptr);
+    // A ray that filled a texel stands for what the texel's hits will save (raycache/resting.hpp).
+    if (store_traced(cube, bounds, origin, direction, traced, p, records ? &path : nullptr)) cube.record_filled_work(traced.work);
     return traced.color;
 }
 

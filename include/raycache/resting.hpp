@@ -45,18 +45,20 @@ inline std::optional<double> looked_up_hit_rate(const CubeStatistics& frame) noe
     return static_cast<double>(frame.hits) / static_cast<double>(looked_up);
 }
 
-// The hit rate a cube must reach in a frame to keep working, when its traced rays reported what they cost
-// (TracedRay::work): a hit saves a traced ray, and every lookup costs `lookup_work` (in the same units, with
-// its share of stores and end-of-frame work), so the cube pays from lookup_work / (the mean work of the rays
-// it traced) on, clamped to [resting_threshold_floor, resting_threshold_ceiling]. A tracer whose rays cost
-// five times the example's then keeps cubes working at a fifth of the hit rate. Whole-number sums, so the
-// threshold, like the decisions, is the same with 1 or N threads. `fallback` when lookup_work <= 0 (or
-// NaN) or fewer than resting_min_judged_lookups traced rays reported their work.
+// The hit rate a cube must reach in a frame to keep working, when the rays that filled its texels reported
+// what they cost (TracedRay::work): `work` over `reports` of them. A hit saves about what its texel's ray
+// cost, and every lookup costs `lookup_work` (in the same units, with its share of stores and end-of-frame
+// work), so the cube pays from lookup_work / (work / reports) on, clamped to [resting_threshold_floor,
+// resting_threshold_ceiling]. A tracer whose rays cost five times the example's then keeps cubes working
+// at a fifth of the hit rate. The rays that filled texels, not all it traced: the confidence test traces
+// the rays of colour edges every frame, which see more and cost more than the rays its hits stand for.
+// Whole-number sums, so the threshold, like the decisions, is the same with 1 or N threads. `fallback`
+// when lookup_work <= 0 (or NaN) or fewer than resting_min_judged_lookups rays reported their work.
 inline constexpr float resting_threshold_floor = 0.05f;
 inline constexpr float resting_threshold_ceiling = 0.9f;
-inline float resting_threshold(const CubeStatistics& frame, float lookup_work, float fallback) noexcept {
-    if (!(lookup_work > 0.0f) || frame.work_reports < resting_min_judged_lookups) return fallback;
-    const double threshold = static_cast<double>(lookup_work) / frame.mean_traced_work();
+inline float resting_threshold(std::uint64_t work, std::uint64_t reports, float lookup_work, float fallback) noexcept {
+    if (!(lookup_work > 0.0f) || reports < resting_min_judged_lookups || work == 0) return fallback;
+    const double threshold = static_cast<double>(lookup_work) * static_cast<double>(reports) / static_cast<double>(work);
     return static_cast<float>(std::min<double>(std::max<double>(threshold, resting_threshold_floor), resting_threshold_ceiling));
 }
 

@@ -49,9 +49,9 @@ struct CubeStatistics {
     std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie
     std::size_t valid_texels = 0;       // texels holding a value now (including this frame's stores)
     std::size_t texel_count = 0;        // 6 * N * N
-    // What the rays traced on misses (resting ones included) reported they cost (TracedRay::work), and how
-    // many reported it; the Embree adapter counts them (raycache/resting.hpp).
-    std::uint64_t traced_work = 0;
+    // What the rays that filled texels reported they cost (TracedRay::work), and how many reported it
+    // (raycache/resting.hpp).
+    std::uint64_t filled_work = 0;
     std::uint64_t work_reports = 0;
 
     double valid_fraction() const noexcept {
@@ -60,9 +60,9 @@ struct CubeStatistics {
     double hit_rate() const noexcept {
         return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0;
     }
-    // The mean work of a traced ray that reported it; 0 when none did.
-    double mean_traced_work() const noexcept {
-        return work_reports ? static_cast<double>(traced_work) / static_cast<double>(work_reports) : 0.0;
+    // The mean work of a ray that filled a texel and reported it; 0 when none did.
+    double mean_filled_work() const noexcept {
+        return work_reports ? static_cast<double>(filled_work) / static_cast<double>(work_reports) : 0.0;
     }
     // Lookups the cube made: its resting misses (raycache/resting.hpp) left out, since it read nothing for them.
     std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }

@@ -183,7 +183,7 @@ CommandLine::CommandLine(const std::string& program)
     add_option("--lookup-work", "F",
                "what a lookup costs, in rays traced: a cube pays when its hits save\n"
                "more than its lookups cost; <= 0: CCT 0.5, CDCT 0.6 whatever rays\n"
-               "cost (Embree tracer) [CCT 1, CDCT 1.2]",
+               "cost (Embree tracer) [CCT 1, CDCT 2]",
                [&o](const std::string& text) { o.lookup_work = parse_float_value("--lookup-work", text, false); });
     add_option("--edge-threshold", "F",
                "texels differing in colour from a neighbour by more than F are\n"

@@ -167,8 +167,8 @@ struct SceneCacheSettings {
     // (TracedRay::work), each cube's own break-even from it (lookup_work). 0: cubes never rest.
     std::optional<float> min_hit_rate;
     // What one lookup costs, with its share of stores and end-of-frame work, in the units the trace callbacks
-    // report TracedRay::work in. While min_hit_rate is unset and a cube's traced rays reported their work, the
-    // cube rests when its hit rate is below lookup_work / (the mean work of the rays it traced)
+    // report TracedRay::work in. While min_hit_rate is unset and the rays that filled a cube's texels reported
+    // their work, the cube rests when its hit rate is below lookup_work / (their mean work, over recent frames)
     // (raycache/resting.hpp, resting_threshold). Unset: default_lookup_work(), for work counted in rays
     // (each intersection and shadow ray one). <= 0: the fixed default_min_hit_rate() alone.
     std::optional<float> lookup_work;
@@ -180,9 +180,13 @@ inline float default_min_hit_rate(Technique technique) noexcept {
 }
 
 // SceneCacheSettings::lookup_work unset, for work counted in rays traced (intersections and shadow rays
-// alike): CCT 1.0, CDCT 1.2. Where the fixed thresholds were measured (the Embree example tracer, one point
-// light), a traced leaving ray took 1.75 to 2.1 rays, which these turn into about its 0.5 and 0.6.
-inline float default_lookup_work(Technique technique) noexcept { return technique == Technique::cdct ? 1.2f : 1.0f; }
+// alike): CCT 1, CDCT 2. A CCT lookup with its stores and end-of-frame work costs about what an Embree ray
+// with its shading does on the example tracer (90 ns against 85); a CDCT search about twice that (measured
+// side by side with costlier rays: at 1.2, reflective-32's CDCT kept working at 40% hits under 4 shadow
+// rays a hit and ran at 0.92x of uncached, at 2 it rested and ran at 0.96x to 0.97x). With the example's
+// point light, where a leaving ray that fills a texel takes 1.6 to 1.9 rays, the CCT's threshold is then
+// about 0.55 and the CDCT's the ceiling, 0.9: it does not pay there.
+inline float default_lookup_work(Technique technique) noexcept { return technique == Technique::cdct ? 2.0f : 1.0f; }
 
 // An object as Embree reports it in a hit: geomID; instID[0] when it was reached through an instance
 // (Embree reports RTC_INVALID_GEOMETRY_ID there for a plain hit); primID, which matters only for a
@@ -257,12 +261,12 @@ struct SceneCacheStatistics {
     std::size_t doubtful_texels = 0; // texels the confidence test does not answer (their rays are traced)
     std::size_t emptied_for_origins = 0; // cubes emptied: rays left further out than an invalidation checked
     std::size_t resting_cubes = 0;   // cubes that rest during the next frame (SceneCacheSettings::min_hit_rate)
-    std::uint64_t traced_work = 0;   // what the rays traced on misses reported they cost (TracedRay::work) ...
-    std::uint64_t work_reports = 0;  // ... and how many reported it
+    std::uint64_t filled_work = 0;   // what the rays that filled texels this frame reported they cost ...
+    std::uint64_t work_reports = 0;  // ... (TracedRay::work), and how many reported it
 
-    // The mean work of a traced ray that reported it; 0 when none did.
-    double mean_traced_work() const noexcept {
-        return work_reports ? static_cast<double>(traced_work) / static_cast<double>(work_reports) : 0.0;
+    // The mean work of a ray that filled a texel and reported it; 0 when none did.
+    double mean_filled_work() const noexcept {
+        return work_reports ? static_cast<double>(filled_work) / static_cast<double>(work_reports) : 0.0;
     }
 
     double hit_rate() const noexcept { return lookups ? static_cast<double>(hits) / static_cast<double>(lookups) : 0.0; }
@@ -406,6 +410,10 @@ class SceneCache {
         // raycache/resting.hpp: whether the cube rests this frame, and whether it started the frame empty.
         RestingState rest{};
         bool cold = true;
+        // The work of the rays that filled its texels (TracedRay::work) and how many reported it, over the
+        // frames so far, each frame's weighed half the next's: a warm cube on a still camera stores little,
+        // yet its hits save what its texels' rays cost. Whole numbers: the same on any thread count.
+        std::uint64_t filled_work = 0, work_reports = 0;
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -582,18 +590,10 @@ private:
 
     // leaving_ray() through the cube: looked up, and on a miss traced and stored.
     template <class Trace>
-    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& untallied) {
+    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
         const int index = find(id);
-        if (index < 0) return trace_alone(untallied);
+        if (index < 0) return trace_alone(trace);
         Entry& e = entries_[static_cast<std::size_t>(index)];
-        // A ray the cube traced counts what it reported it cost, for the cube's resting threshold.
-        // (Its return type keeps the form `untallied` lacks out of overloads, as leaving_ray's wrapper does.)
-        auto trace = [&](auto&... path) -> decltype(untallied(path...)) {
-            decltype(untallied(path...)) traced = untallied(path...);
-            const std::uint32_t work = TracedRay(traced).work;
-            with_cube(e, [work](auto& cube) { cube.record_traced_work(work); });
-            return traced;
-        };
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
         // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
@@ -776,8 +776,12 @@ public:
         };
         parallel_for(entries_.size(), end_cube);
         for (const CubeStatistics& frame : frames) add(total, frame);
-        for (std::size_t i = 0; i < entries_.size(); ++i)
-            entries_[i].rest = next_resting_state(entries_[i].rest, frames[i], resting_threshold_of(frames[i]), entries_[i].cold);
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            Entry& e = entries_[i];
+            e.filled_work = e.filled_work / 2 + frames[i].filled_work;
+            e.work_reports = e.work_reports / 2 + frames[i].work_reports;
+            e.rest = next_resting_state(e.rest, frames[i], resting_threshold_of(e), e.cold);
+        }
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
         for (Entry& e : entries_)
             if (e.origins->outgrown()) total.valid_texels -= empty_cube(e), total.emptied_for_origins += 1;
@@ -851,7 +855,7 @@ public:
 
     // Empties every cube (the objects keep their cubes) and resets the counters.
     void clear() {
-        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{};
+        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{}, e.filled_work = e.work_reports = 0;
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
@@ -1120,10 +1124,11 @@ private:
         return resizes;
     }
 
-    // The hit rate below which a cube with frame counters `frame` rests next frame (raycache/resting.hpp).
-    float resting_threshold_of(const CubeStatistics& frame) const noexcept {
+    // The hit rate below which entry `e` rests next frame (raycache/resting.hpp), from the work its texels'
+    // rays reported over the frames so far.
+    float resting_threshold_of(const Entry& e) const noexcept {
         if (!(min_hit_rate_ > 0.0f)) return 0.0f; // never resting
-        return threshold_from_work_ ? resting_threshold(frame, lookup_work_, min_hit_rate_) : min_hit_rate_;
+        return threshold_from_work_ ? resting_threshold(e.filled_work, e.work_reports, lookup_work_, min_hit_rate_) : min_hit_rate_;
     }
 
     // Gives each entry of `resizes` (plan_resizes()) its new cube: a smaller one filled from the old (resampling,
@@ -1284,7 +1289,7 @@ private:
         to.misses += from.misses;
         for (std::size_t k = 0; k < miss_reason_count; ++k) to.misses_by[k] += from.misses_by[k];
         to.stores += from.stores;
-        to.traced_work += from.traced_work;
+        to.filled_work += from.filled_work;
         to.work_reports += from.work_reports;
         if constexpr (std::is_same_v<Totals, CubeStatistics>) to.refused_stores += from.refused_stores;
     }
