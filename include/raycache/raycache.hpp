@@ -11,6 +11,7 @@
 #include "raycache/statistics.hpp"
 #include "raycache/memory_budget.hpp"
 #include "raycache/path_record.hpp"
+#include "raycache/traced_ray.hpp"
 #include "raycache/cache_cube.hpp"
 #include "raycache/adaptive_resolution.hpp"
 #include "raycache/resting.hpp"
