@@ -2,7 +2,8 @@
 // renders one frame into an rcx::Image, with the secondary rays leaving cached objects going through a
 // raycache::embree::SceneCache (or not, or answered by a constant: see rcx::CacheMode).
 //
-// Shading (Whitted): ambient + Phong diffuse and specular from one point light with a shadow ray, perfect
+// Shading (Whitted): ambient + Phong diffuse and specular from one point light with a shadow ray (or, with
+// PointLight::samples > 1, a disc light with that many shadow rays: soft shadows, costlier rays), perfect
 // mirror reflection, refraction with Schlick's Fresnel and total internal reflection, a world-space
 // checkerboard, the environment colour for rays that escape. A hit at depth scene.max_depth spawns no
 // reflected or refracted ray (primary rays are depth 0; shadow rays do not count).
