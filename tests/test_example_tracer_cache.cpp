@@ -280,6 +280,41 @@ TEST_CASE("with resting cubes, one and two threads still give bit-identical fram
     }
 }
 
+TEST_CASE("with thresholds from the rays' work, one and two threads give bit-identical frames, work counts and decisions") {
+    // The default: min_hit_rate unset, so each cube rests below lookup_work / the mean work the rays that filled
+    // its texels reported (the tracer reports the rays each traced leaving ray took). Soft shadows make that
+    // work differ from ray to ray; the sums, and so the decisions, must not depend on the thread count.
+    rcx::Scene scene = rcx::make_scene("behind-8");
+    scene.light.samples = 4;
+    scene.light.radius = 1.0f;
+    const rcx::embree::Tracer tracer(scene);
+    for (const Variant& v : {cct, cdct_secant}) {
+        const std::string variant = v.name;
+        CAPTURE(variant);
+        raycache::embree::SceneCacheSettings s;
+        s.relief.search = raycache::DepthSearch::secant;
+        SceneCache one(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, s);
+        SceneCache two(v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct, s);
+        tracer.attach_caches(one, 32);
+        tracer.attach_caches(two, 32);
+        std::uint64_t reports = 0;
+        for (int frame = 0; frame < 5; ++frame) {
+            CAPTURE(frame);
+            const rcx::Camera camera = scene.camera_at(frame);
+            CHECK(rcx::bit_identical(tracer.render(camera, settings(40, v, &one, 1)), tracer.render(camera, settings(40, v, &two, 2))));
+            const SceneCacheStatistics sa = one.begin_frame(), sb = rcx::embree::end_frame(two, 2);
+            CHECK(sa.filled_work == sb.filled_work);
+            CHECK(sa.work_reports == sb.work_reports);
+            CHECK(sa.resting_cubes == sb.resting_cubes);
+            CHECK(sa.hits == sb.hits);
+            // Each filled texel's ray took itself and its shadow rays at least.
+            if (sa.work_reports) CHECK(sa.filled_work >= sa.work_reports);
+            reports += sa.work_reports;
+        }
+        CHECK(reports > 0);
+    }
+}
+
 TEST_CASE("a single image with a warm-up pass: the warm-up's pixels are traced once, as uncached, and the rest reuse them") {
     // The warm-up pass runs on empty cubes, so its pixels are the uncached frame's bit for bit (a cold frame
     // is). Traced again in the full pass, a mirror pixel would read back its own texel, its colour rounded to
