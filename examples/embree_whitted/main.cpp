@@ -278,12 +278,12 @@ int run(const rcx::Options& o) {
     // Why the lookups of the frames after the first missed (all frames' when there is one): what to change.
     std::uint64_t lookups = 0;
     std::array<std::uint64_t, raycache::miss_reason_count> misses_by{};
-    std::uint64_t filled_work = 0, work_reports = 0;
+    raycache::embree::SceneCacheStatistics work; // its filled_work and work_reports, summed
     for (std::size_t i = records.size() > 1 ? 1 : 0; i < records.size(); ++i) {
         lookups += records[i].lookups;
         for (std::size_t k = 0; k < misses_by.size(); ++k) misses_by[k] += records[i].misses_by[k];
-        filled_work += records[i].filled_work;
-        work_reports += records[i].work_reports;
+        work.filled_work += records[i].filled_work;
+        work.work_reports += records[i].work_reports;
     }
     if (lookups) {
         std::printf("summary misses, share of lookups:");
@@ -295,10 +295,9 @@ int run(const rcx::Options& o) {
                     " outside: not answerable; resting: a cube that did not pay, traced)\n");
     }
     // What a leaving ray that filled a texel cost, which sets how many hits a cube needs to pay (resting cubes).
-    if (work_reports)
+    if (work.work_reports)
         std::printf("summary a leaving ray that filled a texel took %.2f rays (intersections and shadow rays), mean over %llu\n",
-                    static_cast<double>(filled_work) / static_cast<double>(work_reports),
-                    static_cast<unsigned long long>(work_reports));
+                    work.mean_filled_work(), static_cast<unsigned long long>(work.work_reports));
     if (o.compare) {
         const double speedup = records.size() > 1 ? plain_warm / cached_warm : plain_all / cached_all;
         std::printf("summary uncached: mean %.2f ms/frame (%.2f ms after the first); speed-up %.2fx after the first frame;"

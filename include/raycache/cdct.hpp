@@ -6,8 +6,6 @@
 
 #include <cmath>
 #include <cstddef>
-#include <cstdint>
-#include <limits>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
