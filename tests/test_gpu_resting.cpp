@@ -1,12 +1,14 @@
 // raycache/gpu_resting.hpp and the frame buffer's resting words (raycache/gpu_frame.hpp), against values
 // worked out by hand from the rule written in raycache/resting.hpp:
-// - the start words put 1 in word 8 + 54 k + 5 of each resting cube k and 0 elsewhere among the counters;
+// - the start words put cube k's resting word in word 8 + 54 k + 5 and 0 elsewhere among the counters;
 // - a frame's rested rays are misses of reason `resting`, beside the lookups' own misses, so that the
 //   looked-up rays are hits + misses of lookups alone;
 // - with min_hit_rate 0.5: a cube's first frame (started empty) decides nothing whatever it hit; 10 hits of
 //   100 looked up then rest it; a resting frame whose 40 probes hit 30 times (0.75) makes it work again, and
-//   the frame after that (refilling) decides nothing even at 0 hits; 20 probes (< 32) decide nothing for 7
-//   frames and the 8th such frame makes it work again.
+//   the frame after that (refilling) decides nothing even at 0 hits; frames without probes decide nothing
+//   for 7 frames and the 8th such frame makes it work again; a wake whose first judged frame rests the cube
+//   again counts as wrong (backoff); a resting cube judged from 64 probes of one frame probes half as many
+//   directions the next (resting word one higher).
 #include <doctest/doctest.h>
 
 #include <cstdint>
@@ -38,17 +40,17 @@ struct FrameWords {
 
 } // namespace
 
-TEST_CASE("the start words carry each cube's resting flag in its resting word, and refuse another number of flags") {
+TEST_CASE("the start words carry each cube's resting word, and refuse another number of words") {
     const GpuFrameLayout f = gpu_frame_layout(3, 10);
-    const std::vector<std::uint32_t> w = gpu_frame_start_words(f, true, {true, false, true});
+    const std::vector<std::uint32_t> w = gpu_frame_start_words(f, true, {4u, 0u, 7u});
     REQUIRE(w.size() == 8u + 3u * 54u);
     for (std::size_t i = 8; i < w.size(); ++i) {
-        const bool resting_word = i == 8 + 5 || i == 8 + 2 * 54 + 5; // cubes 0 and 2
-        CHECK(w[i] == (resting_word ? 1u : 0u));
+        const std::uint32_t expected = i == 8 + 5 ? 4u : i == 8 + 2 * 54 + 5 ? 7u : 0u; // cubes 0 and 2
+        CHECK(w[i] == expected);
     }
-    const std::vector<std::uint32_t> none = gpu_frame_start_words(f, true, {false, false, false});
+    const std::vector<std::uint32_t> none = gpu_frame_start_words(f, true, {0u, 0u, 0u});
     for (std::uint32_t k = 0; k < 3; ++k) CHECK(none[8 + 54 * k + 5] == 0u);
-    CHECK_THROWS_AS(gpu_frame_start_words(f, true, {true, false}), std::invalid_argument);
+    CHECK_THROWS_AS(gpu_frame_start_words(f, true, {4u, 0u}), std::invalid_argument);
 }
 
 TEST_CASE("GPU statistics count a resting cube's rays as misses of reason resting, apart from its lookups") {
@@ -83,14 +85,25 @@ TEST_CASE("GpuResting: a cube rests after a frame that answered too few, works a
     // Frame 4, the refill: nothing decided even at 0 hits.
     resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 60, 40, 40).read());
     CHECK(resting.resting() == std::vector<bool>{false, false});
-    // Frame 5: 10 of 100 again: rests. Then 7 frames of 20 probes (fewer than 32: unjudged) keep it resting,
-    // and the 8th makes it work.
+    // Frame 5: 10 of 100 again: rests, probing one direction in 16 (word 4); its wake was wrong, so it rests
+    // at least 2 frames. Then frames without a probe (unjudged) keep it resting, each doubling its probes
+    // back (no fewer than 1 in 16), and the 8th makes it work.
     resting.after_frame(FrameWords(2).cube(0, 10, 90, 90).cube(1, 60, 40, 40).read());
-    CHECK(resting.resting()[0]);
+    CHECK(resting.resting_words() == std::vector<std::uint32_t>{4u, 0u});
+    CHECK(resting.state(0).backoff == 1);
     for (int f = 1; f <= resting_max_unjudged_frames; ++f) {
         CAPTURE(f);
-        resting.after_frame(FrameWords(2).cube(0, 0, 20, 20, 500).cube(1, 60, 40, 40).read());
+        resting.after_frame(FrameWords(2).cube(0, 0, 0, 0, 500).cube(1, 60, 40, 40).read());
         CHECK(resting.resting()[0] == (f < resting_max_unjudged_frames));
+    }
+    // Frame 14: the refill. Frame 15: 5 of 100 (a wrong wake again: 4 frames' rest). Frames 16 to 18: its
+    // 64 probes find 8 hits each: it rests on, probing half as many directions each frame (words 5, 6, 7).
+    resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 60, 40, 40).read());
+    resting.after_frame(FrameWords(2).cube(0, 5, 95, 95).cube(1, 60, 40, 40).read());
+    CHECK(resting.state(0).backoff == 2);
+    for (std::uint32_t word : {5u, 6u, 7u}) {
+        resting.after_frame(FrameWords(2).cube(0, 8, 56, 56, 900).cube(1, 60, 40, 40).read());
+        CHECK(resting.resting_words() == std::vector<std::uint32_t>{word, 0u});
     }
     CHECK_THROWS_AS(resting.after_frame(FrameWords(3).read()), std::invalid_argument);
 }

@@ -128,6 +128,120 @@ TEST_CASE("a resting cube too few of whose rays probe works again after resting_
     CHECK(raycache::next_resting_state({false, 0, false}, frame(3, 0), 0.5f).unjudged == 0);
 }
 
+TEST_CASE("a resting cube's probes are counted over frames until they are enough to judge it") {
+    using raycache::RestingState;
+    // 20 probes a frame (fewer than 32): the first frame decides nothing and keeps its counts.
+    const RestingState resting{true, 0, false};
+    RestingState one = raycache::next_resting_state(resting, frame(1000, 5, 980), 0.5f);
+    CHECK(one.resting);
+    CHECK(one.unjudged == 1);
+    CHECK(one.probe_lookups == 20u);
+    CHECK(one.probe_hits == 5u);
+    // A second frame of 20 probes, 15 hits: 20 of 40 (0.5, not below), so it works again, though that frame
+    // alone (15 of 20) is too few to judge and the first alone (5 of 20) would have said rest.
+    const RestingState woke = raycache::next_resting_state(one, frame(1000, 15, 980), 0.5f);
+    CHECK_FALSE(woke.resting);
+    CHECK(woke.refilling);
+    // With 10 hits instead: 15 of 40 (0.375) rests on, counts started afresh.
+    const RestingState on = raycache::next_resting_state(one, frame(1000, 10, 980), 0.5f);
+    CHECK(on.resting);
+    CHECK(on.unjudged == 0);
+    CHECK(on.probe_lookups == 0u);
+    CHECK(on.probe_hits == 0u);
+}
+
+TEST_CASE("a cube that goes on not paying probes half as many directions each judged frame, down to 1 in 256") {
+    using raycache::RestingState;
+    RestingState state{true, 0, false};
+    CHECK(state.probe_bits == 4u);
+    // Judged from one frame's 64 probes (twice the 32 needed), 10 hits: one bit more each frame, up to 8.
+    for (unsigned expected : {5u, 6u, 7u, 8u, 8u}) {
+        state = raycache::next_resting_state(state, frame(1000, 10, 936), 0.5f);
+        CHECK(state.resting);
+        CHECK(state.probe_bits == expected);
+    }
+    // 63 probes judge it but do not thin its probes.
+    CHECK(raycache::next_resting_state(RestingState{true, 0, false}, frame(1000, 10, 937), 0.5f).probe_bits == 4u);
+    // A frame without enough probes doubles them again, down to one in 16.
+    for (unsigned expected : {7u, 6u, 5u, 4u, 4u}) {
+        state = raycache::next_resting_state(state, frame(1000, 0, 1000), 0.5f);
+        CHECK(state.probe_bits == expected);
+    }
+    // A cube starting to rest probes one direction in 16.
+    CHECK(raycache::next_resting_state(RestingState{}, frame(1000, 10), 0.5f).probe_bits == 4u);
+}
+
+TEST_CASE("the probes at one more bit are half of those at one bit fewer, and the bits are clamped to 4..8") {
+    std::mt19937 rng(5);
+    std::normal_distribution<float> gaussian;
+    const int n = 400000;
+    int probes[10] = {};
+    for (int i = 0; i < n; ++i) {
+        const glm::vec3 d = glm::normalize(glm::vec3(gaussian(rng), gaussian(rng), gaussian(rng)));
+        for (unsigned bits = 4; bits <= 8; ++bits) {
+            const bool probe = raycache::shared::raycache_is_probe_direction_of(d, bits);
+            probes[bits] += probe ? 1 : 0;
+            if (bits > 4 && probe) CHECK(raycache::shared::raycache_is_probe_direction_of(d, bits - 1)); // a subset
+        }
+        CHECK(raycache::shared::raycache_is_probe_direction_of(d, 0u) == raycache::is_probe_direction(d));
+        CHECK(raycache::shared::raycache_is_probe_direction_of(d, 40u) == raycache::shared::raycache_is_probe_direction_of(d, 8u));
+    }
+    // About n / 2^bits each; the boxes are coarse (a few thousand over the sphere), so within a factor 1.6.
+    for (unsigned bits = 4; bits <= 8; ++bits) {
+        CAPTURE(bits);
+        const double expected = static_cast<double>(n) / static_cast<double>(1u << bits);
+        CHECK(probes[bits] > expected / 1.6);
+        CHECK(probes[bits] < expected * 1.6);
+    }
+}
+
+TEST_CASE("a wake its first judged frame proves wrong doubles the next rest (2, 4, then 8 frames), and a wake that pays resets it") {
+    using raycache::RestingState;
+    const CubeStatistics poor = frame(1000, 100);          // a working frame: 10 %, rests
+    const CubeStatistics good = frame(1000, 500);          // a working frame: 50 %, works on
+    const CubeStatistics promising = frame(1000, 40, 920); // a resting frame: its 80 probes hit 40 (0.5): wake
+    // Frames a cube that woke and failed `wrong` times rests before it works again, counted by running the
+    // rule; then it refills and is judged by `judged`.
+    RestingState state = raycache::next_resting_state(RestingState{}, poor, 0.5f); // it worked a while, then rests
+    CHECK(state.resting);
+    CHECK(state.backoff == 0);
+    auto rest_length = [&] {
+        int frames = 0;
+        while (state.resting) {
+            state = raycache::next_resting_state(state, promising, 0.5f);
+            ++frames;
+            REQUIRE(frames < 100);
+        }
+        CHECK(state.refilling);
+        state = raycache::next_resting_state(state, poor, 0.5f); // the refill decides nothing
+        CHECK_FALSE(state.resting);
+        return frames;
+    };
+    CHECK(rest_length() == 1); // a first rest: its probes wake it after one frame
+    state = raycache::next_resting_state(state, poor, 0.5f); // the wake was wrong
+    CHECK(state.backoff == 1);
+    CHECK(rest_length() == 2);
+    state = raycache::next_resting_state(state, poor, 0.5f);
+    CHECK(rest_length() == 4);
+    state = raycache::next_resting_state(state, poor, 0.5f);
+    CHECK(rest_length() == 8);
+    state = raycache::next_resting_state(state, poor, 0.5f);
+    CHECK(state.backoff == raycache::resting_max_backoff);
+    CHECK(rest_length() == 8); // no longer
+    // A wake that pays: it works on, and its next rest is one frame again.
+    state = raycache::next_resting_state(state, good, 0.5f);
+    CHECK_FALSE(state.resting);
+    CHECK(state.backoff == 0);
+    state = raycache::next_resting_state(state, good, 0.5f);
+    state = raycache::next_resting_state(state, poor, 0.5f);
+    CHECK(state.backoff == 0);
+    CHECK(rest_length() == 1);
+    // Probes that find it still not paying keep it resting past its minimum rest.
+    state = raycache::next_resting_state(RestingState{}, poor, 0.5f);
+    for (int f = 0; f < 5; ++f) state = raycache::next_resting_state(state, frame(1000, 10, 920), 0.5f);
+    CHECK(state.resting);
+}
+
 TEST_CASE("a frame the cube started empty, or refilled in after resting, decides nothing") {
     using raycache::RestingState;
     const CubeStatistics missed_all = frame(1000, 0); // a working cube's frame: no hit at all

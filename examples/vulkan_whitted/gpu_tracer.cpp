@@ -406,7 +406,7 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
     // pass their rays but probes by (raycache/gpu_resting.hpp).
     auto start_frame_buffer = [&] {
         const std::vector<std::uint32_t> words =
-            raycache::gpu_frame_start_words(t.frame_layout, t.settings.adaptive, t.resting ? t.resting->resting() : std::vector<bool>{});
+            raycache::gpu_frame_start_words(t.frame_layout, t.settings.adaptive, t.resting ? t.resting->resting_words() : std::vector<std::uint32_t>{});
         t.frame->upload(words.data(), words.size() * 4);
     };
     start_frame_buffer();

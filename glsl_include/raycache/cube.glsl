@@ -82,7 +82,8 @@ uint raycache_cube_texel(raycache_gpu_cube cube, vec3 s) {
 
 /* Whether a ray leaving the cube's object in unit `direction` passes the cube by this frame: the host started
  * the frame with the cube resting (raycache/gpu_resting.hpp) and the direction is not one of the probes
- * that keep measuring it (raycache_is_probe_direction, raycache/shared/coverage.h). Then trace the ray and
+ * that keep measuring it (raycache_is_probe_direction_of with the bits of its resting word,
+ * raycache/shared/coverage.h). Then trace the ray and
  * neither look it up nor store its colour; it is counted in the cube's `rested` counter. Ask before the
  * lookup, as C++'s SceneCache does:
  *   if (raycache_cube_rests(cube, d)) colour = trace(r);
@@ -92,8 +93,9 @@ bool raycache_cube_rests(raycache_gpu_cube cube, vec3 direction) {
 #ifdef RAYCACHE_READ_ONLY
     return false;
 #else
-    if (!raycache_cube_has_texels(cube) || !raycache_frame_cube_resting(cube.index) || raycache_is_probe_direction(direction))
-        return false;
+    if (!raycache_cube_has_texels(cube)) return false;
+    uint probe_bits = raycache_frame_cube_resting_word(cube.index);
+    if (probe_bits == 0u || raycache_is_probe_direction_of(direction, probe_bits)) return false;
     raycache_frame_count(cube.index, RAYCACHE_FRAME_RESTED);
     return true;
 #endif

@@ -26,12 +26,18 @@ void raycache_frame_count(uint index, uint which) {
     if (word < uint(raycache_frame.length())) atomicAdd(raycache_frame[word], 1u);
 }
 
-/* Whether the host started this frame with the cube numbered `index` resting (its resting word; false for a
- * number past the host's cube count). */
-bool raycache_frame_cube_resting(uint index) {
-    if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return false;
+/* The resting word the host started this frame with for the cube numbered `index`: 0 when it works, else
+ * its probe bits (raycache/shared/gpu_layout.h); 0 for a number past the host's cube count. */
+uint raycache_frame_cube_resting_word(uint index) {
+    if (index >= raycache_frame[RAYCACHE_FRAME_CUBE_COUNT]) return 0u;
     uint word = raycache_frame_counter_word(index, RAYCACHE_FRAME_RESTING);
-    return word < uint(raycache_frame.length()) && raycache_frame[word] != 0u;
+    return word < uint(raycache_frame.length()) ? raycache_frame[word] : 0u;
+}
+
+/* Whether the host started this frame with the cube numbered `index` resting (false for a number past the
+ * host's cube count). */
+bool raycache_frame_cube_resting(uint index) {
+    return raycache_frame_cube_resting_word(index) != 0u;
 }
 
 /* Sets the coverage bit of the direction cell `direction` falls in (raycache/shared/coverage.h) for the

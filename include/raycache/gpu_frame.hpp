@@ -5,7 +5,7 @@
 // storage buffer.
 //
 // A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
-//   1. before it: copy gpu_frame_start_words(frame, mark_coverage, resting) into the frame buffer
+//   1. before it: copy gpu_frame_start_words(frame, mark_coverage, resting_words) into the frame buffer
 //      (vkCmdUpdateBuffer or a copy; `resting`: raycache/gpu_resting.hpp, or none), then barrier (transfer
 //      write -> shader read and write; it also covers the first frame's fill);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
@@ -91,16 +91,18 @@ inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint
 // {0, 1, 1}, flags), zeroed counters and each cube's resting word. Upload them before every frame.
 // mark_coverage: lookups mark their direction cells, which next_gpu_face_sizes needs
 // (raycache/gpu_adaptive.hpp); false for fixed face sizes, whose lookups then skip that work
-// (GpuFrameStatistics::coverage reads 0). resting: empty (no cube rests) or one flag per cube, by descriptor
-// index (GpuResting::resting(), raycache/gpu_resting.hpp); throws std::invalid_argument for another count.
+// (GpuFrameStatistics::coverage reads 0). resting: empty (no cube rests) or one resting word per cube, by
+// descriptor index (GpuResting::resting_words(), raycache/gpu_resting.hpp: 0 works, else the cube rests and
+// probes one direction in 2^word, clamped to 4..8, so 1 rests with a first rest's probes); throws
+// std::invalid_argument for another count.
 inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true,
-                                                        const std::vector<bool>& resting = {}) {
+                                                        const std::vector<std::uint32_t>& resting = {}) {
     if (!resting.empty() && resting.size() != f.cube_count)
-        throw std::invalid_argument("RayCache: gpu_frame_start_words needs one resting flag per cube (" +
+        throw std::invalid_argument("RayCache: gpu_frame_start_words needs one resting word per cube (" +
                                     std::to_string(f.cube_count) + "), got " + std::to_string(resting.size()));
     std::vector<std::uint32_t> words(static_cast<std::size_t>(f.start_bytes / 4), 0u);
     for (std::uint32_t k = 0; k < resting.size(); ++k)
-        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTING)] = resting[k] ? 1u : 0u;
+        words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_RESTING)] = resting[k];
     words[RAYCACHE_FRAME_LIST_CAPACITY] = f.list_capacity;
     words[RAYCACHE_FRAME_CUBE_COUNT] = f.cube_count;
     words[RAYCACHE_FRAME_DISPATCH + 1] = 1u;

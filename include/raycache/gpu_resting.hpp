@@ -3,12 +3,14 @@
 //
 // The rule is C++'s, unchanged: after each frame, a cube whose looked-up rays found fewer than min_hit_rate
 // hits rests the next frame, and a resting cube works again when its probes find that many
-// (next_resting_state). The GPU counts what the rule needs (hits and misses of the lookups it made, and the
+// (next_resting_state; probes pooled over frames, thinned while they find it not paying, and longer rests
+// after wrong wakes). The GPU counts what the rule needs (hits and misses of the lookups it made, and the
 // rays a resting cube let through: GpuFrameStatistics), the host writes each cube's resting word before the
-// frame (gpu_frame_start_words(layout, mark_coverage, resting.resting())), and the shaders ask
+// frame (gpu_frame_start_words(layout, mark_coverage, resting.resting_words()): 0, or the probe bits of a
+// resting cube), and the shaders ask
 // raycache_cube_rests(cube, direction) before a lookup (raycache/cube.glsl). A frame, in the order of
 // raycache/gpu_frame.hpp:
-//   1. start the frame buffer with gpu_frame_start_words(frame_layout, mark_coverage, resting.resting());
+//   1. start the frame buffer with gpu_frame_start_words(frame_layout, mark_coverage, resting.resting_words());
 //   2. the frame; read_gpu_statistics() after it;
 //   3. resting.after_frame(statistics); then, with adaptive face sizes, next_gpu_face_sizes (a cube that
 //      rested keeps its size, as a CPU cube does) and, when cubes moved, resting.resized(old, new layout).
@@ -84,7 +86,14 @@ public:
         holds_texels_[index] = holds_texels;
     }
 
-    // Per cube, by index: whether it rests the next frame (for gpu_frame_start_words).
+    // Per cube, by index: its resting word for the next frame (gpu_frame_start_words): 0 when it works, else
+    // its probe bits (it probes one direction in 2^bits, raycache_is_probe_direction_of).
+    std::vector<std::uint32_t> resting_words() const {
+        std::vector<std::uint32_t> r(states_.size());
+        for (std::size_t k = 0; k < states_.size(); ++k) r[k] = states_[k].resting ? states_[k].probe_bits : 0u;
+        return r;
+    }
+    // Per cube, by index: whether it rests the next frame.
     std::vector<bool> resting() const {
         std::vector<bool> r(states_.size());
         for (std::size_t k = 0; k < states_.size(); ++k) r[k] = states_[k].resting;

@@ -6,14 +6,26 @@
 // half of its rays makes a frame slower than no cube would. Along a camera path a mirror can hover there:
 // its tiles' origins drift out of the origin test every few frames, or its reflections are mostly colour
 // edges. Such a cube rests. Its rays are traced as if it were not there (counted as MissReason::resting
-// misses, no lookup, no store), except its probe directions (shared::raycache_is_probe_direction: a
-// sixteenth of direction space, in small boxes scattered over it, tested without a face choice), which
-// go on looking up and storing, so that the hit rate the whole cube would have stays measured. Each frame
-// decides the next: a working cube rests when the rays it looked up found fewer than min_hit_rate hits;
-// a resting cube works again when its probes find at least that many, or after resting_max_unjudged_frames
-// frames with too few probes to tell. A frame the cube started empty, or refilled in just after resting,
-// decides nothing. Decisions follow the frame's counters alone, so frames stay the same with 1 or N
-// threads.
+// misses, no lookup, no store), except its probe directions (shared::raycache_is_probe_direction_of: a
+// sixteenth of direction space at first, in small boxes scattered over it, tested without a face choice),
+// which go on looking up and storing, so that the hit rate the whole cube would have stays measured. Each
+// frame decides the next: a working cube rests when the rays it looked up found fewer than min_hit_rate
+// hits; a resting cube works again when its probes find at least that many, or after
+// resting_max_unjudged_frames frames with too few probes to tell. A frame the cube started empty, or
+// refilled in just after resting, decides nothing. Decisions follow the frame's counters alone, so frames
+// stay the same with 1 or N threads.
+//
+// What resting itself costs is its probes, and its wrong wakes:
+// - Probes are counted over frames until they are enough to judge (resting_min_judged_lookups), so a
+//   cube with few rays is judged every few frames rather than woken unmeasured. A cube whose probes find
+//   again that it does not pay, from one frame's probes with twice the lookups needed, probes half as
+//   many directions the next frame, down to one in 2^RAYCACHE_MAX_PROBE_BITS; a frame too short of
+//   probes to judge doubles them again. (On the Embree tracer's orbits a resting CDCT's probes cost about
+//   3% of a frame at one direction in 16.)
+// - Probes see what a cube resting in the same place answers, and a cube that wakes refills and is then
+//   judged on its own rays, which on a moving camera can answer fewer than its probes did. A wake whose
+//   first judged frame sends the cube back to rest doubles the frames it then rests before its probes
+//   may wake it (1, 2, 4, then 8 frames); a judged frame that keeps it working resets that.
 
 #include "raycache/shared/coverage.h"
 #include "raycache/statistics.hpp"
@@ -26,8 +38,11 @@
 
 namespace raycache {
 
-// Whether a ray in unit `direction` looks up a resting cube (shared::raycache_is_probe_direction).
+// Whether a ray in unit `direction` looks up a resting cube that has just started resting
+// (shared::raycache_is_probe_direction), or one in state `state` (its RestingState::probe_bits).
 inline bool is_probe_direction(const glm::vec3& direction) noexcept { return shared::raycache_is_probe_direction(direction); }
+struct RestingState;
+bool is_probe_direction(const glm::vec3& direction, const RestingState& state) noexcept;
 
 // The threshold a cache uses unless told otherwise, CCT 0.5 and CDCT 0.6: about where a cube starts to pay
 // on the Embree example tracer, whose traced leaving ray costs about twice a CCT lookup and store (README
@@ -66,12 +81,50 @@ inline float resting_threshold(std::uint64_t work, std::uint64_t reports, float 
 // (its probes may miss the few directions its rays now take; it must not rest for ever unmeasured).
 inline constexpr int resting_max_unjudged_frames = 8;
 
+// Wrong wakes in a row that lengthen a cube's rest: after k of them it rests at least 2^k frames.
+inline constexpr int resting_max_backoff = 3;
+
 // One cube's resting state from frame to frame.
 struct RestingState {
     bool resting = false;
     int unjudged = 0;       // frames in a row it rested with too few probes to judge it
     bool refilling = false; // it has just stopped resting: its next frame refills what it let through
+    // Resting: it probes one direction in 2^probe_bits (shared::raycache_is_probe_direction_of), and its
+    // probes' counts of the frames not judged yet.
+    unsigned probe_bits = RAYCACHE_PROBE_BITS;
+    std::uint64_t probe_hits = 0, probe_lookups = 0;
+    // Working: its next judged frame is the first since it woke. Resting: frames it rests whatever its
+    // probes find. Both: wrong wakes in a row (0..resting_max_backoff).
+    bool woke = false;
+    int rest_left = 0;
+    int backoff = 0;
 };
+
+namespace detail {
+
+inline bool below(std::uint64_t hits, std::uint64_t looked_up, float min_hit_rate) noexcept {
+    // Compared as floats: exactly 0.4 is not below 0.4f.
+    return static_cast<float>(static_cast<double>(hits) / static_cast<double>(looked_up)) < min_hit_rate;
+}
+
+// The state of a cube that starts resting after a judged working frame, `backoff` wrong wakes in a row.
+inline RestingState starts_resting(int backoff) noexcept {
+    RestingState next;
+    next.resting = true;
+    next.backoff = backoff;
+    next.rest_left = (1 << backoff) - 1; // this frame's rest is the first
+    return next;
+}
+
+// The state of a cube that works again after resting in state `now`: it refills first.
+inline RestingState wakes(const RestingState& now) noexcept {
+    RestingState next;
+    next.refilling = true;
+    next.backoff = now.backoff;
+    return next;
+}
+
+} // namespace detail
 
 // The state for the next frame of a cube in state `now` after a frame with counters `frame`, which the
 // cube started empty when `started_empty`. A frame it started empty, or refilled in, says nothing of what
@@ -81,16 +134,37 @@ inline RestingState next_resting_state(RestingState now, const CubeStatistics& f
                                        bool started_empty = false) noexcept {
     if (!(min_hit_rate > 0.0f)) return {};
     if (started_empty || now.refilling) {
+        now.woke = now.woke || now.refilling; // its next judged frame tells whether waking was right
         now.refilling = false;
         return now;
     }
-    RestingState next;
-    if (const std::optional<double> rate = looked_up_hit_rate(frame))
-        next.resting = static_cast<float>(*rate) < min_hit_rate; // compared as floats: exactly 0.4 is not below 0.4f
-    else if (now.resting && now.unjudged + 1 < resting_max_unjudged_frames)
-        next = {true, now.unjudged + 1};
-    next.refilling = now.resting && !next.resting;
+    if (!now.resting) {
+        if (frame.looked_up() < resting_min_judged_lookups) return now;
+        if (!detail::below(frame.hits, frame.looked_up(), min_hit_rate)) return {}; // it pays: no wrong wake
+        return detail::starts_resting(now.woke ? std::min(now.backoff + 1, resting_max_backoff) : 0);
+    }
+    RestingState next = now;
+    next.rest_left = std::max(now.rest_left - 1, 0);
+    next.probe_hits += frame.hits;
+    next.probe_lookups += frame.looked_up();
+    if (next.probe_lookups < resting_min_judged_lookups) {
+        if (now.unjudged + 1 >= resting_max_unjudged_frames) return detail::wakes(now);
+        next.unjudged = now.unjudged + 1;
+        next.probe_bits = std::max(now.probe_bits - 1u, static_cast<unsigned>(RAYCACHE_PROBE_BITS)); // more probes
+        return next;
+    }
+    const bool pays = !detail::below(next.probe_hits, next.probe_lookups, min_hit_rate);
+    if (pays && now.rest_left == 0) return detail::wakes(now);
+    // Judged: it rests on, its probes counted afresh; fewer of them when one frame's were plenty to say so.
+    next.unjudged = 0;
+    next.probe_hits = next.probe_lookups = 0;
+    if (!pays && frame.looked_up() >= 2 * resting_min_judged_lookups)
+        next.probe_bits = std::min(now.probe_bits + 1u, static_cast<unsigned>(RAYCACHE_MAX_PROBE_BITS));
     return next;
+}
+
+inline bool is_probe_direction(const glm::vec3& direction, const RestingState& state) noexcept {
+    return shared::raycache_is_probe_direction_of(direction, state.probe_bits);
 }
 
 } // namespace raycache

@@ -74,7 +74,7 @@ struct Frame {
         buffer.fill(0xDEADBEEFu); // list entries are never read before they are written
         start();
     }
-    void start(bool mark_coverage = true, const std::vector<bool>& resting = {}) {
+    void start(bool mark_coverage = true, const std::vector<std::uint32_t>& resting = {}) {
         buffer.upload(raycache::gpu_frame_start_words(layout, mark_coverage, resting).data(), layout.start_bytes);
     }
     raycache::GpuFrameStatistics statistics() const { return raycache::read_gpu_statistics(buffer.as<std::uint32_t>(), layout); }

@@ -42,20 +42,30 @@ RAYCACHE_FN uint raycache_coverage_cell_of_texel(raycache_texel_address t, int f
     return raycache_texel_linear_index(c, RAYCACHE_COVERAGE_CELLS_PER_EDGE);
 }
 
-/* A resting cube (raycache/resting.hpp) looks up one direction in 2^RAYCACHE_PROBE_BITS. */
+/* A resting cube (raycache/resting.hpp) looks up one direction in 2^bits: RAYCACHE_PROBE_BITS when it
+ * starts resting, and up to RAYCACHE_MAX_PROBE_BITS as its probes go on finding that it does not pay
+ * (a cube that keeps resting pays for ever fewer probes). */
 #ifndef RAYCACHE_PROBE_BITS
 #define RAYCACHE_PROBE_BITS 4u
 #endif
-/* Whether `direction` is a probe direction of a resting cube. Direction space is cut into boxes by the
+#define RAYCACHE_MAX_PROBE_BITS 8u
+/* Whether `direction` is a probe direction of a resting cube probing one direction in 2^bits (bits is
+ * clamped to RAYCACHE_PROBE_BITS..RAYCACHE_MAX_PROBE_BITS). Direction space is cut into boxes by the
  * sign, exponent and first three mantissa bits of each component (the top 12 bits of its float); a box
- * probes when the top RAYCACHE_PROBE_BITS bits of a multiplicative hash of its three keys are zero. The
- * same boxes every frame, without a face choice (a resting cube's rays pay for this test alone). A
- * direction's length matters (scale it and it may fall in another box): pass the rays' unit directions. */
-RAYCACHE_FN bool raycache_is_probe_direction(vec3 direction) {
+ * probes when the top `bits` bits of a multiplicative hash of its three keys are zero, so the probes at
+ * bits + 1 are a half of those at bits. The same boxes every frame, without a face choice (a resting
+ * cube's rays pay for this test alone). A direction's length matters (scale it and it may fall in
+ * another box): pass the rays' unit directions. */
+RAYCACHE_FN bool raycache_is_probe_direction_of(vec3 direction, uint bits) {
     uint key = (floatBitsToUint(direction.x) >> 20u) * 2654435761u;
     key = (key ^ (floatBitsToUint(direction.y) >> 20u)) * 2654435761u;
     key = (key ^ (floatBitsToUint(direction.z) >> 20u)) * 2654435761u;
-    return (key >> (32u - RAYCACHE_PROBE_BITS)) == 0u;
+    uint b = min(max(bits, RAYCACHE_PROBE_BITS), RAYCACHE_MAX_PROBE_BITS);
+    return (key >> (32u - b)) == 0u;
+}
+/* The probes of a cube that has just started resting: one direction in 2^RAYCACHE_PROBE_BITS. */
+RAYCACHE_FN bool raycache_is_probe_direction(vec3 direction) {
+    return raycache_is_probe_direction_of(direction, RAYCACHE_PROBE_BITS);
 }
 
 #ifdef __cplusplus

@@ -29,9 +29,10 @@
  *
  * Resting cubes (raycache/resting.hpp, as the Embree adapter's): a cube whose lookups answered fewer than a
  * threshold of its rays in a frame rests the next. The host decides between frames from the counters
- * (raycache/gpu_resting.hpp) and writes the cube's resting word before the frame; a shader asks
- * raycache_cube_rests(cube, direction) before the lookup: true (the cube rests and the direction is not
- * one of its probes, raycache_is_probe_direction) means trace the ray without lookup or store.
+ * (raycache/gpu_resting.hpp) and writes the cube's resting word before the frame (0: it works; else the
+ * probe bits of its RestingState); a shader asks raycache_cube_rests(cube, direction) before the lookup:
+ * true (the cube rests and the direction is not one of its probes, raycache_is_probe_direction_of) means
+ * trace the ray without lookup or store.
  *
  * Confidence test (optional: shaders that define RAYCACHE_CONFIDENCE; the rule is raycache/shared/edge_rule.h,
  * as in C++'s raycache::mark_doubtful_edges). Each technique has a doubtful-bit buffer (binding
@@ -128,7 +129,9 @@ namespace shared {
 #define RAYCACHE_FRAME_STORES 2u
 #define RAYCACHE_FRAME_REFUSED 3u
 #define RAYCACHE_FRAME_RESTED 4u   /* rays the resting cube let through untouched (raycache_cube_rests) */
-#define RAYCACHE_FRAME_RESTING 5u  /* written by the host: non-zero when the cube rests this frame */
+#define RAYCACHE_FRAME_RESTING 5u  /* written by the host: 0 when the cube works this frame, else it rests
+                                      and probes one direction in 2^word (clamped to RAYCACHE_PROBE_BITS..
+                                      RAYCACHE_MAX_PROBE_BITS: raycache_is_probe_direction_of) */
 #define RAYCACHE_FRAME_COVERAGE 6u /* RAYCACHE_COVERAGE_WORDS words: the direction cells its lookups took */
 #define RAYCACHE_FRAME_CUBE_WORDS (RAYCACHE_FRAME_COVERAGE + RAYCACHE_COVERAGE_WORDS)
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */

@@ -598,7 +598,7 @@ private:
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
         // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
         // while it rests, so the other rays need no face choice.
-        if (answerable && e.rest.resting && !is_probe_direction(direction)) {
+        if (answerable && e.rest.resting && !is_probe_direction(direction, e.rest)) {
             with_cube(e, [](auto& cube) { cube.record_miss(MissReason::resting); });
             return trace_alone(trace);
         }
