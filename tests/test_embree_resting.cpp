@@ -195,6 +195,34 @@ TEST_CASE("a warm cube that stores nothing keeps the work its texels' rays repor
     CHECK(s.resting_cubes == 0);
 }
 
+TEST_CASE("a warm cube keeps its threshold from work through any number of frames that report too little to judge by") {
+    // As above, but eight frames between fill and test answer every ray and store nothing. Halving the
+    // estimate every frame would leave 1536 / 2^8 = 6 reports (< 32) and fall back to the fixed 0.5, which
+    // the test frame's third of hits is below (it would rest); frames with fewer than 32 reports leave it
+    // whole, so the threshold stays 1 / 4 and the cube keeps working.
+    MirrorAndBall world;
+    SceneCacheSettings settings;
+    settings.edge_threshold = -1.0f;
+    SceneCache caches(Technique::cct, settings);
+    caches.attach(world.scene, {world.mirror}, 16);
+    const glm::vec3 top(0.0f, 1.0f, 0.0f), side(1.0f, 0.0f, 0.0f);
+    auto frame_from = [&](auto origin_of) {
+        for (const glm::vec3& d : cell_directions())
+            caches.leaving_ray({world.mirror}, origin_of(d), d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, 4}; });
+        return caches.begin_frame();
+    };
+    CHECK(frame_from([&](const glm::vec3&) { return top; }).work_reports == 1536u);
+    for (int f = 0; f < 8; ++f) {
+        const SceneCacheStatistics s = frame_from([&](const glm::vec3&) { return top; });
+        CHECK(s.hits == 1536);
+        CHECK(s.work_reports == 0);
+    }
+    const SceneCacheStatistics s = frame_from([&](const glm::vec3& d) { return raycache::texel_of(d, 16)->face <= 1 ? top : side; });
+    CHECK(s.hits == 512);
+    CHECK(s.work_reports == 0);
+    CHECK(s.resting_cubes == 0);
+}
+
 TEST_CASE("with min_hit_rate 0 a cube never rests, whatever its hit rate") {
     WarmMirror w(0.0f);
     for (int f = 0; f < 3; ++f) {

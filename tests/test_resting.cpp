@@ -128,6 +128,22 @@ TEST_CASE("a resting cube too few of whose rays probe works again after resting_
     CHECK(raycache::next_resting_state({false, 0, false}, frame(3, 0), 0.5f).unjudged == 0);
 }
 
+TEST_CASE("the work estimate halves at a frame with 32 reports or more, and only adds a frame with fewer") {
+    using raycache::WorkEstimate;
+    WorkEstimate e = raycache::next_work_estimate(WorkEstimate{}, 200, 100);
+    CHECK(e.work == 200u);
+    CHECK(e.reports == 100u);
+    for (int f = 0; f < 10; ++f) e = raycache::next_work_estimate(e, 0, 0); // a warm or resting cube storing nothing
+    CHECK(e.work == 200u);
+    CHECK(e.reports == 100u);
+    e = raycache::next_work_estimate(e, 62, 31); // a few probes' stores: added, nothing halved
+    CHECK(e.work == 262u);
+    CHECK(e.reports == 131u);
+    e = raycache::next_work_estimate(e, 400, 32); // a frame that says enough: what came before counts half
+    CHECK(e.work == 131u + 400u);
+    CHECK(e.reports == 65u + 32u);
+}
+
 TEST_CASE("a resting cube's probes are counted over frames until they are enough to judge it") {
     using raycache::RestingState;
     // 20 probes a frame (fewer than 32): the first frame decides nothing and keeps its counts.

@@ -77,6 +77,22 @@ inline float resting_threshold(std::uint64_t work, std::uint64_t reports, float 
     return static_cast<float>(std::min<double>(std::max<double>(threshold, resting_threshold_floor), resting_threshold_ceiling));
 }
 
+// What the rays that filled a cube's texels reported they cost (TracedRay::work), summed over recent
+// frames for resting_threshold: `work` over `reports` rays.
+struct WorkEstimate {
+    std::uint64_t work = 0, reports = 0;
+};
+
+// The estimate after a frame whose rays that filled texels reported `frame_work` over `frame_reports`. A
+// frame with at least resting_min_judged_lookups reports halves what came before, so the estimate follows
+// the recent frames; a frame with fewer (a resting cube's probes, a warm cube that stores little) adds to
+// it without halving, so a cube keeps the threshold it rests by instead of falling back to the fixed one
+// once the frames' reports have halved away. Whole numbers: the same with 1 or N threads.
+inline WorkEstimate next_work_estimate(WorkEstimate now, std::uint64_t frame_work, std::uint64_t frame_reports) noexcept {
+    if (frame_reports >= resting_min_judged_lookups) now.work /= 2, now.reports /= 2;
+    return {now.work + frame_work, now.reports + frame_reports};
+}
+
 // A resting cube whose probes are too few to judge it this many frames in a row works again for a frame
 // (its probes may miss the few directions its rays now take; it must not rest for ever unmeasured).
 inline constexpr int resting_max_unjudged_frames = 8;

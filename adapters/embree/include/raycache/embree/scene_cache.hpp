@@ -410,10 +410,10 @@ class SceneCache {
         // raycache/resting.hpp: whether the cube rests this frame, and whether it started the frame empty.
         RestingState rest{};
         bool cold = true;
-        // The work of the rays that filled its texels (TracedRay::work) and how many reported it, over the
-        // frames so far, each frame's weighed half the next's: a warm cube on a still camera stores little,
-        // yet its hits save what its texels' rays cost. Whole numbers: the same on any thread count.
-        std::uint64_t filled_work = 0, work_reports = 0;
+        // The work of the rays that filled its texels (TracedRay::work) and how many reported it, over recent
+        // frames (raycache::next_work_estimate): a warm cube on a still camera, or a resting one, stores
+        // little, yet its hits save what its texels' rays cost.
+        WorkEstimate work{};
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -778,8 +778,7 @@ public:
         for (const CubeStatistics& frame : frames) add(total, frame);
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
-            e.filled_work = e.filled_work / 2 + frames[i].filled_work;
-            e.work_reports = e.work_reports / 2 + frames[i].work_reports;
+            e.work = next_work_estimate(e.work, frames[i].filled_work, frames[i].work_reports);
             e.rest = next_resting_state(e.rest, frames[i], resting_threshold_of(e), e.cold);
         }
         // A cube that met rays from outside what its last invalidation checked starts afresh, unlimited.
@@ -855,7 +854,7 @@ public:
 
     // Empties every cube (the objects keep their cubes) and resets the counters.
     void clear() {
-        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{}, e.filled_work = e.work_reports = 0;
+        for (Entry& e : entries_) empty_cube(e), e.carried = CubeStatistics{}, e.rest = RestingState{}, e.work = WorkEstimate{};
         texels_read_.reset();
         max_texels_read_.store(0, std::memory_order_relaxed);
     }
@@ -1128,7 +1127,7 @@ private:
     // rays reported over the frames so far.
     float resting_threshold_of(const Entry& e) const noexcept {
         if (!(min_hit_rate_ > 0.0f)) return 0.0f; // never resting
-        return threshold_from_work_ ? resting_threshold(e.filled_work, e.work_reports, lookup_work_, min_hit_rate_) : min_hit_rate_;
+        return threshold_from_work_ ? resting_threshold(e.work.work, e.work.reports, lookup_work_, min_hit_rate_) : min_hit_rate_;
     }
 
     // Gives each entry of `resizes` (plan_resizes()) its new cube: a smaller one filled from the old (resampling,
