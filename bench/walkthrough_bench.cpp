@@ -622,7 +622,7 @@ int main(int argc, char** argv) {
            << "the next), *doubtful* (at a colour edge: the confidence test traces it), *origin* (CCT: the ray left too far "
            << "from its tile's origins; the tile is dropped and refills), *search* (CDCT: no consistent crossing within "
            << "the reads), *outside* (not answerable), *resting* (the cube rested: it had answered too few of its rays, "
-           << "so its rays were traced, but for a sixteenth of the directions, which kept measuring it). *Free lookups* is the speed-up the hit rate alone would give if "
+           << "so its rays were traced, but for a sixteenth of the directions or fewer, which kept measuring it). *Free lookups* is the speed-up the hit rate alone would give if "
            << "lookups and stores cost nothing and a missed ray cost what an average leaving ray costs (the ceiling's ms "
            << "plus the missed share of what the ceiling saves); *ms beyond* is the mode's mean ms minus that time: what "
            << "looking up, storing and ending frames cost, and what the missed rays cost above the average. A rough "

@@ -38,11 +38,9 @@
 
 namespace raycache {
 
-// Whether a ray in unit `direction` looks up a resting cube that has just started resting
-// (shared::raycache_is_probe_direction), or one in state `state` (its RestingState::probe_bits).
+// Whether a ray in unit `direction` looks up a cube that has just started resting
+// (shared::raycache_is_probe_direction); is_probe_direction(direction, state) below for any resting cube.
 inline bool is_probe_direction(const glm::vec3& direction) noexcept { return shared::raycache_is_probe_direction(direction); }
-struct RestingState;
-bool is_probe_direction(const glm::vec3& direction, const RestingState& state) noexcept;
 
 // The threshold a cache uses unless told otherwise, CCT 0.5 and CDCT 0.6: about where a cube starts to pay
 // on the Embree example tracer, whose traced leaving ray costs about twice a CCT lookup and store (README
@@ -116,6 +114,12 @@ struct RestingState {
     int backoff = 0;
 };
 
+// Whether a ray in unit `direction` looks up a resting cube in state `state` (one direction in
+// 2^state.probe_bits).
+inline bool is_probe_direction(const glm::vec3& direction, const RestingState& state) noexcept {
+    return shared::raycache_is_probe_direction_of(direction, state.probe_bits);
+}
+
 namespace detail {
 
 inline bool below(std::uint64_t hits, std::uint64_t looked_up, float min_hit_rate) noexcept {
@@ -177,10 +181,6 @@ inline RestingState next_resting_state(RestingState now, const CubeStatistics& f
     if (!pays && frame.looked_up() >= 2 * resting_min_judged_lookups)
         next.probe_bits = std::min(now.probe_bits + 1u, static_cast<unsigned>(RAYCACHE_MAX_PROBE_BITS));
     return next;
-}
-
-inline bool is_probe_direction(const glm::vec3& direction, const RestingState& state) noexcept {
-    return shared::raycache_is_probe_direction_of(direction, state.probe_bits);
 }
 
 } // namespace raycache

@@ -172,8 +172,9 @@ CommandLine::CommandLine(const std::string& program)
              "is the cache's own work (Embree tracer)");
     add_option("--min-hit-rate", "F",
                "a cube whose rays found fewer hits than this share in a frame\n"
-               "rests: its rays are traced, but for a sixteenth of the directions,\n"
-               "which keep measuring it; 0: cubes never rest [Embree tracer: each\n"
+               "rests: its rays are traced, but for a sixteenth of the directions\n"
+               "(down to 1 in 256 while they find it still does not pay), which\n"
+               "keep measuring it; 0: cubes never rest [Embree tracer: each\n"
                "cube's break-even, --lookup-work / the rays its traced rays took;\n"
                "Vulkan tracer: CCT 0.5, CDCT 0.6]",
                [&o](const std::string& text) {

@@ -162,7 +162,8 @@ struct SceneCacheSettings {
     bool trace_hits = false;
     // Resting cubes (raycache/resting.hpp): a cube whose looked-up rays found fewer than this share of hits
     // in a frame rests the next frame (its rays are traced without lookup or store, but for a sixteenth of
-    // the directions, which keep measuring it) and works again once those find this share. Unset: the
+    // the directions, fewer while they find it still not paying, which keep measuring it) and works again
+    // once those find this share. Unset: the
     // technique's default_min_hit_rate(), or, when the trace callbacks report what their rays cost
     // (TracedRay::work), each cube's own break-even from it (lookup_work). 0: cubes never rest.
     std::optional<float> min_hit_rate;
