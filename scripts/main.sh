@@ -21,7 +21,7 @@ common=(--scene behind-32 --size 1024x1024 --path orbit --step 1 --frames 16 --c
 echo
 echo "===== CCT: colour caching; adaptive cube sizes, texels at colour edges traced (frame 0 is cold);"
 echo "      a cube whose hits saved less than its lookups cost (about 50% hits here) rests the next frame"
-echo "      (its rays traced, a sixteenth probing) ====="
+echo "      (its rays traced, a sixteenth probing, fewer while it keeps not paying) ====="
 "$tracer" "${common[@]}" --cache cct --out out/main/cct "$@"
 echo
 echo "===== CDCT: colour + depth, secant search (a few texel reads), doubtful answers traced; rests below about 60% hits ====="

@@ -86,8 +86,8 @@ TEST_CASE("GpuResting: a cube rests after a frame that answered too few, works a
     resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 60, 40, 40).read());
     CHECK(resting.resting() == std::vector<bool>{false, false});
     // Frame 5: 10 of 100 again: rests, probing one direction in 16 (word 4); its wake was wrong, so it rests
-    // at least 2 frames. Then frames without a probe (unjudged) keep it resting, each doubling its probes
-    // back (no fewer than 1 in 16), and the 8th makes it work.
+    // at least 2 frames. Then frames without a probe (unjudged) keep it resting, at word 4 (probes already
+    // at their most), and the 8th makes it work.
     resting.after_frame(FrameWords(2).cube(0, 10, 90, 90).cube(1, 60, 40, 40).read());
     CHECK(resting.resting_words() == std::vector<std::uint32_t>{4u, 0u});
     CHECK(resting.state(0).backoff == 1);
@@ -95,8 +95,9 @@ TEST_CASE("GpuResting: a cube rests after a frame that answered too few, works a
         CAPTURE(f);
         resting.after_frame(FrameWords(2).cube(0, 0, 0, 0, 500).cube(1, 60, 40, 40).read());
         CHECK(resting.resting()[0] == (f < resting_max_unjudged_frames));
+        if (f < resting_max_unjudged_frames) CHECK(resting.resting_words()[0] == 4u);
     }
-    // Frame 14: the refill. Frame 15: 5 of 100 (a wrong wake again: 4 frames' rest). Frames 16 to 18: its
+    // Frame 14: the refill. Frame 15: 5 of 100 (a wrong wake again: backoff 2). Frames 16 to 18: its
     // 64 probes find 8 hits each: it rests on, probing half as many directions each frame (words 5, 6, 7).
     resting.after_frame(FrameWords(2).cube(0, 0, 100, 100).cube(1, 60, 40, 40).read());
     resting.after_frame(FrameWords(2).cube(0, 5, 95, 95).cube(1, 60, 40, 40).read());

@@ -2,6 +2,7 @@
 // decide whether the cube rests in the next.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -252,10 +253,29 @@ TEST_CASE("a wake its first judged frame proves wrong doubles the next rest (2, 
     state = raycache::next_resting_state(state, poor, 0.5f);
     CHECK(state.backoff == 0);
     CHECK(rest_length() == 1);
-    // Probes that find it still not paying keep it resting past its minimum rest.
-    state = raycache::next_resting_state(RestingState{}, poor, 0.5f);
-    for (int f = 0; f < 5; ++f) state = raycache::next_resting_state(state, frame(1000, 10, 920), 0.5f);
-    CHECK(state.resting);
+}
+
+TEST_CASE("a resting cube whose frames start empty counts them as unjudged and works again after 8 of them") {
+    using raycache::RestingState;
+    // Emptied while resting (its probes alone could refill it): those frames decide nothing, but they count
+    // towards resting_max_unjudged_frames, thicken its probes back (8 -> 4 bits) and run its minimum rest
+    // down, so it cannot rest unmeasured for ever.
+    RestingState state{true, 0, false};
+    state.probe_bits = 8u;
+    state.rest_left = 3;
+    const CubeStatistics probes_hit = frame(1000, 60, 920); // 80 probes, 60 hits: ignored, the cube was empty
+    for (int f = 1; f < raycache::resting_max_unjudged_frames; ++f) {
+        CAPTURE(f);
+        state = raycache::next_resting_state(state, probes_hit, 0.5f, true);
+        CHECK(state.resting);
+        CHECK(state.unjudged == f);
+        CHECK(state.probe_bits == static_cast<unsigned>(std::max(8 - f, 4)));
+        CHECK(state.rest_left == std::max(3 - f, 0));
+        CHECK(state.probe_lookups == 0u);
+    }
+    state = raycache::next_resting_state(state, probes_hit, 0.5f, true);
+    CHECK_FALSE(state.resting);
+    CHECK(state.refilling);
 }
 
 TEST_CASE("a frame the cube started empty, or refilled in after resting, decides nothing") {
@@ -265,8 +285,8 @@ TEST_CASE("a frame the cube started empty, or refilled in after resting, decides
     CHECK_FALSE(raycache::next_resting_state(RestingState{}, missed_all, 0.5f, true).resting);
     const RestingState resting{true, 3, false};
     const RestingState kept = raycache::next_resting_state(resting, frame(1000, 10, 900), 0.5f, true);
-    CHECK(kept.resting);
-    CHECK(kept.unjudged == 3);
+    CHECK(kept.resting); // a resting cube keeps resting, the frame counted as one it could not judge
+    CHECK(kept.unjudged == 4);
     // A resting cube whose probes hit works again, and refills first: that frame decides nothing either.
     RestingState state = raycache::next_resting_state(resting, frame(1000, 90, 900), 0.5f); // 90 % of the probes
     CHECK_FALSE(state.resting);

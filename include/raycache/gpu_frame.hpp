@@ -6,7 +6,7 @@
 //
 // A frame, in Vulkan terms (README "In your own Vulkan shaders" walks through it):
 //   1. before it: copy gpu_frame_start_words(frame, mark_coverage, resting_words) into the frame buffer
-//      (vkCmdUpdateBuffer or a copy; `resting`: raycache/gpu_resting.hpp, or none), then barrier (transfer
+//      (vkCmdUpdateBuffer or a copy; `resting_words`: raycache/gpu_resting.hpp, or none), then barrier (transfer
 //      write -> shader read and write; it also covers the first frame's fill);
 //   2. the frame's shaders look up and store (raycache/cct.glsl, cdct.glsl);
 //   3. barrier (shader write -> indirect read and shader read), then the end-of-frame pass
@@ -93,7 +93,8 @@ inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint
 // (raycache/gpu_adaptive.hpp); false for fixed face sizes, whose lookups then skip that work
 // (GpuFrameStatistics::coverage reads 0). resting: empty (no cube rests) or one resting word per cube, by
 // descriptor index (GpuResting::resting_words(), raycache/gpu_resting.hpp: 0 works, else the cube rests and
-// probes one direction in 2^word, clamped to 4..8, so 1 rests with a first rest's probes); throws
+// probes one direction in 2^word, clamped to RAYCACHE_PROBE_BITS..RAYCACHE_MAX_PROBE_BITS, 4..8 unless
+// defined otherwise, so 1 rests with a first rest's probes); throws
 // std::invalid_argument for another count.
 inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true,
                                                         const std::vector<std::uint32_t>& resting = {}) {

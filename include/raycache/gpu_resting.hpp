@@ -24,6 +24,7 @@
 
 #include "raycache/requires_cpp17.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -90,7 +91,7 @@ public:
     // its probe bits (it probes one direction in 2^bits, raycache_is_probe_direction_of).
     std::vector<std::uint32_t> resting_words() const {
         std::vector<std::uint32_t> r(states_.size());
-        for (std::size_t k = 0; k < states_.size(); ++k) r[k] = states_[k].resting ? states_[k].probe_bits : 0u;
+        for (std::size_t k = 0; k < states_.size(); ++k) r[k] = states_[k].resting ? std::max(states_[k].probe_bits, 1u) : 0u;
         return r;
     }
     // Per cube, by index: whether it rests the next frame.

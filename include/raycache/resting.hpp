@@ -47,7 +47,8 @@ inline bool is_probe_direction(const glm::vec3& direction) noexcept { return sha
 // "Results" has the sweep). A CDCT search costs more than a CCT lookup, so its cubes must answer more to pay.
 inline constexpr float default_min_hit_rate(bool cdct) noexcept { return cdct ? 0.6f : 0.5f; }
 
-// Fewer looked-up rays in a frame than this decide nothing (the cube keeps resting or working).
+// Fewer looked-up rays than this decide nothing: a working cube's frame with fewer keeps it working, and a
+// resting cube's probes are counted over frames until they reach it.
 inline constexpr std::uint64_t resting_min_judged_lookups = 32;
 
 // The hit rate of the rays a frame looked up in a cube (its resting misses left out); std::nullopt when
@@ -97,6 +98,10 @@ inline constexpr int resting_max_unjudged_frames = 8;
 
 // Wrong wakes in a row that lengthen a cube's rest: after k of them it rests at least 2^k frames.
 inline constexpr int resting_max_backoff = 3;
+// The forced wake after resting_max_unjudged_frames unjudged frames does not wait for a minimum rest, so
+// the longest minimum rest must not be longer.
+static_assert((1 << resting_max_backoff) <= resting_max_unjudged_frames,
+              "RayCache: a minimum rest longer than resting_max_unjudged_frames would be cut short");
 
 // One cube's resting state from frame to frame.
 struct RestingState {
@@ -144,15 +149,31 @@ inline RestingState wakes(const RestingState& now) noexcept {
     return next;
 }
 
+// A resting cube's frame that could not judge it (too few probes so far, or a frame it started empty):
+// `next` is its state with the frame's probes counted. After resting_max_unjudged_frames such frames in a
+// row it works again (it must not rest for ever unmeasured); else its probes double (down to 1 in 2^
+// RAYCACHE_PROBE_BITS) and its minimum rest runs on.
+inline RestingState rests_unjudged(const RestingState& now, RestingState next) noexcept {
+    if (now.unjudged + 1 >= resting_max_unjudged_frames) return wakes(now);
+    next.unjudged = now.unjudged + 1;
+    next.rest_left = std::max(now.rest_left - 1, 0);
+    next.probe_bits = now.probe_bits > RAYCACHE_PROBE_BITS ? now.probe_bits - 1u : RAYCACHE_PROBE_BITS;
+    next.refilling = false;
+    return next;
+}
+
 } // namespace detail
 
 // The state for the next frame of a cube in state `now` after a frame with counters `frame`, which the
 // cube started empty when `started_empty`. A frame it started empty, or refilled in, says nothing of what
 // it would answer once filled, so it keeps the state (else a cube that stops resting would rest again at
-// once). min_hit_rate <= 0 (or NaN): never resting.
+// once); for a resting cube it counts as an unjudged frame (a cube emptied while resting, whose probes
+// alone could refill it, works again after resting_max_unjudged_frames of them). min_hit_rate <= 0 (or
+// NaN): never resting.
 inline RestingState next_resting_state(RestingState now, const CubeStatistics& frame, float min_hit_rate,
                                        bool started_empty = false) noexcept {
     if (!(min_hit_rate > 0.0f)) return {};
+    if (started_empty && now.resting) return detail::rests_unjudged(now, now);
     if (started_empty || now.refilling) {
         now.woke = now.woke || now.refilling; // its next judged frame tells whether waking was right
         now.refilling = false;
@@ -167,12 +188,7 @@ inline RestingState next_resting_state(RestingState now, const CubeStatistics& f
     next.rest_left = std::max(now.rest_left - 1, 0);
     next.probe_hits += frame.hits;
     next.probe_lookups += frame.looked_up();
-    if (next.probe_lookups < resting_min_judged_lookups) {
-        if (now.unjudged + 1 >= resting_max_unjudged_frames) return detail::wakes(now);
-        next.unjudged = now.unjudged + 1;
-        next.probe_bits = std::max(now.probe_bits - 1u, static_cast<unsigned>(RAYCACHE_PROBE_BITS)); // more probes
-        return next;
-    }
+    if (next.probe_lookups < resting_min_judged_lookups) return detail::rests_unjudged(now, next);
     const bool pays = !detail::below(next.probe_hits, next.probe_lookups, min_hit_rate);
     if (pays && now.rest_left == 0) return detail::wakes(now);
     // Judged: it rests on, its probes counted afresh; fewer of them when one frame's were plenty to say so.

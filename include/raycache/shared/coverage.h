@@ -48,7 +48,9 @@ RAYCACHE_FN uint raycache_coverage_cell_of_texel(raycache_texel_address t, int f
 #ifndef RAYCACHE_PROBE_BITS
 #define RAYCACHE_PROBE_BITS 4u
 #endif
+#ifndef RAYCACHE_MAX_PROBE_BITS
 #define RAYCACHE_MAX_PROBE_BITS 8u
+#endif
 /* Whether `direction` is a probe direction of a resting cube probing one direction in 2^bits (bits is
  * clamped to RAYCACHE_PROBE_BITS..RAYCACHE_MAX_PROBE_BITS). Direction space is cut into boxes by the
  * sign, exponent and first three mantissa bits of each component (the top 12 bits of its float); a box
@@ -60,12 +62,12 @@ RAYCACHE_FN bool raycache_is_probe_direction_of(vec3 direction, uint bits) {
     uint key = (floatBitsToUint(direction.x) >> 20u) * 2654435761u;
     key = (key ^ (floatBitsToUint(direction.y) >> 20u)) * 2654435761u;
     key = (key ^ (floatBitsToUint(direction.z) >> 20u)) * 2654435761u;
-    uint b = min(max(bits, RAYCACHE_PROBE_BITS), RAYCACHE_MAX_PROBE_BITS);
+    uint b = min(max(bits, uint(RAYCACHE_PROBE_BITS)), uint(RAYCACHE_MAX_PROBE_BITS));
     return (key >> (32u - b)) == 0u;
 }
 /* The probes of a cube that has just started resting: one direction in 2^RAYCACHE_PROBE_BITS. */
 RAYCACHE_FN bool raycache_is_probe_direction(vec3 direction) {
-    return raycache_is_probe_direction_of(direction, RAYCACHE_PROBE_BITS);
+    return raycache_is_probe_direction_of(direction, uint(RAYCACHE_PROBE_BITS));
 }
 
 #ifdef __cplusplus
