@@ -82,6 +82,36 @@ struct WarmMirror {
     SceneCacheStatistics from(glm::vec3 origin) { return frame(caches, world.mirror, origin, traced); }
 };
 
+// A mirror's cube (16-texel faces, every texel answering) at the default thresholds, whose traced rays
+// each report 4 rays of work: its threshold from work is 1 / 4, where a frame without reports would fall
+// back to the fixed 0.5.
+struct MirrorReportingWork {
+    MirrorAndBall world;
+    SceneCache caches;
+    const glm::vec3 top{0.0f, 1.0f, 0.0f}, side{1.0f, 0.0f, 0.0f};
+    MirrorReportingWork() : caches(Technique::cct, settings()) { caches.attach(world.scene, {world.mirror}, 16); }
+    static SceneCacheSettings settings() {
+        SceneCacheSettings s;
+        s.edge_threshold = -1.0f;
+        return s;
+    }
+    // A frame of every direction, each leaving from origin_of(direction).
+    template <class OriginOf>
+    SceneCacheStatistics frame_from(OriginOf origin_of) {
+        for (const glm::vec3& d : cell_directions())
+            caches.leaving_ray({world.mirror}, origin_of(d), d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, 4}; });
+        return caches.begin_frame();
+    }
+    SceneCacheStatistics frame_from_top() {
+        return frame_from([&](const glm::vec3&) { return top; });
+    }
+    // Faces 0 and 1 from the top, where their texels were stored (a third of the rays hit); the others from
+    // the side, failing the origin test and storing nothing.
+    SceneCacheStatistics frame_a_third_from_top() {
+        return frame_from([&](const glm::vec3& d) { return raycache::texel_of(d, 16)->face <= 1 ? top : side; });
+    }
+};
+
 } // namespace
 
 TEST_CASE("a cube whose rays all missed rests: the next frame looks up its probe directions alone") {
@@ -175,20 +205,10 @@ TEST_CASE("a warm cube that stores nothing keeps the work its texels' rays repor
     // Frames 0 and 1 fill every texel from the top, each ray reporting 4 rays. Frame 2 stores nothing: a third
     // of its rays hit, the others leave from the side and fail the origin test. Its threshold is 1 / 4 from the
     // earlier frames' work (it keeps working), not the fixed 0.5 a frame without reports would fall back to.
-    MirrorAndBall world;
-    SceneCacheSettings settings;
-    settings.edge_threshold = -1.0f;
-    SceneCache caches(Technique::cct, settings);
-    caches.attach(world.scene, {world.mirror}, 16);
-    const glm::vec3 top(0.0f, 1.0f, 0.0f), side(1.0f, 0.0f, 0.0f);
-    auto frame_from = [&](auto origin_of) {
-        for (const glm::vec3& d : cell_directions())
-            caches.leaving_ray({world.mirror}, origin_of(d), d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, 4}; });
-        return caches.begin_frame();
-    };
-    frame_from([&](const glm::vec3&) { return top; });
-    CHECK(frame_from([&](const glm::vec3&) { return top; }).hits == 1536);
-    const SceneCacheStatistics s = frame_from([&](const glm::vec3& d) { return raycache::texel_of(d, 16)->face <= 1 ? top : side; });
+    MirrorReportingWork m;
+    m.frame_from_top();
+    CHECK(m.frame_from_top().hits == 1536);
+    const SceneCacheStatistics s = m.frame_a_third_from_top();
     CHECK(s.hits == 512);
     CHECK(s.misses_by[static_cast<std::size_t>(MissReason::origin)] == 1024);
     CHECK(s.work_reports == 0);
@@ -200,24 +220,14 @@ TEST_CASE("a warm cube keeps its threshold from work through any number of frame
     // estimate every frame would leave 1536 / 2^8 = 6 reports (< 32) and fall back to the fixed 0.5, which
     // the test frame's third of hits is below (it would rest); frames with fewer than 32 reports leave it
     // whole, so the threshold stays 1 / 4 and the cube keeps working.
-    MirrorAndBall world;
-    SceneCacheSettings settings;
-    settings.edge_threshold = -1.0f;
-    SceneCache caches(Technique::cct, settings);
-    caches.attach(world.scene, {world.mirror}, 16);
-    const glm::vec3 top(0.0f, 1.0f, 0.0f), side(1.0f, 0.0f, 0.0f);
-    auto frame_from = [&](auto origin_of) {
-        for (const glm::vec3& d : cell_directions())
-            caches.leaving_ray({world.mirror}, origin_of(d), d, [&] { return TracedRay{0.5f + 0.5f * d, 10.0f, 4}; });
-        return caches.begin_frame();
-    };
-    CHECK(frame_from([&](const glm::vec3&) { return top; }).work_reports == 1536u);
+    MirrorReportingWork m;
+    CHECK(m.frame_from_top().work_reports == 1536u);
     for (int f = 0; f < 8; ++f) {
-        const SceneCacheStatistics s = frame_from([&](const glm::vec3&) { return top; });
+        const SceneCacheStatistics s = m.frame_from_top();
         CHECK(s.hits == 1536);
         CHECK(s.work_reports == 0);
     }
-    const SceneCacheStatistics s = frame_from([&](const glm::vec3& d) { return raycache::texel_of(d, 16)->face <= 1 ? top : side; });
+    const SceneCacheStatistics s = m.frame_a_third_from_top();
     CHECK(s.hits == 512);
     CHECK(s.work_reports == 0);
     CHECK(s.resting_cubes == 0);

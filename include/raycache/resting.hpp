@@ -127,9 +127,8 @@ inline bool is_probe_direction(const glm::vec3& direction, const RestingState& s
 
 namespace detail {
 
-inline bool below(std::uint64_t hits, std::uint64_t looked_up, float min_hit_rate) noexcept {
-    // Compared as floats: exactly 0.4 is not below 0.4f.
-    return static_cast<float>(static_cast<double>(hits) / static_cast<double>(looked_up)) < min_hit_rate;
+inline bool below(double hit_rate, float min_hit_rate) noexcept {
+    return static_cast<float>(hit_rate) < min_hit_rate; // compared as floats: exactly 0.4 is not below 0.4f
 }
 
 // The state of a cube that starts resting after a judged working frame, `backoff` wrong wakes in a row.
@@ -180,8 +179,9 @@ inline RestingState next_resting_state(RestingState now, const CubeStatistics& f
         return now;
     }
     if (!now.resting) {
-        if (frame.looked_up() < resting_min_judged_lookups) return now;
-        if (!detail::below(frame.hits, frame.looked_up(), min_hit_rate)) return {}; // it pays: no wrong wake
+        const std::optional<double> rate = looked_up_hit_rate(frame);
+        if (!rate) return now;
+        if (!detail::below(*rate, min_hit_rate)) return {}; // it pays: no wrong wake
         return detail::starts_resting(now.woke ? std::min(now.backoff + 1, resting_max_backoff) : 0);
     }
     RestingState next = now;
@@ -189,7 +189,8 @@ inline RestingState next_resting_state(RestingState now, const CubeStatistics& f
     next.probe_hits += frame.hits;
     next.probe_lookups += frame.looked_up();
     if (next.probe_lookups < resting_min_judged_lookups) return detail::rests_unjudged(now, next);
-    const bool pays = !detail::below(next.probe_hits, next.probe_lookups, min_hit_rate);
+    const bool pays =
+        !detail::below(static_cast<double>(next.probe_hits) / static_cast<double>(next.probe_lookups), min_hit_rate);
     if (pays && now.rest_left == 0) return detail::wakes(now);
     // Judged: it rests on, its probes counted afresh; fewer of them when one frame's were plenty to say so.
     next.unjudged = 0;

@@ -163,9 +163,9 @@ struct SceneCacheSettings {
     // Resting cubes (raycache/resting.hpp): a cube whose looked-up rays found fewer than this share of hits
     // in a frame rests the next frame (its rays are traced without lookup or store, but for a sixteenth of
     // the directions, fewer while they find it still not paying, which keep measuring it) and works again
-    // once those find this share. Unset: the
-    // technique's default_min_hit_rate(), or, when the trace callbacks report what their rays cost
-    // (TracedRay::work), each cube's own break-even from it (lookup_work). 0: cubes never rest.
+    // once those find this share. Unset: the technique's default_min_hit_rate(), or, when the trace
+    // callbacks report what their rays cost (TracedRay::work), each cube's own break-even from it
+    // (lookup_work). 0: cubes never rest.
     std::optional<float> min_hit_rate;
     // What one lookup costs, with its share of stores and end-of-frame work, in the units the trace callbacks
     // report TracedRay::work in. While min_hit_rate is unset and the rays that filled a cube's texels reported
