@@ -129,7 +129,7 @@ TEST_CASE("a cache file is sparse: a 4096-texel cube holding one texel takes one
     CdctCube cube(4096);
     CHECK(cube.store(glm::vec3(0.3f, -1.0f, 0.2f), raycache::DepthSample{glm::vec3(0.5f), 2.0f}));
     const std::vector<std::uint8_t> bytes = encode_one(cube);
-    CHECK(bytes.size() < 16 * 16 * 8 + 16 * 64 + 300); // its words and its blocks' path records
+    CHECK(bytes.size() < 16 * 16 * 8 + 300); // its words (stored without a path record: no record block written)
     std::vector<raycache::LoadedCube<CdctTexel>> back = decode<CdctTexel>(bytes);
     REQUIRE(back.size() == 1u);
     CHECK(back[0].cube->face_size() == 4096);
@@ -208,10 +208,12 @@ TEST_CASE("a file of a newer or unknown format version is refused, saying which"
         for (int i = 0; i < 4; ++i) b[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
         return b;
     };
-    CHECK(decode<CdctTexel>(with_version(3)).size() == 1u);
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(4)); }), "format version 4 is newer than this RayCache reads (3)"));
-    // A format-3 file relabelled as format 2 or 1 does not parse as one (its cubes carry 8 bytes more, read
-    // as the tile count and a tile; format 1's tiles are also 4 bytes shorter).
+    CHECK(decode<CdctTexel>(with_version(4)).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(5)); }), "format version 5 is newer than this RayCache reads (4)"));
+    // A format-4 file relabelled as format 3, 2 or 1 does not parse as one (format 3's tiles always carry
+    // sixteen records, where this one's say none; formats 1 and 2 lack the cubes' 8 bytes of reach, so they
+    // read them as the tile count and a tile).
+    CHECK_FALSE(cache_file_error([&] { decode<CdctTexel>(with_version(3)); }).empty());
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(2)); }), "tiles"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(1)); }), "tiles"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(0)); }), "unknown format version 0"));
@@ -255,10 +257,12 @@ std::vector<std::uint8_t> with_cube_float(const std::vector<std::uint8_t>& bytes
     std::memcpy(&bits, &value, 4);
     return with_cube_bits(bytes, offset, bits);
 }
-// Payload offsets of a CUBE chunk (format 3): its first tile's first record block's flag, path flags and
-// boxes (after object, part, face size, placement, reach, tile count; the tile's index, origin flag and
-// box, nearest distance and doubtful marks).
-constexpr std::size_t first_block_flag = 116, first_block_path_flags = 120, first_block_boxes = 132;
+// Payload offsets of a CUBE chunk (format 4): its first tile's count of record blocks (after object,
+// part, face size, placement, reach, tile count; the tile's index, origin flag and box, nearest distance
+// and doubtful marks), then its first record block's flag, path flags and boxes, and the second's flag and
+// path flags (records are 64 bytes).
+constexpr std::size_t record_count = 116, first_block_flag = 120, first_block_path_flags = 124, first_block_boxes = 136;
+constexpr std::size_t second_block_flag = first_block_flag + 64, second_block_path_flags = first_block_path_flags + 64;
 } // namespace
 
 TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
@@ -385,16 +389,78 @@ TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded
     CHECK_FALSE(back.load(*back.texel_of(glm::vec3(0, 0, -1))).has_value());
 }
 
+// `bytes` (format 4, one cube of one tile written with no record block) as format 3 would have written
+// it: sixteen 4 x 4 record blocks, the first holding `record`, the others none.
+static std::vector<std::uint8_t> as_format3(const std::vector<std::uint8_t>& bytes, const raycache::PathRecord& record) {
+    auto u64_at = [&](std::size_t at) {
+        std::uint64_t v = 0;
+        for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
+        return v;
+    };
+    const std::size_t head = 16, cube = head + 4 + 8 + u64_at(head + 4) + 8, payload = cube + 12, size = u64_at(cube + 4);
+    REQUIRE(u64_at(payload + record_count) % (std::uint64_t{1} << 32) == 0u); // no record block
+    std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(payload + record_count));
+    auto put = [&](std::uint64_t v, int n) {
+        for (int i = 0; i < n; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    };
+    put(1, 4);
+    put(raycache::CctCube::path_flags_of(record), 4);
+    put(record.objects, 8);
+    for (const glm::vec3& corner : {record.vertex_lo, record.vertex_hi, record.escape_lo, record.escape_hi})
+        for (int k = 0; k < 3; ++k) put(glm::floatBitsToUint(corner[k]), 4);
+    out.insert(out.end(), 15 * 64, 0);
+    out.insert(out.end(), bytes.begin() + static_cast<std::ptrdiff_t>(payload + record_count + 4),
+               bytes.begin() + static_cast<std::ptrdiff_t>(payload + size));
+    const std::uint64_t new_size = size - 4 + 16 * 64;
+    for (int i = 0; i < 8; ++i) out[cube + 4 + i] = static_cast<std::uint8_t>(new_size >> (8 * i));
+    put(raycache::fnv1a64(out.data() + cube, 12 + new_size), 8);
+    out.insert(out.end(), bytes.begin() + static_cast<std::ptrdiff_t>(payload + size + 8), bytes.end()); // the END chunk
+    out[8] = 3; // the version, and the prelude's checksum
+    const auto check = static_cast<std::uint32_t>(raycache::fnv1a64(out.data(), 12));
+    for (int i = 0; i < 4; ++i) out[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
+    return out;
+}
+
+TEST_CASE("a format-3 file's 4 x 4 record block gives its record to each 2 x 2 block within it") {
+    // Three texels of the +x face's first tile, stored without records: (1, 1) and (2, 3) lie in the file's
+    // first 4 x 4 block (the cube's 2 x 2 blocks 0 and 9), (5, 1) in its second (the cube's block 2). The
+    // format-3 file says the first 4 x 4 block's texels saw object 5 at (3, 0, 0) and cast a shadow ray.
+    CctCube cube(16);
+    for (const TexelAddress& t : {TexelAddress{0, 1, 1}, TexelAddress{0, 2, 3}, TexelAddress{0, 5, 1}}) REQUIRE(cube.store_at(t, glm::vec3(0.5f)));
+    cube.begin_frame();
+    raycache::PathRecord path;
+    path.hit(5, glm::vec3(3.0f, 0.0f, 0.0f));
+    path.lit = true;
+    const auto loaded = decode<CctTexel>(as_format3(encode_one(cube), path));
+    REQUIRE(loaded.size() == 1u);
+    int blocks = 0;
+    loaded[0].cube->for_each_block_state([&](const CctCube::BlockState& b) {
+        if (b.valid_texels == 0) return;
+        ++blocks;
+        CAPTURE(b.block);
+        if (b.block == 0 || b.block == 9) {
+            CHECK(b.unrecorded_texels == 0);
+            CHECK(b.objects == raycache::object_bits(5));
+            CHECK(b.lit());
+            CHECK(b.vertex_lo == glm::vec3(3.0f, 0.0f, 0.0f));
+            CHECK(b.vertex_hi == glm::vec3(3.0f, 0.0f, 0.0f));
+        } else {
+            CHECK(b.block == 2);
+            CHECK(b.unrecorded_texels == 1); // the file's second block holds none
+        }
+    });
+    CHECK(blocks == 3);
+}
+
 TEST_CASE("a block record that is not one is refused by name") {
     CdctCube cube(20);
     Lcg rng{5};
-    fill_randomly(cube, rng, 1000); // every texel stored without a record: each block's record is written as none, all zero
+    fill_randomly(cube, rng, 1000); // every texel stored without a record: each tile is written with no record block
     const std::vector<std::uint8_t> none = encode_one(cube);
-    REQUIRE(decode<CdctTexel>(with_cube_bits(none, first_block_flag, 0u)).size() == 1u); // the patching itself is sound
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(none, first_block_flag, 2u)); }), "record flag 2 (0 or 1)"));
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(none, first_block_path_flags, 1u)); }),
-                   "holds no record but is not all zero"));
-    // A block with a record (the tile's texels stored with one, up the +x face's first tile).
+    REQUIRE(decode<CdctTexel>(with_cube_bits(none, record_count, 0u)).size() == 1u); // the patching itself is sound
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(none, record_count, 5u)); }), "has 5 record blocks (0 or 64)"));
+    // A block with a record (a texel of the +x face's first tile stored with one: its first 2 x 2 block),
+    // and its tile's other blocks written as none.
     CdctCube recorded(20);
     raycache::PathRecord path;
     path.hit(3, glm::vec3(2.0f, 0.0f, 0.0f));
@@ -402,6 +468,10 @@ TEST_CASE("a block record that is not one is refused by name") {
     recorded.begin_frame();
     const std::vector<std::uint8_t> one = encode_one(recorded);
     REQUIRE(decode<CdctTexel>(one).size() == 1u);
+    REQUIRE(decode<CdctTexel>(with_cube_bits(one, second_block_flag, 0u)).size() == 1u); // the second block holds none
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, second_block_flag, 2u)); }), "record flag 2 (0 or 1)"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, second_block_path_flags, 1u)); }),
+                   "holds no record but is not all zero"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, first_block_path_flags, 8u)); }), "has path flags 8"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, std::nanf(""))); }),
                    "boxes are neither empty"));

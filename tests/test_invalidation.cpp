@@ -156,8 +156,8 @@ TEST_CASE("texels whose cone and whose 4 x 4 block's paths miss the moved sphere
     CHECK(kept > must_keep.size() / 2);
 }
 
-TEST_CASE("a path that hit a moved object costs the texels of its 4 x 4 record block, not the rest of its tile") {
-    // Face +X of a 16-texel cube is one tile of sixteen 4 x 4 blocks. Block 0 (columns and rows 0..3) holds
+TEST_CASE("a path that hit a moved object costs the texels of its 2 x 2 record block, not the rest of its tile") {
+    // Face +X of a 16-texel cube is one tile of sixty-four 2 x 2 blocks. Block 0 (columns and rows 0..1) holds
     // paths that hit object 5, the other blocks paths that hit object 6; object 5 moves far out along -X,
     // where no ray of face +X can reach it, so only the path records can drop anything.
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
@@ -167,25 +167,25 @@ TEST_CASE("a path that hit a moved object costs the texels of its 4 x 4 record b
     saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
     for (int row = 0; row < 16; ++row)
         for (int column = 0; column < 16; ++column)
-            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), column < 4 && row < 4 ? saw_5 : saw_6));
+            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), column < 2 && row < 2 ? saw_5 : saw_6));
     cube.begin_frame();
     raycache::SceneChanges changes;
     changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
-    CHECK(counts.dropped == 16);
-    CHECK(counts.dropped_by_path == 16); // the reason, counted: no cone reaches -X, every store recorded
+    CHECK(counts.dropped == 4);
+    CHECK(counts.dropped_by_path == 4); // the reason, counted: no cone reaches -X, every store recorded
     CHECK(counts.dropped_by_cone + counts.dropped_unrecorded == 0);
     CHECK(counts.blocks_by_path == 1);
-    CHECK(cube.valid_texels() == 256 - 16);
+    CHECK(cube.valid_texels() == 256 - 4);
     for (int row = 0; row < 16; ++row)
         for (int column = 0; column < 16; ++column)
-            CHECK(cube.load({RAYCACHE_FACE_POSITIVE_X, column, row}).has_value() == !(column < 4 && row < 4));
+            CHECK(cube.load({RAYCACHE_FACE_POSITIVE_X, column, row}).has_value() == !(column < 2 && row < 2));
 }
 
 TEST_CASE("a block emptied by a move forgets the paths it held: refilled with paths that missed the mover, it stays at the next move") {
-    // Block 0 of face +X (columns and rows 0..3) first holds paths that hit object 5, which moves (far out
-    // along -X, where no ray of face +X can reach it): the block goes. Refilled with paths that hit object 6
-    // only, it must survive object 5's next move; a record that still held the first paths would drop it.
+    // Blocks 0, 1, 8 and 9 of face +X (columns and rows 0..3) first hold paths that hit object 5, which moves (far out
+    // along -X, where no ray of face +X can reach it): the blocks go. Refilled with paths that hit object 6
+    // only, they must survive object 5's next move; a record that still held the first paths would drop them.
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(16);
     PathRecord saw_5, saw_6;
@@ -208,14 +208,14 @@ TEST_CASE("a block emptied by a move forgets the paths it held: refilled with pa
     CHECK(cube.valid_texels() == 16);
 }
 
-TEST_CASE("blocks of one 8 x 8 group are judged by their own paths when only the group's union meets the move") {
-    // Face +Y of a 16-texel cube: block 0 (columns and rows 0..3) holds paths that hit a point P = (0, 5, 0)
-    // and escaped straight along +X, block 1 (columns 4..7) paths from P that escaped along +Z; the other
+TEST_CASE("blocks of one 4 x 4 group are judged by their own paths when only the group's union meets the move") {
+    // Face +Y of a 16-texel cube: block 0 (columns and rows 0..1) holds paths that hit a point P = (0, 5, 0)
+    // and escaped straight along +X, block 1 (columns 2..3) paths from P that escaped along +Z; the other
     // blocks hold no path. A ball of radius 0.5 moves to P + 10 (1, 0, 1) / sqrt(2): 45 degrees off either
     // escape, 10 away, so it subtends under 3 degrees and neither block's escaped rays (from within the
     // tracer's 1e-3 offset of P) can meet it; the two blocks' union, the escape directions' box from +X to
     // +Z, holds its direction. The texels' own rays go up and toward -X and -Z (face +Y's first rows and
-    // columns), away from the ball. So nothing may go; with the group's union alone both blocks (32 texels)
+    // columns), away from the ball. So nothing may go; with the group's union alone both blocks (8 texels)
     // would.
     CctCube cube(16);
     const glm::vec3 p(0.0f, 5.0f, 0.0f);
@@ -224,9 +224,9 @@ TEST_CASE("blocks of one 8 x 8 group are judged by their own paths when only the
     along_x.escaped(glm::vec3(1.0f, 0.0f, 0.0f));
     along_z.hit(7, p);
     along_z.escaped(glm::vec3(0.0f, 0.0f, 1.0f));
-    for (int row = 0; row < 4; ++row)
-        for (int column = 0; column < 8; ++column)
-            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_Y, column, row}, glm::vec3(0.25f), column < 4 ? along_x : along_z));
+    for (int row = 0; row < 2; ++row)
+        for (int column = 0; column < 4; ++column)
+            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_Y, column, row}, glm::vec3(0.25f), column < 2 ? along_x : along_z));
     cube.begin_frame();
     const glm::vec3 away = p + 10.0f * glm::normalize(glm::vec3(1.0f, 0.0f, 1.0f));
     // The union's cone does hold the ball: the premise of the test (tested on one record of both escapes).
@@ -238,10 +238,10 @@ TEST_CASE("blocks of one 8 x 8 group are judged by their own paths when only the
     REQUIRE_FALSE(raycache::detail::paths_meet(along_x, changes));
     REQUIRE_FALSE(raycache::detail::paths_meet(along_z, changes));
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
-    CHECK(counts.valid_before == 32);
+    CHECK(counts.valid_before == 8);
     CHECK(counts.dropped == 0);
     CHECK(counts.blocks_by_path == 0);
-    CHECK(cube.valid_texels() == 32);
+    CHECK(cube.valid_texels() == 8);
 }
 
 TEST_CASE("a moved light drops every texel whose path hit something and keeps the rays that escaped") {
@@ -461,7 +461,7 @@ TEST_CASE("a cube resampled to a coarser size keeps, per record block, the union
     // after resample_into() and carry_path_records(), each block of the coarser cube must name exactly the
     // old blocks whose rectangles of the face overlap its own, found here by testing every pair in integers.
     CctCube from(32);
-    auto key_of = [](int face, int row, int column) { return static_cast<std::uint64_t>((face * 8 + row / 4) * 8 + column / 4); };
+    auto key_of = [](int face, int row, int column) { return static_cast<std::uint64_t>((face * 16 + row / 2) * 16 + column / 2); };
     for (int face = 0; face < 6; ++face)
         for (int row = 0; row < 32; ++row)
             for (int column = 0; column < 32; ++column) {
@@ -487,13 +487,13 @@ TEST_CASE("a cube resampled to a coarser size keeps, per record block, the union
             CHECK(t.unrecorded_texels == 0);
             ++blocks;
         });
-        CHECK(blocks == static_cast<std::size_t>(6 * ((size + 3) / 4) * ((size + 3) / 4)));
+        CHECK(blocks == static_cast<std::size_t>(6 * ((size + 1) / 2) * ((size + 1) / 2)));
     }
 }
 
 TEST_CASE("a block counts the texels that hold a value, recorded or not, on faces that end within a block") {
-    // Face 20: the second tile of a row holds columns 16..19 only, so its blocks 0..3 of each row are one
-    // block wide and the rest lie off the face. Texels are stored with and without records, some emptied
+    // Face 20: the second tile of a row holds columns 16..19 only, so two of its blocks of each row lie on
+    // the face and the rest off it. Texels are stored with and without records, some emptied
     // again; every block's count must equal the count of the texels set here that lie in it.
     CctCube cube(20);
     std::mt19937 random(7);
@@ -533,12 +533,12 @@ TEST_CASE("a cube resampled to a coarser size leaves out the paths of blocks who
     PathRecord saw_7, saw_9;
     saw_7.hit(7, glm::vec3(5.0f));
     saw_9.hit(9, glm::vec3(5.0f));
-    const TexelAddress emptied{RAYCACHE_FACE_POSITIVE_Z, 1, 1}, kept{RAYCACHE_FACE_POSITIVE_Z, 5, 1}; // blocks 0 and 1
+    const TexelAddress emptied{RAYCACHE_FACE_POSITIVE_Z, 1, 1}, kept{RAYCACHE_FACE_POSITIVE_Z, 3, 1}; // blocks 0 and 1
     REQUIRE(from.store_at(emptied, glm::vec3(0.5f), saw_7));
     REQUIRE(from.store_at(kept, glm::vec3(0.5f), saw_9));
     from.begin_frame();
     from.invalidate(emptied);
-    CctCube to(8); // texels (1,1) and (5,1) of the fine face lie in texels (0,0) and (2,0): coarse block 0
+    CctCube to(8); // texels (1,1) and (3,1) of the fine face lie in texels (0,0) and (1,0): coarse block 0
     REQUIRE(raycache::resample_into(from, to) == 1);
     raycache::carry_path_records(from, to);
     bool found = false;

@@ -1,7 +1,7 @@
 // raycache/cache_file.hpp: saving warm caching cubes to a file and loading them back, so that a walkthrough
 // starts warm (as engines bake their light probes) instead of losing its caches at exit.
 //
-// The file, format version 3 (versions 1 and 2 are read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
+// The file, format version 4 (versions 1 to 3 are read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
 // below, no library needed), so a truncated or corrupted file is refused, never half loaded.
 //
 //   prelude  "RAYCACHE" (8 bytes), u32 format version, u32 low half of fnv1a64 of those 12 bytes
@@ -19,8 +19,11 @@
 //            f32 the nearest hit distance of its stores (CacheCube::nearest_hit; infinity: none; not in
 //            format 1, whose tiles load without one and answer within the drift alone of an
 //            OriginTolerance until a store gives them a distance); u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
-//            doubtful (CacheCube::is_doubtful; only texels holding a value); in format 3, the path records
-//            of its sixteen 4 x 4 record blocks (block = (row / 4) * 4 + column / 4), 64 bytes each: u32 1
+//            doubtful (CacheCube::is_doubtful; only texels holding a value); in format 4, u32 0 (no path
+//            record: every texel counts as stored without one) or 64, and then the path records of its
+//            sixty-four 2 x 2 record blocks (block = (row / 2) * 8 + column / 2); in format 3, always the
+//            records of sixteen 4 x 4 blocks (block = (row / 4) * 4 + column / 4), which a loaded cube's
+//            2 x 2 blocks take as theirs; a record is 64 bytes: u32 1
 //            when every texel of the block holding a value was stored with the record (else 0, and the
 //            rest zero: such texels count as having seen everything), u32 flags (1 lit, 2 chained, 4
 //            unbounded), u64 the objects' Bloom mask, f32 x 6 the box of the paths' hit points and f32 x 6
@@ -91,7 +94,7 @@ struct SceneIdentity {
     std::string name;
 };
 
-inline constexpr std::uint32_t cache_file_version = 3;
+inline constexpr std::uint32_t cache_file_version = 4;
 
 inline constexpr std::uint64_t fnv1a64_basis = 14695981039346656037ull;
 
@@ -326,11 +329,13 @@ struct CubeRecord {
     CubeBounds bounds;
     float origins_seen = std::numeric_limits<float>::infinity(), origins_limit = std::numeric_limits<float>::infinity();
     std::uint32_t tiles = 0;
-    const std::uint8_t* tile_data = nullptr; // `tiles` times a tile_header_bytes(version) header and 256 words
+    const std::uint8_t* tile_data = nullptr; // `tiles` times a header (read_tile_header) and 256 words
+    std::size_t tile_bytes = 0;              // the bytes from tile_data holding them
     std::uint32_t version = cache_file_version;
 };
 
-inline constexpr int file_record_blocks = 16;       // 4 x 4 blocks of 4 x 4 texels a tile
+inline constexpr int file_record_blocks = 64;       // 8 x 8 blocks of 2 x 2 texels a tile (format 4)
+inline constexpr int format3_record_edge = 4;        // format 3: 4 x 4 blocks of 4 x 4 texels
 inline constexpr std::size_t file_record_bytes = 64; // one block's path record
 static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks &&
                   CacheCube<CctTexel>::path_lit == 1u && CacheCube<CctTexel>::path_chained == 2u &&
@@ -350,12 +355,21 @@ struct TileHeader {
     glm::vec3 lo{0.0f}, hi{0.0f};
     float nearest = std::numeric_limits<float>::infinity(); // format 2 on; format 1 has none
     std::uint64_t doubtful[4] = {0, 0, 0, 0};
+    int record_edge = CacheCube<CctTexel>::record_edge;      // texels along a record block's side in the file
     BlockRecord blocks[file_record_blocks];                  // format 3 on; before, none recorded
     bool is_doubtful(int slot) const noexcept { return (doubtful[slot / 64] >> (slot % 64)) & 1u; }
+    // The record of the cube's record block whose first texel is (column0, row0) of its face: the file's
+    // block holding it (format 3's 4 x 4 blocks each hold four of the cube's).
+    const BlockRecord& record_of(int column0, int row0) const noexcept {
+        const int edge = static_cast<int>(file_tile_edge), per_side = edge / record_edge;
+        return blocks[(row0 % edge / record_edge) * per_side + column0 % edge / record_edge];
+    }
 };
-// Format 1 has no nearest hit distance (4 bytes) after the box; formats 1 and 2 no path records.
-inline std::size_t tile_header_bytes(std::uint32_t version) noexcept {
-    return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8 + (version >= 3 ? file_record_blocks * file_record_bytes : 0);
+// A tile's bytes before its words at least (format 1 has no nearest hit distance, 4 bytes, after the box;
+// formats 1 and 2 no path records; format 3 always sixteen; format 4 a count, then 0 or 64 of them).
+inline std::size_t least_tile_header_bytes(std::uint32_t version) noexcept {
+    const std::size_t records = version == 3 ? 16 * file_record_bytes : version >= 4 ? 4 : 0;
+    return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8 + records;
 }
 
 // Hit points a file's records may hold: within 1e18 of the origin on every axis, so that the distances and
@@ -429,8 +443,16 @@ inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
             r.fail("tile " + std::to_string(h.index) + "'s nearest hit distance is not >= 0 (infinity: none)");
     }
     for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
-    if (version >= 3)
-        for (int b = 0; b < file_record_blocks; ++b) h.blocks[b] = read_block_record(r, h.index, b);
+    if (version == 3) {
+        h.record_edge = format3_record_edge;
+        for (int b = 0; b < 16; ++b) h.blocks[b] = read_block_record(r, h.index, b);
+    } else if (version >= 4) {
+        const std::uint32_t count = r.u32("a tile's count of record blocks");
+        if (count != 0 && count != file_record_blocks)
+            r.fail("tile " + std::to_string(h.index) + " has " + std::to_string(count) + " record blocks (0 or " +
+                   std::to_string(file_record_blocks) + ")");
+        for (std::uint32_t b = 0; b < count; ++b) h.blocks[b] = read_block_record(r, h.index, static_cast<int>(b));
+    }
     return h;
 }
 
@@ -487,11 +509,12 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
     if (c.tiles > tile_count)
         r.fail(std::to_string(c.tiles) + " tiles, more than the " + std::to_string(tile_count) + " of a cube of face size " +
                std::to_string(face_size));
-    const std::size_t tile_bytes = tile_header_bytes(c.version) + file_tile_texels * sizeof(Word);
-    if (r.remaining() / tile_bytes < c.tiles || r.remaining() != c.tiles * tile_bytes)
-        r.fail(std::to_string(c.tiles) + " tiles need " + std::to_string(std::uint64_t{c.tiles} * tile_bytes) + " bytes, the chunk holds " +
-               std::to_string(r.remaining()));
+    const std::size_t least_tile_bytes = least_tile_header_bytes(c.version) + file_tile_texels * sizeof(Word);
+    if (r.remaining() / least_tile_bytes < c.tiles)
+        r.fail(std::to_string(c.tiles) + " tiles need at least " + std::to_string(std::uint64_t{c.tiles} * least_tile_bytes) +
+               " bytes, the chunk holds " + std::to_string(r.remaining()));
     c.tile_data = r.here();
+    c.tile_bytes = r.remaining(); // the tiles must end the chunk (checked below)
     std::int64_t previous = -1;
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
         const TileHeader header = read_tile_header(r, c.version);
@@ -501,6 +524,7 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
         if (static_cast<std::int64_t>(index) <= previous)
             r.fail("tile index " + std::to_string(index) + " follows " + std::to_string(previous) + " (tiles must be in increasing order, each once)");
         previous = index;
+        r.need(file_tile_texels * sizeof(Word), "a tile's texels");
         const std::uint8_t* words = r.here();
         for (int slot = 0; slot < static_cast<int>(file_tile_texels); ++slot) {
             const Word w = read_word<Word>(words + static_cast<std::size_t>(slot) * sizeof(Word));
@@ -522,7 +546,7 @@ CubeRecord read_cube_record(ByteReader& r, std::uint32_t version) {
 // A reader over the record's tiles, each a header and 256 words (checked: read_cube_record() sized them).
 template <class Texel>
 ByteReader tiles_of(const CubeRecord& c) {
-    return ByteReader(c.tile_data, c.tiles * (tile_header_bytes(c.version) + file_tile_texels * sizeof(typename Texel::Word)), "tiles");
+    return ByteReader(c.tile_data, c.tile_bytes, "tiles");
 }
 
 // Whether any block of the record's tiles holds a path record.
@@ -564,7 +588,8 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
         if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi, h.nearest); // slot 0 is on the face
         // The paths its blocks' texels saw, so exact invalidation can keep them (the tile index is the cube's).
         cube->for_each_block_state_of_tile(h.index, [&](const typename CacheCube<Texel>::BlockState& b) {
-            if (h.blocks[b.block].recorded) cube->record_texels_of_block(b, h.blocks[b.block].record);
+            const BlockRecord& f = h.record_of(b.column0, b.row0);
+            if (f.recorded) cube->record_texels_of_block(b, f.record);
         });
     }
     return cube;
@@ -640,12 +665,16 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
             // texels count as having seen everything, as unrecorded texels do); none for a block without
             // values, so a file holds records only where they describe texels (holds_path_records()).
             detail::BlockRecord blocks[detail::file_record_blocks];
+            bool any = false;
             c.cube->for_each_block_state_of_tile(index, [&](const typename CacheCube<Texel>::BlockState& b) {
                 if (b.unrecorded_texels != 0 || b.valid_texels == 0) return;
                 const PathRecord record = b.record();
-                if (detail::is_file_record(record)) blocks[b.block] = detail::BlockRecord{true, record};
+                if (detail::is_file_record(record)) blocks[b.block] = detail::BlockRecord{true, record}, any = true;
             });
-            for (const detail::BlockRecord& b : blocks) {
+            // A tile with no record (a static scene's) writes none: its texels are unrecorded either way.
+            w.u32(any ? static_cast<std::uint32_t>(detail::file_record_blocks) : 0u);
+            for (int i = 0; i < (any ? detail::file_record_blocks : 0); ++i) {
+                const detail::BlockRecord& b = blocks[i];
                 w.u32(b.recorded ? 1 : 0);
                 w.u32(b.recorded ? CacheCube<Texel>::path_flags_of(b.record) : 0u);
                 w.u64(b.recorded ? b.record.objects : 0);

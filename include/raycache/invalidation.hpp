@@ -9,12 +9,12 @@
 // both, and a CDCT texel is finally tested with the segments themselves.
 // A texel's value is stale after object X moved from sphere A to sphere B when
 //   - its rays' first segment can meet A or B: the region's cone, grown by the origins' ball, meets the sphere
-//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, an 8 x 8 group of 4 x 4
+//     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, a 4 x 4 group of 2 x 2
 //     record blocks, a block, then each texel); for a CDCT texel, whose searches end on its stored surface
 //     (its distance, give or take the search's gap limit), the segments from the origins' ball to that
 //     shell of its directions meet the sphere (the hull of two balls: raycache_ball_hull_meets_sphere);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
-//     raycache/path_record.hpp, tested once the union of its 8 x 8 group of blocks met X): X among the
+//     raycache/path_record.hpp, tested once the union of its 4 x 4 group of blocks met X): X among the
 //     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
 //     B in that box (bounces between hit points), A or B met by rays from that box in the cone of the
 //     directions in which bounces escaped, a bounce that escaped with no such bound (unbounded), or a cached
@@ -279,7 +279,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     const bool geometric = !changes.moved.empty() || changes.light_moved; // else only names of changed objects
 
     // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
-    // 8 x 8 texels), then by block, then by texel: the union of a group's paths and the group's cone are
+    // 4 x 4 texels), then by block, then by texel: the union of a group's paths and the group's cone are
     // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
     // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
     // have no hit points to start from (no bound) makes its group's union unusable.
@@ -296,11 +296,14 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     };
     // Tile `index`, its blocks read here (on the run's thread), counted into `c`.
     auto tile = [&](std::size_t index, InvalidationCounts& c) {
+        // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
         std::array<Block, CacheCube<Texel>::record_blocks> blocks;
         std::size_t count = 0;
-        cube.for_each_block_state_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
+        cube.for_each_block_state_of_tile(index, [&](const Block& b) {
+            ++c.blocks;
+            if (b.valid_texels > 0) blocks[count++] = b;
+        });
         if (count == 0) return;
-        c.blocks += count;
         const Block& head = blocks[0];
         // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
         const OriginBall ball = origin_ball(rays, head.has_origins, head.origin_lo, head.origin_hi); // the origins are the tile's
@@ -310,12 +313,10 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
                                changes.moved);
         std::array<Group, group_count> groups{};
-        std::array<PathRecord, CacheCube<Texel>::record_blocks> records;
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
-            if (t.valid_texels == 0) continue; // nothing to empty, and its paths answer for no texel
             Group& g = groups[group_of(t.block)];
-            const PathRecord& r = records[i] = t.record();
+            const PathRecord r = t.record();
             g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
             g.paths.merge(r);
             g.any = true;
@@ -334,9 +335,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         }
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
-            if (t.valid_texels == 0) continue;
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k] && paths_meet(records[i], changes)) {
+            if (group_paths_meet[k] && paths_meet(t.record(), changes)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;

@@ -4,7 +4,7 @@
 // A cached ray's value depends on its first segment (the ray itself: covered by the texel's cone) and on
 // the rest of its path: the objects it hit, the shadow rays from its hit points to the light, and further
 // bounces. The tracer fills one PathRecord per traced leaving ray (SceneCache::leaving_ray with a callback
-// that takes a PathRecord&, or cct_cached_trace() with a trace taking a PathRecord&); each 4 x 4 block of a
+// that takes a PathRecord&, or cct_cached_trace() with a trace taking a PathRecord&); each 2 x 2 block of a
 // cube's 16 x 16 tiles keeps the union of the records of the stores into it (CacheCube::store with a path:
 // 8 + 24 + 24 + 4 bytes a block, padded to 64, and a bit per texel saying its store brought a record).
 #pragma once
