@@ -182,6 +182,57 @@ TEST_CASE("a path that hit a moved object costs the texels of its 2 x 2 record b
             CHECK(cube.load({RAYCACHE_FACE_POSITIVE_X, column, row}).has_value() == !(column < 2 && row < 2));
 }
 
+TEST_CASE("a tile that no change can reach is passed over without reading its blocks, and a tile a move emptied forgets its paths") {
+    // Face +X of a 32-texel cube has four 16 x 16 tiles. The first tile's texels saw object 5, the second's
+    // object 6, all at (5, 0, 0); object 5 moves far out along -X, where no ray of face +X can reach it. Only
+    // the first tile's union names 5, so only its 64 blocks are read, and its 256 texels go. Refilled with
+    // paths that saw object 6, the first tile must be passed over at 5's next move too: its union was
+    // rebuilt from what its blocks kept (nothing), not left holding 5.
+    REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
+    CctCube cube(32);
+    PathRecord saw_5, saw_6;
+    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
+    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    auto fill_tile = [&](int first_column, const PathRecord& path) {
+        for (int row = 0; row < 16; ++row)
+            for (int column = first_column; column < first_column + 16; ++column)
+                REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
+        cube.begin_frame();
+    };
+    fill_tile(0, saw_5);
+    fill_tile(16, saw_6);
+    raycache::SceneChanges changes;
+    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::InvalidationCounts first = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(first.dropped == 256);
+    CHECK(first.blocks == static_cast<std::size_t>(CctCube::record_blocks)); // the first tile's alone
+    fill_tile(0, saw_6);
+    const raycache::InvalidationCounts second = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(second.dropped == 0);
+    CHECK(second.blocks == 0u);
+    CHECK(cube.valid_texels() == 512);
+}
+
+TEST_CASE("a block whose paths include escapes with no hit point to start from goes at any move") {
+    // Two texels of one 2 x 2 block of face +X: one path hit object 7 at (5, 0, 0) and stopped, the other
+    // escaped along +X with no hit recorded before it (no bound on where it started). Object 9 moves far out
+    // along -X: from (5, 0, 0) nothing escaping along +X can reach it, but the second path could have started
+    // anywhere, so the block goes (a union that took the escape as leaving the first path's hit point would
+    // keep it).
+    CctCube cube(16);
+    PathRecord stopped, unbound;
+    stopped.hit(7, glm::vec3(5.0f, 0.0f, 0.0f));
+    unbound.escaped(glm::vec3(1.0f, 0.0f, 0.0f));
+    REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 0, 0}, glm::vec3(0.25f), stopped));
+    REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 1, 0}, glm::vec3(0.25f), unbound));
+    cube.begin_frame();
+    raycache::SceneChanges changes;
+    changes.moved.push_back({9, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
+    CHECK(counts.dropped == 2);
+    CHECK(counts.dropped_by_path == 2);
+}
+
 TEST_CASE("a block emptied by a move forgets the paths it held: refilled with paths that missed the mover, it stays at the next move") {
     // Blocks 0, 1, 8 and 9 of face +X (columns and rows 0..3) first hold paths that hit object 5, which moves (far out
     // along -X, where no ray of face +X can reach it): the blocks go. Refilled with paths that hit object 6

@@ -97,6 +97,9 @@ public:
     // again (88% -> 92%), for 3 KiB more a tile than 4 x 4 (kept only once objects move: PathRecords).
     static constexpr int record_edge = 2;
     static constexpr int record_blocks = (tile_edge / record_edge) * (tile_edge / record_edge);
+    // After a tile's record blocks, in the same allocation: their union, so that invalidation can pass over
+    // a tile that no change can reach without reading its blocks.
+    static constexpr int tile_union_slot = record_blocks;
     static_assert(tile_edge % record_edge == 0, "record blocks tile a tile");
 
     // A cube of six face_size x face_size faces, every texel invalid and no tile allocated yet.
@@ -150,9 +153,9 @@ public:
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * bytes_per_tile(); }
     std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
     // Bytes of one tile: 16 x 16 words, their bits, its origin boxes and, with path_records, a path record
-    // per 2 x 2 block (in the same allocation).
+    // per 2 x 2 block and their union (in the same allocation).
     static constexpr std::size_t tile_bytes(bool path_records = true) noexcept {
-        return sizeof(Tile) + (path_records ? sizeof(PathUnion) * record_blocks : 0);
+        return sizeof(Tile) + (path_records ? sizeof(PathUnion) * (record_blocks + 1) : 0);
     }
     std::size_t bytes_per_tile() const noexcept { return tile_bytes(path_records_); }
     // Whether the tiles keep path records (the constructor's path_records).
@@ -450,26 +453,11 @@ public:
         const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
         if (!tile) return;
         const TexelAddress first = first_texel_of_tile(i);
-        // Recorded bits are set only on texels holding a value (and cleared when one is emptied), so a
-        // tile whose count of values equals its recorded bits has no unrecorded texel in any block.
-        int recorded_count = 0;
-        for (int w = 0; w < bit_words; ++w) recorded_count += bit_count(recorded_word(*tile, w));
-        const bool any_unrecorded = static_cast<int>(tile->valid.load(std::memory_order_relaxed)) != recorded_count;
+        const bool any_unrecorded = has_unrecorded(*tile);
         BlockState t{};
         t.tile = i;
         t.face = first.face;
-        t.has_origins = tile->has_box || tile->pending_min[0].load(std::memory_order_relaxed) <=
-                                             tile->pending_max[0].load(std::memory_order_relaxed);
-        if (t.has_origins) {
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t lo = tile->pending_min[k].load(std::memory_order_relaxed);
-                const std::uint32_t hi = tile->pending_max[k].load(std::memory_order_relaxed);
-                float a = tile->has_box ? tile->box_min[k] : std::numeric_limits<float>::infinity();
-                float b = tile->has_box ? tile->box_max[k] : -std::numeric_limits<float>::infinity();
-                if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
-                t.origin_lo[k] = a, t.origin_hi[k] = b;
-            }
-        }
+        t.has_origins = origins_of(*tile, t.origin_lo, t.origin_hi);
         for (int b = 0; b < record_blocks; ++b) {
             t.block = b;
             t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
@@ -499,6 +487,46 @@ public:
             read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
             read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
             f(static_cast<const BlockState&>(t));
+        }
+    }
+
+    // What invalidation needs of a whole tile before its blocks: where it lies, its origins (as BlockState's),
+    // whether a texel holds a value stored without a record, and the union of its blocks' path records (a
+    // superset of what its texels saw: stores add to it; retighten_tile_union() drops what emptied blocks held).
+    struct TileSummary {
+        int face, column0, row0; // the tile's first texel
+        bool has_origins;
+        glm::vec3 origin_lo, origin_hi;
+        bool any_unrecorded;
+        PathRecord paths; // empty in a cube without records
+    };
+    // tile_summary() of tile `i`; std::nullopt when it is not allocated. Between frames only.
+    std::optional<TileSummary> tile_summary(std::size_t i) const {
+        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return std::nullopt;
+        const TexelAddress first = first_texel_of_tile(i);
+        TileSummary s{first.face, first.column, first.row, false, glm::vec3(0.0f), glm::vec3(0.0f), has_unrecorded(*tile), PathRecord{}};
+        s.has_origins = origins_of(*tile, s.origin_lo, s.origin_hi);
+        if (tile->records) s.paths = record_of(tile->records[tile_union_slot]);
+        return s;
+    }
+    // Makes tile `i`'s union that of its blocks holding a recorded texel (after invalidation emptied some).
+    // Between frames only.
+    void retighten_tile_union(std::size_t i) noexcept {
+        assert_between_frames();
+        Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        if (!tile || !tile->records) return;
+        PathUnion& u = tile->records[tile_union_slot];
+        u.clear();
+        constexpr int per_side = tile_edge / record_edge;
+        const std::uint64_t row_mask = (std::uint64_t{1} << record_edge) - 1u;
+        for (int b = 0; b < record_blocks; ++b) {
+            bool recorded_texel = false;
+            for (int row = 0; row < record_edge && !recorded_texel; ++row) {
+                const int slot = (b / per_side * record_edge + row) * tile_edge + b % per_side * record_edge;
+                recorded_texel = ((recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask) != 0;
+            }
+            if (recorded_texel) merge_path(u, record_of(tile->records[b]));
         }
     }
 
@@ -542,6 +570,7 @@ public:
             tile->unrecorded_bits[slot / 64].fetch_and(~bit, std::memory_order_relaxed); // copied in without one: known now
         });
         merge_path(tile->records[b.block], path);
+        merge_path(tile->records[tile_union_slot], path);
     }
 
     // store() by address (named apart so that a braced {face, column, row} never reads as a direction);
@@ -896,8 +925,9 @@ private:
         // Texels holding a value stored before this frame (with written_bits: every texel holding one), so
         // passes over a sparse tile visit its few values, not its 256 words. Written between frames only.
         std::atomic<std::uint64_t> held_bits[bit_words];
-        // The path records, one per record block, right after the tile in its allocation (new_tile());
-        // null in a cube without records.
+        // The path records, one per record block and then the tile's union of them (tile_union_slot: a
+        // superset, tightened by retighten_tile_union()), right after the tile in its allocation
+        // (new_tile()); null in a cube without records.
         PathUnion* records = nullptr;
     };
 
@@ -1017,7 +1047,7 @@ private:
         Tile* tile = new (memory) Tile();
         if (path_records_) {
             tile->records = reinterpret_cast<PathUnion*>(static_cast<unsigned char*>(memory) + sizeof(Tile));
-            for (int b = 0; b < record_blocks; ++b) new (&tile->records[b]) PathUnion();
+            for (int b = 0; b <= tile_union_slot; ++b) new (&tile->records[b]) PathUnion();
         }
         state_->allocated_tiles.fetch_add(1, std::memory_order_relaxed);
         return tile;
@@ -1239,6 +1269,7 @@ private:
         const int slot = slot_of(t);
         tile->recorded_bits[slot / 64].fetch_or(std::uint64_t{1} << (slot % 64), std::memory_order_relaxed);
         merge_path(tile->records[block_of(t)], path);
+        merge_path(tile->records[tile_union_slot], path);
     }
     // f(TexelAddress, slot within its tile) for every texel of record block `b`.
     template <class F>
@@ -1256,10 +1287,46 @@ private:
     static void merge_path(PathUnion& r, const PathRecord& path) noexcept {
         if ((r.objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
             r.objects.fetch_or(path.objects, std::memory_order_relaxed);
-        const std::uint32_t flags = path_flags_of(path);
+        // Escapes with no hit point to start from have no bound; merged with other paths' hit points they
+        // would seem to start there, so the union says so.
+        const std::uint32_t flags = path_flags_of(path) | (path.has_escapes() && !path.has_vertices() ? path_unbounded : 0u);
         if ((r.flags.load(std::memory_order_relaxed) & flags) != flags) r.flags.fetch_or(flags, std::memory_order_relaxed);
         if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
         if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);
+    }
+    // A union as one PathRecord (empty boxes as PathRecord keeps them).
+    static PathRecord record_of(const PathUnion& u) noexcept {
+        PathRecord r;
+        r.objects = u.objects.load(std::memory_order_relaxed);
+        set_path_flags(r, u.flags.load(std::memory_order_relaxed));
+        glm::vec3 lo, hi;
+        read_box(u.vertex_min, u.vertex_max, lo, hi);
+        if (lo.x <= hi.x) r.vertex_lo = lo, r.vertex_hi = hi;
+        read_box(u.escape_min, u.escape_max, lo, hi);
+        if (lo.x <= hi.x) r.escape_lo = lo, r.escape_hi = hi;
+        return r;
+    }
+    // Whether a texel of the tile holds a value stored without a record. Recorded bits are set only on
+    // texels holding a value (and cleared when one is emptied), so a tile whose count of values equals its
+    // recorded bits has none.
+    static bool has_unrecorded(const Tile& tile) noexcept {
+        int recorded_count = 0;
+        for (int w = 0; w < bit_words; ++w) recorded_count += bit_count(recorded_word(tile, w));
+        return static_cast<int>(tile.valid.load(std::memory_order_relaxed)) != recorded_count;
+    }
+    // The box of the origins the tile's texels were stored from, visible and pending; false when none.
+    static bool origins_of(const Tile& tile, glm::vec3& lo_out, glm::vec3& hi_out) noexcept {
+        const bool has = tile.has_box || tile.pending_min[0].load(std::memory_order_relaxed) <= tile.pending_max[0].load(std::memory_order_relaxed);
+        if (!has) return false;
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t lo = tile.pending_min[k].load(std::memory_order_relaxed);
+            const std::uint32_t hi = tile.pending_max[k].load(std::memory_order_relaxed);
+            float a = tile.has_box ? tile.box_min[k] : std::numeric_limits<float>::infinity();
+            float b = tile.has_box ? tile.box_max[k] : -std::numeric_limits<float>::infinity();
+            if (lo <= hi) a = std::min(a, unordered(lo)), b = std::max(b, unordered(hi));
+            lo_out[k] = a, hi_out[k] = b;
+        }
+        return true;
     }
     // Widens the box of ordered floats [min, max] to hold [lo, hi] (atomic min and max per axis).
     static void widen(std::atomic<std::uint32_t> (&min)[3], std::atomic<std::uint32_t> (&max)[3], const glm::vec3& lo,

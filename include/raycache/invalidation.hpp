@@ -107,7 +107,7 @@ struct InvalidationCounts {
     std::size_t dropped_by_path = 0;    // ... with blocks whose path records met a change
     std::size_t dropped_by_cone = 0;    // ... whose own rays' cone met a moved sphere
     std::size_t dropped_unrecorded = 0; // ... whose store brought no path record
-    std::size_t blocks = 0;          // record blocks of allocated tiles looked at (CacheCube::BlockState)
+    std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those of tiles a change may reach
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
     std::size_t blocks_by_texel = 0; // blocks whose cone met a moved sphere, so each texel was tested
 };
@@ -296,6 +296,18 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     };
     // Tile `index`, its blocks read here (on the run's thread), counted into `c`.
     auto tile = [&](std::size_t index, InvalidationCounts& c) {
+        const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
+        if (!summary) return;
+        // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
+        const OriginBall ball = origin_ball(rays, summary->has_origins, summary->origin_lo, summary->origin_hi);
+        const int face = summary->face, c0 = summary->column0, r0 = summary->row0;
+        const bool tile_cone_meets =
+            geometric && face_meets[face] &&
+            any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
+                               changes.moved);
+        // A tile whose cone misses, whose every value came with a record, and whose union of paths (a
+        // superset of its blocks') misses too keeps everything: its blocks are not read (most tiles).
+        if (!tile_cone_meets && !summary->any_unrecorded && !paths_meet(summary->paths, changes)) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
         std::array<Block, CacheCube<Texel>::record_blocks> blocks;
         std::size_t count = 0;
@@ -303,15 +315,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             ++c.blocks;
             if (b.valid_texels > 0) blocks[count++] = b;
         });
-        if (count == 0) return;
-        const Block& head = blocks[0];
-        // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
-        const OriginBall ball = origin_ball(rays, head.has_origins, head.origin_lo, head.origin_hi); // the origins are the tile's
-        const int c0 = head.column0 / edge * edge, r0 = head.row0 / edge * edge;
-        const bool tile_cone_meets =
-            geometric && face_meets[head.face] &&
-            any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(head.face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
-                               changes.moved);
+        const std::size_t dropped_before = c.dropped;
         std::array<Group, group_count> groups{};
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
@@ -330,7 +334,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
             group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, [&] {
-                return shared::raycache_region_cone(head.face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
+                return shared::raycache_region_cone(face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
             }, changes.moved);
         }
         for (std::size_t i = 0; i < count; ++i) {
@@ -358,6 +362,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 return meets;
             });
         }
+        if (c.dropped != dropped_before) cube.retighten_tile_union(index); // emptied blocks' paths leave it
     };
     // Runs of tiles_per_run allocated tiles for parallel_for, each reading its own tiles' records; their
     // counts are added in order.
