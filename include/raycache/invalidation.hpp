@@ -14,7 +14,7 @@
 //     (its distance, give or take the search's gap limit), the segments from the origins' ball to that
 //     shell of its directions meet the sphere (the hull of two balls: raycache_ball_hull_meets_sphere);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
-//     raycache/path_record.hpp, tested once the union of its 4 x 4 group of blocks met X): X among the
+//     raycache/path_record.hpp, tested once the unions of its tile and of its 4 x 4 group of blocks met X): X among the
 //     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
 //     B in that box (bounces between hit points), A or B met by rays from that box in the cone of the
 //     directions in which bounces escaped, a bounce that escaped with no such bound (unbounded), or a cached
