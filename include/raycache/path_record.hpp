@@ -71,8 +71,11 @@ struct PathRecord {
     }
     bool has_vertices() const noexcept { return vertex_lo.x <= vertex_hi.x; }
     bool has_escapes() const noexcept { return escape_lo.x <= escape_hi.x; }
-    // Adds what another record saw (a nested leaving ray's path is part of the outer one).
+    // Adds what another record saw (a nested leaving ray's path is part of the outer one). Escapes with no
+    // hit point before them (in either) have no bound: merged with the other's hit points they would seem
+    // to start there, so the result is unbounded.
     void merge(const PathRecord& other) noexcept {
+        const bool loose = (has_escapes() && !has_vertices()) || (other.has_escapes() && !other.has_vertices());
         objects |= other.objects;
         vertex_lo = glm::min(vertex_lo, other.vertex_lo);
         vertex_hi = glm::max(vertex_hi, other.vertex_hi);
@@ -80,7 +83,7 @@ struct PathRecord {
         escape_hi = glm::max(escape_hi, other.escape_hi);
         lit = lit || other.lit;
         chained = chained || other.chained;
-        unbounded = unbounded || other.unbounded;
+        unbounded = unbounded || other.unbounded || loose;
     }
 };
 
