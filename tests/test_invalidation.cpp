@@ -75,6 +75,21 @@ std::size_t stale_texels(const CctCube& cube, const World& before, const World& 
     return stale;
 }
 
+// A path that saw object `key` straight out along +X, at (5, 0, 0): no shadow ray, no bounce.
+PathRecord saw(std::uint64_t key) {
+    PathRecord path;
+    path.hit(key, glm::vec3(5.0f, 0.0f, 0.0f));
+    return path;
+}
+
+// Object `key` moving far out along -X (a ball of radius 0.5 around (-20, 0, 0), then (-20, 0.5, 0)),
+// where no ray of face +X can reach it: only path records can drop a texel of that face for it.
+raycache::SceneChanges far_along_minus_x(std::uint64_t key) {
+    raycache::SceneChanges changes;
+    changes.moved.push_back({key, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    return changes;
+}
+
 } // namespace
 
 TEST_CASE("after a sphere moves, exact invalidation leaves no stale texel, without it the oracle finds them") {
@@ -162,15 +177,12 @@ TEST_CASE("a path that hit a moved object costs the texels of its 2 x 2 record b
     // where no ray of face +X can reach it, so only the path records can drop anything.
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(16);
-    PathRecord saw_5, saw_6;
-    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f)); // seen straight out along +X; no shadow ray, no bounce
-    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    const PathRecord saw_5 = saw(5), saw_6 = saw(6);
     for (int row = 0; row < 16; ++row)
         for (int column = 0; column < 16; ++column)
             REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), column < 2 && row < 2 ? saw_5 : saw_6));
     cube.begin_frame();
-    raycache::SceneChanges changes;
-    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::SceneChanges changes = far_along_minus_x(5);
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
     CHECK(counts.dropped == 4);
     CHECK(counts.dropped_by_path == 4); // the reason, counted: no cone reaches -X, every store recorded
@@ -190,9 +202,7 @@ TEST_CASE("a tile that no change can reach is passed over without reading its bl
     // rebuilt from what its blocks kept (nothing), not left holding 5.
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(32);
-    PathRecord saw_5, saw_6;
-    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
-    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    const PathRecord saw_5 = saw(5), saw_6 = saw(6);
     auto fill_tile = [&](int first_column, const PathRecord& path) {
         for (int row = 0; row < 16; ++row)
             for (int column = first_column; column < first_column + 16; ++column)
@@ -201,8 +211,7 @@ TEST_CASE("a tile that no change can reach is passed over without reading its bl
     };
     fill_tile(0, saw_5);
     fill_tile(16, saw_6);
-    raycache::SceneChanges changes;
-    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::SceneChanges changes = far_along_minus_x(5);
     const raycache::InvalidationCounts first = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
     CHECK(first.dropped == 256);
     CHECK(first.blocks == static_cast<std::size_t>(CctCube::record_blocks)); // the first tile's alone
@@ -230,8 +239,7 @@ TEST_CASE("merging a path whose escapes have no hit point before them with one t
     CHECK(a.unbounded);
     CHECK(b.unbounded);
     CHECK_FALSE(c.unbounded);
-    raycache::SceneChanges changes;
-    changes.moved.push_back({9, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::SceneChanges changes = far_along_minus_x(9);
     CHECK(raycache::detail::paths_meet(a, changes));
     CHECK(raycache::detail::paths_meet(b, changes));
     CHECK_FALSE(raycache::detail::paths_meet(c, changes));
@@ -250,8 +258,7 @@ TEST_CASE("a block whose paths include escapes with no hit point to start from g
     REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 0, 0}, glm::vec3(0.25f), stopped));
     REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 1, 0}, glm::vec3(0.25f), unbound));
     cube.begin_frame();
-    raycache::SceneChanges changes;
-    changes.moved.push_back({9, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::SceneChanges changes = far_along_minus_x(9);
     const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, changes);
     CHECK(counts.dropped == 2);
     CHECK(counts.dropped_by_path == 2);
@@ -265,17 +272,14 @@ TEST_CASE("a block emptied by a move forgets the paths it held: refilled with pa
     // from being passed over whole, so the blocks' own records are what decides.
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(16);
-    PathRecord saw_5, saw_6;
-    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
-    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    const PathRecord saw_5 = saw(5), saw_6 = saw(6);
     auto fill_block = [&](const PathRecord& path) {
         for (int row = 0; row < 4; ++row)
             for (int column = 0; column < 4; ++column) REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
         REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 10, 10}, glm::vec3(0.25f)));
         cube.begin_frame();
     };
-    raycache::SceneChanges changes;
-    changes.moved.push_back({5, {glm::vec3(-20.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(-20.0f, 0.5f, 0.0f), 0.5f}});
+    const raycache::SceneChanges changes = far_along_minus_x(5);
     fill_block(saw_5);
     CHECK(raycache::invalidate_changes(cube, {box, -1.0f}, changes).dropped == 17);
     CHECK(cube.valid_texels() == 0);
@@ -636,9 +640,7 @@ TEST_CASE("two rays stored into one texel in one frame leave the same path recor
     // either way too, or which texels a move drops (and so later frames) would depend on thread timing.
     const glm::vec3 dim(0.1f), bright(0.9f); // dim packs to the smaller word
     REQUIRE(raycache::CctTexel::encode(dim) < raycache::CctTexel::encode(bright));
-    PathRecord saw_5, saw_6;
-    saw_5.hit(5, glm::vec3(5.0f, 0.0f, 0.0f));
-    saw_6.hit(6, glm::vec3(5.0f, 0.0f, 0.0f));
+    const PathRecord saw_5 = saw(5), saw_6 = saw(6);
     const TexelAddress t{RAYCACHE_FACE_POSITIVE_X, 3, 4};
     auto objects_after = [&](const glm::vec3& first, const PathRecord& first_path, const glm::vec3& second, const PathRecord& second_path) {
         CctCube cube(16);
