@@ -1287,9 +1287,8 @@ private:
     static void merge_path(PathUnion& r, const PathRecord& path) noexcept {
         if ((r.objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
             r.objects.fetch_or(path.objects, std::memory_order_relaxed);
-        // Escapes with no hit point to start from have no bound; merged with other paths' hit points they
-        // would seem to start there, so the union says so.
-        const std::uint32_t flags = path_flags_of(path) | (path.has_escapes() && !path.has_vertices() ? path_unbounded : 0u);
+        // A path that escaped from nowhere makes the union unbounded (PathRecord::merge's rule).
+        const std::uint32_t flags = path_flags_of(path) | (path.escapes_from_nowhere() ? path_unbounded : 0u);
         if ((r.flags.load(std::memory_order_relaxed) & flags) != flags) r.flags.fetch_or(flags, std::memory_order_relaxed);
         if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
         if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);

@@ -202,7 +202,7 @@ bool texel_rays_meet(const OriginBall& ball, ConeOf&& cone_of, const std::vector
 inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
     const bool has_vertices = t.has_vertices();
     const bool has_escapes = t.has_escapes();
-    if (has_escapes && !has_vertices) return true; // escapes from points not recorded: no bound
+    if (t.escapes_from_nowhere()) return true; // escapes from points not recorded: no bound
     if (t.unbounded) return true; // a bounce escaped with no bound known
     if (changes.light_moved && has_vertices) return true;
     auto tagged = [&](std::uint64_t key) {
@@ -282,7 +282,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     // 4 x 4 texels), then by block, then by texel: the union of a group's paths and the group's cone are
     // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
     // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
-    // have no hit points to start from (no bound) makes its group's union unusable.
+    // have no hit points to start from makes its group's union unbounded (PathRecord::merge).
     constexpr int edge = CacheCube<Texel>::tile_edge;
     constexpr int per_side = edge / CacheCube<Texel>::record_edge;
     constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
@@ -291,8 +291,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     static_assert(per_side % group_edge == 0, "groups tile a tile");
     auto group_of = [](int block) { return static_cast<std::size_t>((block / per_side / group_edge) * groups_per_side + block % per_side / group_edge); };
     struct Group {
-        PathRecord paths;
-        bool unbound = false, any = false;
+        PathRecord paths; // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
+        bool any = false;
     };
     // Tile `index`, its blocks read here (on the run's thread), counted into `c`.
     auto tile = [&](std::size_t index, InvalidationCounts& c) {
@@ -321,7 +321,6 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             const Block& t = blocks[i];
             Group& g = groups[group_of(t.block)];
             const PathRecord r = t.record();
-            g.unbound = g.unbound || (r.has_escapes() && !r.has_vertices());
             g.paths.merge(r);
             g.any = true;
         }
@@ -329,7 +328,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         for (std::size_t k = 0; k < group_count; ++k) {
             const Group& g = groups[k];
             if (!g.any) continue;
-            group_paths_meet[k] = g.unbound || paths_meet(g.paths, changes);
+            group_paths_meet[k] = paths_meet(g.paths, changes);
             // The group's square of texels, clipped to the face as its blocks are.
             constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;

@@ -71,11 +71,13 @@ struct PathRecord {
     }
     bool has_vertices() const noexcept { return vertex_lo.x <= vertex_hi.x; }
     bool has_escapes() const noexcept { return escape_lo.x <= escape_hi.x; }
-    // Adds what another record saw (a nested leaving ray's path is part of the outer one). Escapes with no
-    // hit point before them (in either) have no bound: merged with the other's hit points they would seem
-    // to start there, so the result is unbounded.
+    // Escapes with no hit point before them: no bound on where they started. Merged with another path's hit
+    // points they would seem to start there, so a union holding such a path is unbounded.
+    bool escapes_from_nowhere() const noexcept { return has_escapes() && !has_vertices(); }
+    // Adds what another record saw (a nested leaving ray's path is part of the outer one); unbounded when
+    // either escaped from nowhere (escapes_from_nowhere).
     void merge(const PathRecord& other) noexcept {
-        const bool loose = (has_escapes() && !has_vertices()) || (other.has_escapes() && !other.has_vertices());
+        const bool loose = escapes_from_nowhere() || other.escapes_from_nowhere();
         objects |= other.objects;
         vertex_lo = glm::min(vertex_lo, other.vertex_lo);
         vertex_hi = glm::max(vertex_hi, other.vertex_hi);
