@@ -518,16 +518,9 @@ public:
         if (!tile || !tile->records) return;
         PathUnion& u = tile->records[tile_union_slot];
         u.clear();
-        constexpr int per_side = tile_edge / record_edge;
-        const std::uint64_t row_mask = (std::uint64_t{1} << record_edge) - 1u;
-        for (int b = 0; b < record_blocks; ++b) {
-            bool recorded_texel = false;
-            for (int row = 0; row < record_edge && !recorded_texel; ++row) {
-                const int slot = (b / per_side * record_edge + row) * tile_edge + b % per_side * record_edge;
-                recorded_texel = ((recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask) != 0;
-            }
-            if (recorded_texel) merge_path(u, record_of(tile->records[b]));
-        }
+        for_each_block_state_of_tile(i, [&](const BlockState& b) {
+            if (b.valid_texels > b.unrecorded_texels) merge_path(u, b.record()); // a recorded texel
+        });
     }
 
     // Empties the texels of block `b` (from for_each_block_state()) holding a value for which
