@@ -336,6 +336,7 @@ struct CubeRecord {
 
 inline constexpr int file_record_blocks = 64;       // 8 x 8 blocks of 2 x 2 texels a tile (format 4)
 inline constexpr int format3_record_edge = 4;        // format 3: 4 x 4 blocks of 4 x 4 texels
+inline constexpr int format3_record_blocks = 16;
 inline constexpr std::size_t file_record_bytes = 64; // one block's path record
 static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks &&
                   CacheCube<CctTexel>::path_lit == 1u && CacheCube<CctTexel>::path_chained == 2u &&
@@ -368,7 +369,7 @@ struct TileHeader {
 // A tile's bytes before its words at least (format 1 has no nearest hit distance, 4 bytes, after the box;
 // formats 1 and 2 no path records; format 3 always sixteen; format 4 a count, then 0 or 64 of them).
 inline std::size_t least_tile_header_bytes(std::uint32_t version) noexcept {
-    const std::size_t records = version == 3 ? 16 * file_record_bytes : version >= 4 ? 4 : 0;
+    const std::size_t records = version == 3 ? format3_record_blocks * file_record_bytes : version >= 4 ? 4 : 0;
     return 4 + 4 + 6 * 4 + (version >= 2 ? 4 : 0) + 4 * 8 + records;
 }
 
@@ -445,7 +446,7 @@ inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
     for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
     if (version == 3) {
         h.record_edge = format3_record_edge;
-        for (int b = 0; b < 16; ++b) h.blocks[b] = read_block_record(r, h.index, b);
+        for (int b = 0; b < format3_record_blocks; ++b) h.blocks[b] = read_block_record(r, h.index, b);
     } else if (version >= 4) {
         const std::uint32_t count = r.u32("a tile's count of record blocks");
         if (count != 0 && count != file_record_blocks)
