@@ -102,6 +102,32 @@ void check_round_trip(int face_size, unsigned per_mille, std::uint64_t seed) {
     CHECK(loaded.statistics().stores == 0u);
 }
 
+
+// The little-endian u64 at byte `at` of `bytes`.
+std::uint64_t u64_at(const std::vector<std::uint8_t>& bytes, std::size_t at) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
+    return v;
+}
+
+// Where a file's first CUBE chunk starts (after the prelude and the HEAD chunk), where its payload starts,
+// and the payload's size.
+struct CubeChunk {
+    std::size_t start, payload, size;
+};
+CubeChunk first_cube_chunk(const std::vector<std::uint8_t>& bytes) {
+    const std::size_t head = 16; // after the prelude
+    const std::size_t cube = head + 4 + 8 + u64_at(bytes, head + 4) + 8;
+    return {cube, cube + 12, u64_at(bytes, cube + 4)};
+}
+
+// `bytes` relabelled as format `version`, the prelude's checksum made right.
+std::vector<std::uint8_t> with_version(std::vector<std::uint8_t> bytes, std::uint32_t version) {
+    for (int i = 0; i < 4; ++i) bytes[8 + i] = static_cast<std::uint8_t>(version >> (8 * i));
+    const auto check = static_cast<std::uint32_t>(raycache::fnv1a64(bytes.data(), 12));
+    for (int i = 0; i < 4; ++i) bytes[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
+    return bytes;
+}
 } // namespace
 
 TEST_CASE("a CCT cube saved and loaded back holds every texel bit for bit, visible at once") {
@@ -200,23 +226,16 @@ TEST_CASE("a file saved for another scene, object, placement or technique is ref
 }
 
 TEST_CASE("a file of a newer or unknown format version is refused, saying which") {
-    std::vector<std::uint8_t> bytes = small_file();
-    auto with_version = [&](std::uint32_t version) {
-        std::vector<std::uint8_t> b = bytes;
-        for (int i = 0; i < 4; ++i) b[8 + i] = static_cast<std::uint8_t>(version >> (8 * i));
-        const auto check = static_cast<std::uint32_t>(raycache::fnv1a64(b.data(), 12));
-        for (int i = 0; i < 4; ++i) b[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
-        return b;
-    };
-    CHECK(decode<CdctTexel>(with_version(4)).size() == 1u);
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(5)); }), "format version 5 is newer than this RayCache reads (4)"));
+    const std::vector<std::uint8_t> bytes = small_file();
+    CHECK(decode<CdctTexel>(with_version(bytes, 4)).size() == 1u);
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 5)); }), "format version 5 is newer than this RayCache reads (4)"));
     // A format-4 file relabelled as format 3, 2 or 1 does not parse as one (format 3's tiles always carry
     // sixteen records, where this one's say none; formats 1 and 2 lack the cubes' 8 bytes of reach, so they
     // read them as the tile count and a tile).
-    CHECK_FALSE(cache_file_error([&] { decode<CdctTexel>(with_version(3)); }).empty());
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(2)); }), "tiles"));
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(1)); }), "tiles"));
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(0)); }), "unknown format version 0"));
+    CHECK_FALSE(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 3)); }).empty());
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 2)); }), "tiles"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 1)); }), "tiles"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 0)); }), "unknown format version 0"));
     std::vector<std::uint8_t> not_ours = bytes;
     not_ours[0] = 'X';
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(not_ours); }), "not a RayCache cache file"));
@@ -239,14 +258,7 @@ std::vector<std::uint8_t> seed_file(const std::string& name) {
 // `bytes` (one CUBE chunk after the HEAD chunk) with the CUBE payload's 32 bits at `offset` replaced and
 // the chunk's checksum made right again, so that only the value is wrong.
 std::vector<std::uint8_t> with_cube_bits(std::vector<std::uint8_t> bytes, std::size_t offset, std::uint32_t bits) {
-    auto u64_at = [&](std::size_t at) {
-        std::uint64_t v = 0;
-        for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
-        return v;
-    };
-    const std::size_t head = 16;                                     // after the prelude
-    const std::size_t cube = head + 4 + 8 + u64_at(head + 4) + 8;    // after the HEAD chunk
-    const std::size_t payload = cube + 12, size = u64_at(cube + 4);
+    const auto [cube, payload, size] = first_cube_chunk(bytes);
     for (int i = 0; i < 4; ++i) bytes[payload + offset + i] = static_cast<std::uint8_t>(bits >> (8 * i));
     const std::uint64_t check = raycache::fnv1a64(bytes.data() + cube, 12 + size);
     for (int i = 0; i < 8; ++i) bytes[payload + size + i] = static_cast<std::uint8_t>(check >> (8 * i));
@@ -392,13 +404,8 @@ TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded
 // `bytes` (format 4, one cube of one tile written with no record block) as format 3 would have written
 // it: sixteen 4 x 4 record blocks, the first holding `record`, the others none.
 static std::vector<std::uint8_t> as_format3(const std::vector<std::uint8_t>& bytes, const raycache::PathRecord& record) {
-    auto u64_at = [&](std::size_t at) {
-        std::uint64_t v = 0;
-        for (int i = 0; i < 8; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
-        return v;
-    };
-    const std::size_t head = 16, cube = head + 4 + 8 + u64_at(head + 4) + 8, payload = cube + 12, size = u64_at(cube + 4);
-    REQUIRE(u64_at(payload + record_count) % (std::uint64_t{1} << 32) == 0u); // no record block
+    const auto [cube, payload, size] = first_cube_chunk(bytes);
+    REQUIRE(u64_at(bytes, payload + record_count) % (std::uint64_t{1} << 32) == 0u); // no record block
     std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(payload + record_count));
     auto put = [&](std::uint64_t v, int n) {
         for (int i = 0; i < n; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
@@ -415,10 +422,7 @@ static std::vector<std::uint8_t> as_format3(const std::vector<std::uint8_t>& byt
     for (int i = 0; i < 8; ++i) out[cube + 4 + i] = static_cast<std::uint8_t>(new_size >> (8 * i));
     put(raycache::fnv1a64(out.data() + cube, 12 + new_size), 8);
     out.insert(out.end(), bytes.begin() + static_cast<std::ptrdiff_t>(payload + size + 8), bytes.end()); // the END chunk
-    out[8] = 3; // the version, and the prelude's checksum
-    const auto check = static_cast<std::uint32_t>(raycache::fnv1a64(out.data(), 12));
-    for (int i = 0; i < 4; ++i) out[12 + i] = static_cast<std::uint8_t>(check >> (8 * i));
-    return out;
+    return with_version(std::move(out), 3);
 }
 
 TEST_CASE("a format-3 file's 4 x 4 record block gives its record to each 2 x 2 block within it") {
