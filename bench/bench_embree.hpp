@@ -20,6 +20,31 @@ namespace rcx::bench {
 // pyramid (chosen per variant) and crossings more than 0.5 behind the cached surface rejected.
 inline const raycache::ReliefParameters our_relief{0.2f, 0.02f, 1024, 100.0f, 0.5f};
 
+// A SceneCache of `technique` for a scene whose objects move from the first frame on: the tracer's search,
+// and path records kept from the start (as the tracer keeps them for dynamic scenes). Cubes never rest, so
+// the invalidation policies' hit rates and PSNR differ by what they invalidated alone.
+inline std::unique_ptr<raycache::embree::SceneCache> dynamic_scene_cache(raycache::embree::Technique technique) {
+    raycache::embree::SceneCacheSettings settings;
+    settings.relief = our_relief;
+    settings.path_records = raycache::embree::PathRecords::always;
+    settings.min_hit_rate = 0.0f;
+    return std::make_unique<raycache::embree::SceneCache>(technique, settings);
+}
+
+// behind-32 orbited 1 degree a frame while the first of the 32 spheres behind the camera circles (radius
+// 0.2, 3 degrees a frame) and everything else stands still: one moved object among behind-32-sized caches.
+inline Scene behind_with_one_mover() {
+    Scene behind = make_scene("behind-32");
+    behind.path.kind = CameraPath::Kind::orbit;
+    behind.path.step_degrees = 1.0f;
+    Motion m;
+    m.index = 1;
+    m.circle_radius = 0.2f;
+    m.degrees_per_frame = 3.0f;
+    behind.motions.push_back(m);
+    return behind;
+}
+
 // One way of rendering a frame: a mode and, for the cached modes, its own caches.
 struct Variant {
     std::string label;

@@ -114,17 +114,6 @@ struct Outputs {
     std::string exact_why;    // per scenario and technique: what exact emptied, by reason
 };
 
-// A SceneCache of `technique` for a scene whose objects move from the first frame on: the tracer's search,
-// and path records kept from the start (as the tracer keeps them for dynamic scenes). Cubes never rest, so
-// the policies' hit rates and PSNR differ by what they invalidated alone.
-std::unique_ptr<SceneCache> dynamic_scene_cache(raycache::embree::Technique technique) {
-    raycache::embree::SceneCacheSettings settings;
-    settings.relief = rcx::bench::our_relief;
-    settings.path_records = raycache::embree::PathRecords::always;
-    settings.min_hit_rate = 0.0f;
-    return std::make_unique<SceneCache>(technique, settings);
-}
-
 // What each move of `scene` really changed, per technique: the stale-texel oracle's fraction of the valid
 // texels, mean over frames 1.., on caches under `none` (every texel kept). A pass of its own, after the
 // timed one, so that the retracing cannot slow what is timed; frames are deterministic, so its caches hold
@@ -136,7 +125,7 @@ std::vector<double> changed_by_moves(const Options& o, const rcx::Scene& scene) 
     for (std::size_t i = 0; i < std::size(techniques); ++i) {
         variants[i].label = techniques[i].label;
         variants[i].mode = techniques[i].mode;
-        variants[i].caches = dynamic_scene_cache(techniques[i].technique);
+        variants[i].caches = rcx::bench::dynamic_scene_cache(techniques[i].technique);
         tracer.attach_caches(*variants[i].caches, 0);
         order.push_back(&variants[i]);
     }
@@ -175,7 +164,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
             t.variant.mode = techniques[i].mode;
             t.technique_index = i;
             t.policy = &policies[k];
-            t.variant.caches = dynamic_scene_cache(techniques[i].technique); // the tracer's search
+            t.variant.caches = rcx::bench::dynamic_scene_cache(techniques[i].technique); // the tracer's search
             tracer.attach_caches(*t.variant.caches, 0);
         }
     std::vector<rcx::bench::Variant*> order;
@@ -305,15 +294,7 @@ int main(int argc, char** argv) {
         rcx::Scene one = all;
         one.motions.resize(1); // sphere 0, a cached mirror, circling; the other objects stand still
         scenario(o, o.scene + ", one object moves", one, out);
-        rcx::Scene behind = rcx::make_scene("behind-32");
-        behind.path.kind = rcx::CameraPath::Kind::orbit;
-        behind.path.step_degrees = 1.0f;
-        rcx::Motion m;
-        m.index = 1; // the first of the 32 spheres behind the camera
-        m.circle_radius = 0.2f;
-        m.degrees_per_frame = 3.0f;
-        behind.motions.push_back(m);
-        scenario(o, "behind-32, one sphere moves", behind, out);
+        scenario(o, "behind-32, one sphere moves", rcx::bench::behind_with_one_mover(), out);
 
         std::ostringstream md;
         md << "## Dynamic scenes: invalidation when objects move\n\n"

@@ -1,12 +1,18 @@
 // raycache_micro_bench: the cost of one cache operation against one rtcIntersect1, on the same reflected
-// rays of behind-32 (rays leaving the main mirror sphere towards the spheres behind the camera).
+// rays of behind-32 (rays leaving the main mirror sphere towards the spheres behind the camera), and of
+// exact invalidation after one object of behind-32 moved.
 // Google Benchmark; each benchmark cycles through the same 4096 rays.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "bench_embree.hpp"
+#include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
 
 namespace {
@@ -146,6 +152,83 @@ void cdct_search(benchmark::State& state, raycache::DepthSearch search, bool pyr
 BENCHMARK_CAPTURE(cdct_search, linear_thesis_0_2, raycache::DepthSearch::relief, false, 0.2f, 0.02f);
 BENCHMARK_CAPTURE(cdct_search, pyramid, raycache::DepthSearch::relief, true, 0.2f, 0.02f);
 BENCHMARK_CAPTURE(cdct_search, secant, raycache::DepthSearch::secant, false, 0.2f, 0.02f);
+
+// behind-32 with one sphere circling (the dynamic benchmark's scene), CCT and CDCT caches warmed along its
+// walkthrough for `warm_frames` frames at 512 x 512 with exact invalidation of each move, then saved: every
+// iteration loads that state (untimed) and times the exact invalidation of the next move, so each one
+// starts from the same texels. A loaded cube's tiles are allocated in order, a warmed one's as rays came.
+struct MovedSphere {
+    static constexpr int warm_frames = 20;
+    rcx::Scene scene = rcx::bench::behind_with_one_mover();
+    rcx::embree::Tracer tracer{scene};
+    raycache::SceneIdentity identity{rcx::scene_hash(scene), scene.name};
+    std::unique_ptr<raycache::embree::SceneCache> caches[2];
+    std::string files[2];
+    raycache::embree::SceneChange next_move;
+    raycache::embree::SceneChange move_back; // puts the moved sphere's cube back where the files expect it
+
+    MovedSphere() {
+        const raycache::embree::Technique techniques[2] = {raycache::embree::Technique::cct, raycache::embree::Technique::cdct};
+        const rcx::CacheMode modes[2] = {rcx::CacheMode::cct, rcx::CacheMode::cdct};
+        for (int k = 0; k < 2; ++k) {
+            caches[k] = rcx::bench::dynamic_scene_cache(techniques[k]);
+            tracer.attach_caches(*caches[k], 0);
+        }
+        for (int f = 0; f < warm_frames; ++f) {
+            if (f > 0) {
+                const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
+                for (auto& c : caches) rcx::embree::scene_changed(*c, change, raycache::embree::Invalidation::exact);
+            }
+            for (int k = 0; k < 2; ++k) {
+                rcx::bench::Variant v;
+                v.mode = modes[k];
+                v.caches = std::move(caches[k]);
+                rcx::bench::render(tracer, v, scene.camera_at(f), 512, 512);
+                caches[k] = std::move(v.caches);
+            }
+        }
+        next_move = tracer.move_to(scene.at_frame(warm_frames));
+        move_back = tracer.move_to(scene.at_frame(warm_frames - 1));
+        for (int k = 0; k < 2; ++k) {
+            files[k] = (std::filesystem::temp_directory_path() / ("raycache_micro_bench_" + std::to_string(k) + ".rcache")).string();
+            caches[k]->save(files[k], identity);
+        }
+    }
+    ~MovedSphere() {
+        for (const std::string& f : files) std::filesystem::remove(f);
+    }
+};
+
+MovedSphere& moved_sphere() {
+    static MovedSphere m;
+    return m;
+}
+
+// technique: 0 CCT, 1 CDCT; state.range(0): invalidation threads (0: every core).
+void exact_invalidation(benchmark::State& state, int technique) {
+    MovedSphere& m = moved_sphere();
+    raycache::embree::SceneCache& caches = *m.caches[technique];
+    // Written between the load and the timed pass, so that the cubes are not all in the cores' caches, as
+    // after a frame's rendering.
+    std::vector<char> evict(32u << 20);
+    double kept = 0.0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        caches.load(m.files[technique], m.identity);
+        std::fill(evict.begin(), evict.end(), static_cast<char>(evict[0] + 1));
+        benchmark::ClobberMemory();
+        state.ResumeTiming();
+        const raycache::embree::InvalidationStatistics s =
+            rcx::embree::scene_changed(caches, m.next_move, raycache::embree::Invalidation::exact, static_cast<int>(state.range(0)));
+        kept += s.kept_fraction();
+        state.PauseTiming();
+        caches.scene_changed(m.move_back, raycache::embree::Invalidation::none);
+        state.ResumeTiming();
+    }
+    state.counters["kept"] = benchmark::Counter(kept, benchmark::Counter::kAvgIterations);
+}
+BENCHMARK_CAPTURE(exact_invalidation, behind_32_cct, 0)->Arg(1)->Arg(0)->Iterations(60)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(exact_invalidation, behind_32_cdct, 1)->Arg(1)->Arg(0)->Iterations(60)->Unit(benchmark::kMillisecond);
 
 } // namespace
 
