@@ -299,6 +299,27 @@ TEST_CASE("CDCT: a sphere beside a texel's stored point, off every segment from 
     CHECK(after_move({0.0f, 0.0f, 3.0f}, 0.5f) == 1);
 }
 
+TEST_CASE("CDCT: a block whose texels' rays all end short of a sphere in its directions keeps them without testing each texel") {
+    // The texel ten ahead lies in a 2 x 2 block of face coordinates within 0.125 of the +z face's centre:
+    // directions within atan(0.125 sqrt 2) = 0.18 rad of +z. Its rays end on the shell 9.5 .. 10.5 out, so
+    // every segment from the box (z <= 1) to the ends of the block's rays has z <= 10.5.
+    auto after_move = [](glm::vec3 to, float radius) {
+        std::unique_ptr<CdctCube> cube = one_texel_ten_ahead();
+        raycache::SceneChanges changes;
+        changes.moved.push_back({77, {glm::vec3(0.0f, 40.0f, 0.0f), radius}, {to, radius}}); // from far away
+        return raycache::invalidate_changes(*cube, box, parameters, changes);
+    };
+    // Behind the surface on the axis (z 11.5 .. 12.5): the block's cone meets it, its segments do not, so
+    // no texel of it is tested (blocks_by_texel counts blocks whose texels were).
+    const raycache::InvalidationCounts behind = after_move({0.1f, 0.1f, 12.0f}, 0.5f);
+    CHECK(behind.blocks_by_texel == 0);
+    CHECK(behind.dropped == 0);
+    // Between the box and the surface, on the axis: the block's segments meet it, and then the texel's.
+    const raycache::InvalidationCounts between = after_move({0.0f, 0.0f, 3.0f}, 0.5f);
+    CHECK(between.blocks_by_texel == 1);
+    CHECK(between.dropped_by_cone == 1);
+}
+
 TEST_CASE("CDCT: rays known to leave from within 1 of the centre keep a texel that only segments from the box's corners would meet") {
     // The texel of one_texel_ten_ahead() (a point 10 along +z). Its segments start from the ball of origins: the
     // box's, radius sqrt(3) = 1.73, or, when the cube answers only rays from within 1 of the centre (the

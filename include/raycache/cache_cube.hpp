@@ -510,16 +510,26 @@ public:
         if (tile->records) s.paths = record_of(tile->records[tile_union_slot]);
         return s;
     }
-    // Makes tile `i`'s union that of its blocks holding a recorded texel (after invalidation emptied some).
-    // Between frames only.
-    void retighten_tile_union(std::size_t i) noexcept {
+    // Makes tile `i`'s union `kept` after invalidation emptied some of its texels: the caller, which has
+    // just read the tile's blocks, passes the union of those still holding a recorded texel (a union
+    // missing any of their paths would let invalidation keep texels a move changed). Between frames only.
+    void retighten_tile_union(std::size_t i, const PathRecord& kept) noexcept {
         assert_between_frames();
         Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
         if (!tile || !tile->records) return;
         PathUnion& u = tile->records[tile_union_slot];
         u.clear();
-        for_each_block_state_of_tile(i, [&](const BlockState& b) {
-            if (b.valid_texels > b.unrecorded_texels) merge_path(u, b.record()); // a recorded texel
+        merge_path(u, kept);
+    }
+
+    // f(TexelAddress, bool recorded) for each texel of block `b` (from for_each_block_state()) holding a
+    // value; `recorded`: its store brought a path record. Between frames only.
+    template <class F>
+    void for_each_value_of_block(const BlockState& b, F&& f) const {
+        const Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return;
+        for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
+            if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) f(t, recorded(*tile, slot));
         });
     }
 

@@ -12,7 +12,8 @@
 //     (raycache/shared/cone_sphere.h; tested top-down: a face, a 16 x 16 tile, a 4 x 4 group of 2 x 2
 //     record blocks, a block, then each texel); for a CDCT texel, whose searches end on its stored surface
 //     (its distance, give or take the search's gap limit), the segments from the origins' ball to that
-//     shell of its directions meet the sphere (the hull of two balls: raycache_ball_hull_meets_sphere);
+//     shell of its directions meet the sphere (the hull of two balls: raycache_ball_hull_meets_sphere;
+//     first for a whole block, with the shell of all its texels' ends);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
 //     raycache/path_record.hpp, tested once the unions of its tile and of its 4 x 4 group of blocks met X): X among the
 //     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
@@ -109,7 +110,8 @@ struct InvalidationCounts {
     std::size_t dropped_unrecorded = 0; // ... whose store brought no path record
     std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those of tiles a change may reach
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
-    std::size_t blocks_by_texel = 0; // blocks whose cone met a moved sphere, so each texel was tested
+    std::size_t blocks_by_texel = 0; // blocks whose rays (their cone; a CDCT's, up to where its texels' rays
+                                     // end) can meet a moved sphere, so each texel was tested
 };
 
 namespace detail {
@@ -255,12 +257,13 @@ struct SerialFor {
 };
 
 // invalidate_changes() below; reach(texel): where the rays a texel answers end (TexelReach: nowhere for the
-// CCT). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
+// CCT); texel_rays_may_end: whether reach() can return an end at all (else blocks skip the walk over their
+// texels' ends). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
 // and returns when all have: runs of tiles go to f, and tiles share nothing they write but the cube's
 // atomic counts, so the result does not depend on the threads.
 template <class Texel, class Reach, class ParallelFor>
 InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach,
-                              ParallelFor&& parallel_for) {
+                              bool texel_rays_may_end, ParallelFor&& parallel_for) {
     cube.assert_between_frames();
     check_scene_changes(changes);
     cube.settle_budget(); // the tiles this frame keeps, before their records are read
@@ -336,6 +339,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 return shared::raycache_region_cone(face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
             }, changes.moved);
         }
+        // The union of the blocks left holding a recorded texel, for the tile once it lost texels.
+        PathRecord kept_paths;
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
@@ -346,22 +351,46 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 c.dropped_by_path += d;
                 continue;
             }
-            if (!geometric) continue; // unrecorded texels went in the first pass
-            const bool cone_meets =
-                group_cone_meets[k] &&
-                any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n); },
-                                   changes.moved);
+            const bool any_recorded = t.valid_texels > t.unrecorded_texels;
+            if (!geometric) { // unrecorded texels went in the first pass
+                if (any_recorded) kept_paths.merge(t.record());
+                continue;
+            }
+            bool cone_meets = false;
+            if (group_cone_meets[k]) {
+                const shared::raycache_direction_cone cone = shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n);
+                cone_meets = any_sphere_in_cone(ball, [&] { return cone; }, changes.moved);
+                // Rays that end (a CDCT's): the segments to the shell of the ends of all the block's
+                // recorded texels, which holds each texel's, tested first; most blocks miss it, and their
+                // texels then need no test of their own.
+                if (cone_meets && texel_rays_may_end && any_recorded) {
+                    TexelReach shell{std::numeric_limits<float>::infinity(), 0.0f};
+                    cube.for_each_value_of_block(t, [&](const TexelAddress& a, bool recorded) {
+                        if (!recorded) return;
+                        const TexelReach r = reach(a);
+                        shell.near = std::min(shell.near, r.near);
+                        shell.far = std::max(shell.far, r.far);
+                    });
+                    cone_meets = texel_rays_meet(ball, [&] { return cone; }, changes.moved, cube_ball, shell);
+                }
+            }
             if (cone_meets) ++c.blocks_by_texel;
-            else if (t.unrecorded_texels == 0) continue; // nothing here can have changed
+            else if (t.unrecorded_texels == 0) { // nothing here can have changed
+                kept_paths.merge(t.record());
+                continue;
+            }
+            bool keeps_recorded = false;
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
                 const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
                                                                  changes.moved, cube_ball, reach(a));
                 c.dropped_by_cone += meets;
+                keeps_recorded = keeps_recorded || !meets;
                 return meets;
             });
+            if (keeps_recorded) kept_paths.merge(t.record());
         }
-        if (c.dropped != dropped_before) cube.retighten_tile_union(index); // emptied blocks' paths leave it
+        if (c.dropped != dropped_before) cube.retighten_tile_union(index, kept_paths); // emptied blocks' paths leave it
     };
     // Runs of tiles_per_run allocated tiles for parallel_for, each reading its own tiles' records; their
     // counts are added in order.
@@ -394,7 +423,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 template <class Texel, class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
-    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return detail::TexelReach{}; }, parallel_for);
+    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return detail::TexelReach{}; }, false, parallel_for);
 }
 
 // invalidate_changes() over a CDCT cube in `bounds`, searched with `p`: its rays leave from anywhere in the
@@ -425,7 +454,7 @@ InvalidationCounts invalidate_changes(CdctCube& cube, const CubeRays& rays, cons
             reach.far = (texel->distance + gap) * 1.0001f + 1e-4f;
             return reach;
         },
-        parallel_for);
+        std::isfinite(gap), parallel_for);
 }
 
 // invalidate_changes() over a CDCT cache's cube (its rays leave from anywhere in its box), then its depth
