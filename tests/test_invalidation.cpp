@@ -245,6 +245,23 @@ TEST_CASE("merging a path whose escapes have no hit point before them with one t
     CHECK_FALSE(raycache::detail::paths_meet(c, changes));
 }
 
+TEST_CASE("the path tests report every test that met, repeat only the tests asked for, and can stop at the first") {
+    // A lit path that hit object 9 at (5, 0, 0) and bounced on to (6, 0, 0); object 9 moves by 0.5 along Y,
+    // radius 0.5, around (10, 0, 0): on the shadow rays to the light at (15, 0, 0), off the hit points' box.
+    PathRecord path = saw(9);
+    path.hit(9, glm::vec3(6.0f, 0.0f, 0.0f));
+    path.lit = true;
+    path.chained = true;
+    raycache::SceneChanges changes;
+    changes.moved.push_back({9, {glm::vec3(10.0f, 0.0f, 0.0f), 0.5f}, {glm::vec3(10.0f, 0.5f, 0.0f), 0.5f}});
+    changes.lights.push_back(glm::vec3(15.0f, 0.0f, 0.0f));
+    using namespace raycache::detail;
+    CHECK(paths_meeting(path, changes) == (path_test_moved | path_test_shadow));
+    CHECK(paths_meeting(path, changes, path_test_shadow | path_test_between) == path_test_shadow);
+    CHECK(paths_meeting(path, changes, path_test_between | path_test_escape) == 0u);
+    CHECK(paths_meeting(path, changes, every_path_test, true) == path_test_moved); // the first in order
+}
+
 TEST_CASE("a block whose paths include escapes with no hit point to start from goes at any move") {
     // Two texels of one 2 x 2 block of face +X: one path hit object 7 at (5, 0, 0) and stopped, the other
     // escaped along +X with no hit recorded before it (no bound on where it started). Object 9 moves far out

@@ -199,53 +199,97 @@ bool texel_rays_meet(const OriginBall& ball, ConeOf&& cone_of, const std::vector
     });
 }
 
-// Whether the rest of the paths whose union is `t` (a record block's, or a group of blocks') can have met a
-// change.
-inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) {
+// The tests of paths_meeting(), one bit each. Each one bounds every path of the union it is given, so a test
+// that finds no path of a tile's union meeting a change finds none of a group of its blocks either: a group
+// (and a block of a group) repeats only the tests its larger region's union met.
+enum PathTest : unsigned {
+    path_test_unbound = 1u << 0, // escapes with no bound on where they went (or started)
+    path_test_light = 1u << 1,   // a moved light, and the paths hit something
+    path_test_changed = 1u << 2, // a changed object among the objects hit
+    path_test_moved = 1u << 3,   // a moved object among them
+    path_test_between = 1u << 4, // bounces between hit points: a moved sphere in their box
+    path_test_shadow = 1u << 5,  // shadow rays: a moved sphere in the cone from a light to the hit points
+    path_test_escape = 1u << 6,  // escaped bounces: a moved sphere met by rays from the hit points in their cone
+};
+inline constexpr unsigned every_path_test = (1u << 7) - 1u;
+
+// Which of `tests` find that the rest of the paths whose union is `t` (a tile's, a group of blocks', a
+// block's) can have met a change: 0 when none. With `first_only`, it stops at the first that does.
+inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, unsigned tests = every_path_test, bool first_only = false) {
+    unsigned met = 0;
+    // Records that `test` met; true when the caller has its answer.
+    auto meets = [&](unsigned test) {
+        met |= test;
+        return first_only;
+    };
     const bool has_vertices = t.has_vertices();
     const bool has_escapes = t.has_escapes();
-    if (t.escapes_from_nowhere()) return true; // escapes from points not recorded: no bound
-    if (t.unbounded) return true; // a bounce escaped with no bound known
-    if (changes.light_moved && has_vertices) return true;
+    // Escapes from points not recorded, or a bounce that escaped with no bound known: no bound.
+    if ((tests & path_test_unbound) && (t.escapes_from_nowhere() || t.unbounded) && meets(path_test_unbound)) return met;
+    if ((tests & path_test_light) && changes.light_moved && has_vertices && meets(path_test_light)) return met;
     auto tagged = [&](std::uint64_t key) {
         const std::uint64_t bits = object_bits(key);
         return (t.objects & bits) == bits;
     };
-    for (std::uint64_t key : changes.changed)
-        if (tagged(key)) return true;
-    if (changes.moved.empty()) return false;
+    if (tests & path_test_changed)
+        for (std::uint64_t key : changes.changed)
+            if (tagged(key)) {
+                if (meets(path_test_changed)) return met;
+                break;
+            }
+    if (changes.moved.empty()) return met;
+    if (tests & path_test_moved)
+        for (const SceneChanges::Move& m : changes.moved)
+            if (tagged(m.key)) {
+                if (meets(path_test_moved)) return met;
+                break;
+            }
+    if (!has_vertices) return met;
     // The ball around the hit points, once per union; hit points so far out that it overflows bound nothing.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
     const float farthest = std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi));
-    if (has_vertices && !(shared::raycache_is_finite3(centre) && std::isfinite(radius) && std::isfinite(farthest))) return true;
-    // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped).
-    const float scale = std::max(1.0f, farthest);
-    const float escapes_from = radius + 1e-3f * scale; // the ball the escaped bounces leave from
-    // The escapes' cone costs eight normalisations: made only for a sphere that the escapes' directions face.
-    std::optional<shared::raycache_direction_cone> escapes;
-    for (const SceneChanges::Move& m : changes.moved) {
-        if (tagged(m.key)) return true;
-        if (!has_vertices) continue;
-        // Cheapest first (any one meeting decides): bounces between hit points, shadow rays, escaped bounces.
-        for (const BoundingSphere& s : {m.before, m.after})
-            if (t.chained && shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius)) return true;
-        for (const BoundingSphere& s : {m.before, m.after}) {
-            if (t.lit)
-                for (const glm::vec3& light : changes.lights)
-                    if (shared::raycache_cone_meets_sphere(light, shared::raycache_cone_toward_ball(light, centre, radius), s.centre,
-                                                           s.radius))
-                        return true;
-            // Escaped bounces: rays from the hit points' ball facing the sphere, and in the escapes' cone.
-            if (has_escapes &&
-                shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius)) {
-                if (!escapes) escapes = shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi);
-                if (shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, *escapes, s.centre, s.radius)) return true;
+    if (!(shared::raycache_is_finite3(centre) && std::isfinite(radius) && std::isfinite(farthest))) {
+        meets(tests & (path_test_between | path_test_shadow | path_test_escape));
+        return met;
+    }
+    auto each_moved_sphere = [&](auto&& f) {
+        for (const SceneChanges::Move& m : changes.moved)
+            if (f(m.before) || f(m.after)) return true;
+        return false;
+    };
+    if ((tests & path_test_between) && t.chained &&
+        each_moved_sphere([&](const BoundingSphere& s) { return shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius); }) &&
+        meets(path_test_between))
+        return met;
+    if ((tests & path_test_shadow) && t.lit)
+        for (const glm::vec3& light : changes.lights) {
+            const shared::raycache_direction_cone to_hits = shared::raycache_cone_toward_ball(light, centre, radius);
+            if (each_moved_sphere([&](const BoundingSphere& s) { return shared::raycache_cone_meets_sphere(light, to_hits, s.centre, s.radius); })) {
+                if (meets(path_test_shadow)) return met;
+                break;
             }
         }
+    if ((tests & path_test_escape) && has_escapes) {
+        // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped):
+        // rays from the hit points' ball facing the sphere, and in the escapes' cone, which costs eight
+        // normalisations and is made only for a sphere that the escapes' directions face.
+        const float escapes_from = radius + 1e-3f * std::max(1.0f, farthest);
+        std::optional<shared::raycache_direction_cone> escapes;
+        if (each_moved_sphere([&](const BoundingSphere& s) {
+                if (!shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius))
+                    return false;
+                if (!escapes) escapes = shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi);
+                return shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, *escapes, s.centre, s.radius);
+            }))
+            meets(path_test_escape);
     }
-    return false;
+    return met;
 }
+
+// Whether the rest of the paths whose union is `t` can have met a change (paths_meeting(), stopping at the
+// first test that meets).
+inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) { return paths_meeting(t, changes, every_path_test, true) != 0; }
 
 // Calls f(i) for each i in [0, count) on this thread: the parallel_for of the serial overloads (here and
 // SceneCache's).
@@ -285,7 +329,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     // 4 x 4 texels), then by block, then by texel: the union of a group's paths and the group's cone are
     // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
     // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
-    // have no hit points to start from makes its group's union unbounded (PathRecord::merge).
+    // have no hit points to start from makes its group's union unbounded (PathRecord::merge). A group
+    // repeats only the path tests its tile's union met, and a block only those its group's met (PathTest).
     constexpr int edge = CacheCube<Texel>::tile_edge;
     constexpr int per_side = edge / CacheCube<Texel>::record_edge;
     constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
@@ -310,7 +355,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                                changes.moved);
         // A tile whose cone misses, whose every value came with a record, and whose union of paths (a
         // superset of its blocks') misses too keeps everything: its blocks are not read (most tiles).
-        if (!tile_cone_meets && !summary->any_unrecorded && !paths_meet(summary->paths, changes)) return;
+        const unsigned tile_paths_meet = paths_meeting(summary->paths, changes);
+        if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
         std::array<Block, CacheCube<Texel>::record_blocks> blocks;
         std::size_t count = 0;
@@ -327,11 +373,12 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             g.paths.merge(r);
             g.any = true;
         }
-        std::array<bool, group_count> group_paths_meet{}, group_cone_meets{};
+        std::array<unsigned, group_count> group_paths_meet{}; // the tests that met (paths_meeting)
+        std::array<bool, group_count> group_cone_meets{};
         for (std::size_t k = 0; k < group_count; ++k) {
             const Group& g = groups[k];
             if (!g.any) continue;
-            group_paths_meet[k] = paths_meet(g.paths, changes);
+            group_paths_meet[k] = paths_meeting(g.paths, changes, tile_paths_meet);
             // The group's square of texels, clipped to the face as its blocks are.
             constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
@@ -344,7 +391,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k] && paths_meet(t.record(), changes)) {
+            if (group_paths_meet[k] && paths_meeting(t.record(), changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
