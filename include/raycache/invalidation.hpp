@@ -404,6 +404,13 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 continue;
             }
             bool cone_meets = false;
+            // The reaches of the block's recorded texels, when the block's shell was tested.
+            struct Reached {
+                TexelAddress address;
+                TexelReach reach;
+            };
+            std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
+            std::size_t reached = 0;
             if (group_cone_meets[k]) {
                 const shared::raycache_direction_cone cone = shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n);
                 cone_meets = any_sphere_in_cone(ball, [&] { return cone; }, changes.moved);
@@ -415,12 +422,19 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                     cube.for_each_value_of_block(t, [&](const TexelAddress& a, bool recorded) {
                         if (!recorded) return;
                         const TexelReach r = reach(a);
+                        reaches[reached++] = {a, r};
                         shell.near = std::min(shell.near, r.near);
                         shell.far = std::max(shell.far, r.far);
                     });
                     cone_meets = texel_rays_meet(ball, [&] { return cone; }, changes.moved, cube_ball, shell);
                 }
             }
+            // A recorded texel's reach, from the walk above when it made one (in the same texel order).
+            std::size_t next_reach = 0;
+            auto reach_of = [&](const TexelAddress& a) {
+                if (next_reach < reached && reaches[next_reach].address == a) return reaches[next_reach++].reach;
+                return reach(a);
+            };
             if (cone_meets) ++c.blocks_by_texel;
             else if (t.unrecorded_texels == 0) { // nothing here can have changed
                 kept_paths.merge(t.record());
@@ -430,7 +444,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
                 const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
-                                                                 changes.moved, cube_ball, reach(a));
+                                                                 changes.moved, cube_ball, reach_of(a));
                 c.dropped_by_cone += meets;
                 keeps_recorded = keeps_recorded || !meets;
                 return meets;
@@ -494,11 +508,13 @@ InvalidationCounts invalidate_changes(CdctCube& cube, const CubeRays& rays, cons
     return detail::invalidate(
         cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes,
         [&](const TexelAddress& a) {
-            const std::optional<DepthSample> texel = cube.load(a);
+            const CdctTexel::Word word = cube.load_word(a); // the distance alone: the colour is not needed
             detail::TexelReach reach;
-            if (!texel || !(texel->distance < p.max_depth) || !std::isfinite(gap)) return reach; // an escape, clamped, or no limit
-            reach.near = std::max(0.0f, (texel->distance - gap) * 0.9999f - 1e-4f);
-            reach.far = (texel->distance + gap) * 1.0001f + 1e-4f;
+            if (!CdctTexel::is_valid(word)) return reach;
+            const float distance = shared::raycache_cdct_distance(CdctTexel::to_pair(word));
+            if (!(distance < p.max_depth) || !std::isfinite(gap)) return reach; // an escape, clamped, or no limit
+            reach.near = std::max(0.0f, (distance - gap) * 0.9999f - 1e-4f);
+            reach.far = (distance + gap) * 1.0001f + 1e-4f;
             return reach;
         },
         std::isfinite(gap), parallel_for);
