@@ -245,6 +245,25 @@ TEST_CASE("merging a path whose escapes have no hit point before them with one t
     CHECK_FALSE(raycache::detail::paths_meet(c, changes));
 }
 
+TEST_CASE("shadow rays end at the light: a sphere moving beyond the lit hit points is not met, one between them and the light is") {
+    // A path lit at (5, 0, 0) by a light at (15, 0, 0): its shadow ray is the segment x 5 .. 15 on the X axis.
+    // Object 9 moves along Y by 0.5, radius 0.5, around x = -5 (beyond the hit point, seen from the light: in
+    // the light's cone over the hit point but on no shadow ray), around x = 10 (on the shadow ray), or around
+    // (10, 3) (beside it).
+    REQUIRE((raycache::object_bits(7) & raycache::object_bits(9)) != raycache::object_bits(9)); // no Bloom alias
+    PathRecord lit = saw(7);
+    lit.lit = true;
+    auto moving_around = [](glm::vec3 centre) {
+        raycache::SceneChanges changes;
+        changes.moved.push_back({9, {centre, 0.5f}, {centre + glm::vec3(0.0f, 0.5f, 0.0f), 0.5f}});
+        changes.lights.push_back(glm::vec3(15.0f, 0.0f, 0.0f));
+        return changes;
+    };
+    CHECK(raycache::detail::paths_meeting(lit, moving_around({-5.0f, 0.0f, 0.0f})) == 0u);
+    CHECK(raycache::detail::paths_meeting(lit, moving_around({10.0f, 0.0f, 0.0f})) == raycache::detail::path_test_shadow);
+    CHECK(raycache::detail::paths_meeting(lit, moving_around({10.0f, 3.0f, 0.0f})) == 0u);
+}
+
 TEST_CASE("the path tests report every test that met, repeat only the tests asked for, and can stop at the first") {
     // A lit path that hit object 9 at (5, 0, 0) and bounced on to (6, 0, 0); object 9 moves by 0.5 along Y,
     // radius 0.5, around (10, 0, 0): on the shadow rays to the light at (15, 0, 0), off the hit points' box.
@@ -469,7 +488,7 @@ TEST_CASE("paths whose hit points lie so far out that their bounds overflow are 
     CHECK(counts.dropped_by_path == 1u);
 }
 
-TEST_CASE("a moved shadow caster that no cached ray sees: the cone from the light over the paths' hit points catches its shadow") {
+TEST_CASE("a moved shadow caster that no cached ray sees: the segments from the paths' hit points to the light catch its shadow") {
     // The cube stores only rays within 11 degrees of horizontal, so no texel's cone reaches the caster high
     // above ball 0; only its shadow on ball 0 changes when it moves.
     World before = make_world();

@@ -16,7 +16,7 @@
 //     first for a whole block, with the shell of all its texels' ends);
 //   - or the rest of a path stored into its record block can have met X (the block's PathRecord union,
 //     raycache/path_record.hpp, tested once the unions of its tile and of its 4 x 4 group of blocks met X): X among the
-//     objects hit (Bloom mask), A or B in the cone from a light to the box of hit points (shadow rays), A or
+//     objects hit (Bloom mask), A or B on the segments from the box of hit points to a light (shadow rays), A or
 //     B in that box (bounces between hit points), A or B met by rays from that box in the cone of the
 //     directions in which bounces escaped, a bounce that escaped with no such bound (unbounded), or a cached
 //     object whose own cube changed (transitively, by the caller);
@@ -208,7 +208,7 @@ enum PathTest : unsigned {
     path_test_changed = 1u << 2, // a changed object among the objects hit
     path_test_moved = 1u << 3,   // a moved object among them
     path_test_between = 1u << 4, // bounces between hit points: a moved sphere in their box
-    path_test_shadow = 1u << 5,  // shadow rays: a moved sphere in the cone from a light to the hit points
+    path_test_shadow = 1u << 5,  // shadow rays: a moved sphere on the segments from the hit points to a light
     path_test_escape = 1u << 6,  // escaped bounces: a moved sphere met by rays from the hit points in their cone
 };
 inline constexpr unsigned every_path_test = (1u << 7) - 1u;
@@ -253,6 +253,9 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         meets(tests & (path_test_between | path_test_shadow | path_test_escape));
         return met;
     }
+    // Rays after the first hit leave the hit points offset by the tracer's surface epsilon (PathRecord::escaped):
+    // from this ball around them.
+    const float rays_from = radius + 1e-3f * std::max(1.0f, farthest);
     auto each_moved_sphere = [&](auto&& f) {
         for (const SceneChanges::Move& m : changes.moved)
             if (f(m.before) || f(m.after)) return true;
@@ -262,25 +265,26 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         each_moved_sphere([&](const BoundingSphere& s) { return shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius); }) &&
         meets(path_test_between))
         return met;
+    // Shadow rays end at the light: they lie in the hull of the light and the ball they leave from (not in the
+    // whole cone from the light, which goes on past the hit points).
     if ((tests & path_test_shadow) && t.lit)
         for (const glm::vec3& light : changes.lights) {
-            const shared::raycache_direction_cone to_hits = shared::raycache_cone_toward_ball(light, centre, radius);
-            if (each_moved_sphere([&](const BoundingSphere& s) { return shared::raycache_cone_meets_sphere(light, to_hits, s.centre, s.radius); })) {
+            if (each_moved_sphere([&](const BoundingSphere& s) {
+                    return shared::raycache_ball_hull_meets_sphere(light, 0.0f, centre, rays_from, s.centre, s.radius);
+                })) {
                 if (meets(path_test_shadow)) return met;
                 break;
             }
         }
     if ((tests & path_test_escape) && has_escapes) {
-        // Escaped bounces leave the hit points, offset by the tracer's surface epsilon (PathRecord::escaped):
-        // rays from the hit points' ball facing the sphere, and in the escapes' cone, which costs eight
-        // normalisations and is made only for a sphere that the escapes' directions face.
-        const float escapes_from = radius + 1e-3f * std::max(1.0f, farthest);
+        // Escaped bounces: rays from the hit points' ball facing the sphere, and in the escapes' cone, which
+        // costs eight normalisations and is made only for a sphere that the escapes' directions face.
         std::optional<shared::raycache_direction_cone> escapes;
         if (each_moved_sphere([&](const BoundingSphere& s) {
-                if (!shared::raycache_direction_box_may_reach_sphere(centre, escapes_from, t.escape_lo, t.escape_hi, s.centre, s.radius))
+                if (!shared::raycache_direction_box_may_reach_sphere(centre, rays_from, t.escape_lo, t.escape_hi, s.centre, s.radius))
                     return false;
                 if (!escapes) escapes = shared::raycache_cone_of_direction_box(t.escape_lo, t.escape_hi);
-                return shared::raycache_rays_from_ball_meet_sphere(centre, escapes_from, *escapes, s.centre, s.radius);
+                return shared::raycache_rays_from_ball_meet_sphere(centre, rays_from, *escapes, s.centre, s.radius);
             }))
             meets(path_test_escape);
     }
