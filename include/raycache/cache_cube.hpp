@@ -476,7 +476,9 @@ public:
             const std::uint64_t row_mask = (std::uint64_t{1} << (t.column1 - t.column0)) - 1u;
             for (int row = t.row0; row < t.row1; ++row) {
                 const int slot = slot_of(TexelAddress{t.face, t.column0, row});
-                t.valid_texels += bit_count((recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask);
+                const std::uint64_t bits = (recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask;
+                if constexpr (record_edge == 2) t.valid_texels += static_cast<int>(bits - (bits >> 1)); // 0, 1, 1, 2
+                else t.valid_texels += bit_count(bits);
             }
             // A block holding no value answers for no path: its union is not read (most blocks of a
             // sparse tile after a cold frame are such).
@@ -997,7 +999,10 @@ private:
         return (static_cast<std::size_t>(t.face) * per_edge + static_cast<std::size_t>(t.row / tile_edge)) * per_edge +
                static_cast<std::size_t>(t.column / tile_edge);
     }
-    static int slot_of(const TexelAddress& t) noexcept { return (t.row % tile_edge) * tile_edge + t.column % tile_edge; }
+    // (Addresses on the cube are never negative: unsigned remainders by the power of two are masks.)
+    static int slot_of(const TexelAddress& t) noexcept {
+        return static_cast<int>(static_cast<unsigned>(t.row) % tile_edge * tile_edge + static_cast<unsigned>(t.column) % tile_edge);
+    }
 
     Tile* tile_of(const TexelAddress& t) const noexcept {
         Tile* tile = state_->tiles[tile_index(t)].load(std::memory_order_acquire);
@@ -1096,13 +1101,17 @@ private:
         return n;
 #endif
     }
+    // Where the target has no popcount instruction (x86-64 without -mpopcnt, the distributions' default),
+    // __builtin_popcountll is a call into libgcc: a tenth of an invalidation pass's instructions went there.
+    // The SWAR count below is a dozen inlined operations.
     static int bit_count(std::uint64_t bits) noexcept {
-#if defined(__GNUC__) || defined(__clang__)
+#if defined(__POPCNT__) || defined(__ARM_NEON) || defined(__aarch64__)
         return __builtin_popcountll(bits);
 #else
-        int n = 0;
-        for (; bits; bits &= bits - 1) ++n;
-        return n;
+        bits -= (bits >> 1) & 0x5555555555555555ull;
+        bits = (bits & 0x3333333333333333ull) + ((bits >> 2) & 0x3333333333333333ull);
+        bits = (bits + (bits >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+        return static_cast<int>((bits * 0x0101010101010101ull) >> 56);
 #endif
     }
     // How many of a tile's bits are set.
@@ -1285,7 +1294,8 @@ private:
     }
     // The record block of a texel within its tile.
     static int block_of(const TexelAddress& t) noexcept {
-        return (t.row % tile_edge / record_edge) * (tile_edge / record_edge) + t.column % tile_edge / record_edge;
+        return static_cast<int>(static_cast<unsigned>(t.row) % tile_edge / record_edge * (tile_edge / record_edge) +
+                                static_cast<unsigned>(t.column) % tile_edge / record_edge);
     }
     static void merge_path(PathUnion& r, const PathRecord& path) noexcept {
         if ((r.objects.load(std::memory_order_relaxed) & path.objects) != path.objects)
@@ -1349,7 +1359,10 @@ private:
             lo = glm::vec3(1.0f), hi = glm::vec3(-1.0f);
             return;
         }
-        for (int k = 0; k < 3; ++k) lo[k] = unordered(min[k].load(std::memory_order_relaxed)), hi[k] = unordered(max[k].load(std::memory_order_relaxed));
+        // By member, not by glm's operator[] (a switch per component, on invalidation's hot path).
+        auto value = [](const std::atomic<std::uint32_t>& v) { return unordered(v.load(std::memory_order_relaxed)); };
+        lo = glm::vec3(value(min[0]), value(min[1]), value(min[2]));
+        hi = glm::vec3(value(max[0]), value(max[1]), value(max[2]));
     }
 
     // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and
