@@ -341,13 +341,27 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     constexpr int groups_per_side = per_side / group_edge;
     constexpr std::size_t group_count = groups_per_side * groups_per_side;
     static_assert(per_side % group_edge == 0, "groups tile a tile");
-    auto group_of = [](int block) { return static_cast<std::size_t>((block / per_side / group_edge) * groups_per_side + block % per_side / group_edge); };
+    auto group_of = [](int block) { // (unsigned: divisions by the powers of two are shifts)
+        const auto b = static_cast<unsigned>(block);
+        return static_cast<std::size_t>(b / per_side / group_edge * groups_per_side + b % per_side / group_edge);
+    };
     struct Group {
         PathRecord paths; // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
         bool any = false;
     };
-    // Tile `index`, its blocks read here (on the run's thread), counted into `c`.
-    auto tile = [&](std::size_t index, InvalidationCounts& c) {
+    struct Reached { // a recorded texel's reach, from its block's shell walk
+        TexelAddress address;
+        TexelReach reach;
+    };
+    // What a tile's pass reads its blocks into: made once for a run of tiles, not for each tile (64 path
+    // records to initialise).
+    struct Scratch {
+        std::array<Block, CacheCube<Texel>::record_blocks> blocks;      // those holding a value
+        std::array<PathRecord, CacheCube<Texel>::record_blocks> records; // blocks[i]'s, converted once
+        std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
+    };
+    // Tile `index`, its blocks read here (on the run's thread) into `scratch`, counted into `c`.
+    auto tile = [&](std::size_t index, InvalidationCounts& c, Scratch& scratch) {
         const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
         if (!summary) return;
         // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
@@ -362,7 +376,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         const unsigned tile_paths_meet = paths_meeting(summary->paths, changes);
         if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
-        std::array<Block, CacheCube<Texel>::record_blocks> blocks;
+        auto& blocks = scratch.blocks;
+        auto& records = scratch.records;
         std::size_t count = 0;
         cube.for_each_block_state_of_tile(index, [&](const Block& b) {
             ++c.blocks;
@@ -373,8 +388,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             Group& g = groups[group_of(t.block)];
-            const PathRecord r = t.record();
-            g.paths.merge(r);
+            records[i] = t.record();
+            g.paths.merge(records[i]);
             g.any = true;
         }
         std::array<unsigned, group_count> group_paths_meet{}; // the tests that met (paths_meeting)
@@ -390,12 +405,12 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 return shared::raycache_region_cone(face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
             }, changes.moved);
         }
-        // The union of the blocks left holding a recorded texel, for the tile once it lost texels.
-        PathRecord kept_paths;
+        // The blocks left holding a recorded texel: their union becomes the tile's once it lost texels.
+        std::array<bool, CacheCube<Texel>::record_blocks> keeps_recorded{};
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k] && paths_meeting(t.record(), changes, group_paths_meet[k], true)) {
+            if (group_paths_meet[k] && paths_meeting(records[i], changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
@@ -404,16 +419,12 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             }
             const bool any_recorded = t.valid_texels > t.unrecorded_texels;
             if (!geometric) { // unrecorded texels went in the first pass
-                if (any_recorded) kept_paths.merge(t.record());
+                keeps_recorded[i] = any_recorded;
                 continue;
             }
             bool cone_meets = false;
             // The reaches of the block's recorded texels, when the block's shell was tested.
-            struct Reached {
-                TexelAddress address;
-                TexelReach reach;
-            };
-            std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
+            auto& reaches = scratch.reaches;
             std::size_t reached = 0;
             if (group_cone_meets[k]) {
                 const shared::raycache_direction_cone cone = shared::raycache_region_cone(t.face, t.column0, t.row0, t.column1, t.row1, n);
@@ -441,21 +452,24 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             };
             if (cone_meets) ++c.blocks_by_texel;
             else if (t.unrecorded_texels == 0) { // nothing here can have changed
-                kept_paths.merge(t.record());
+                keeps_recorded[i] = true;
                 continue;
             }
-            bool keeps_recorded = false;
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
                 const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
                                                                  changes.moved, cube_ball, reach_of(a));
                 c.dropped_by_cone += meets;
-                keeps_recorded = keeps_recorded || !meets;
+                keeps_recorded[i] = keeps_recorded[i] || !meets;
                 return meets;
             });
-            if (keeps_recorded) kept_paths.merge(t.record());
         }
-        if (c.dropped != dropped_before) cube.retighten_tile_union(index, kept_paths); // emptied blocks' paths leave it
+        if (c.dropped != dropped_before) { // emptied blocks' paths leave the tile's union
+            PathRecord kept;
+            for (std::size_t i = 0; i < count; ++i)
+                if (keeps_recorded[i]) kept.merge(records[i]);
+            cube.retighten_tile_union(index, kept);
+        }
     };
     // Runs of tiles_per_run allocated tiles for parallel_for, each reading its own tiles' records; their
     // counts are added in order.
@@ -463,7 +477,8 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
     const std::vector<std::size_t> tiles = cube.allocated_tile_indices();
     std::vector<InvalidationCounts> runs((tiles.size() + tiles_per_run - 1) / tiles_per_run);
     parallel_for(runs.size(), [&](std::size_t r) {
-        for (std::size_t i = r * tiles_per_run; i < std::min(tiles.size(), (r + 1) * tiles_per_run); ++i) tile(tiles[i], runs[r]);
+        Scratch scratch;
+        for (std::size_t i = r * tiles_per_run; i < std::min(tiles.size(), (r + 1) * tiles_per_run); ++i) tile(tiles[i], runs[r], scratch);
     });
     for (const InvalidationCounts& r : runs) {
         counts.blocks += r.blocks;
