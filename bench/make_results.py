@@ -253,11 +253,14 @@ def micro_table(results):
     if not os.path.exists(mpath):
         return "(micro-benchmarks not run)\n"
     m = micro(mpath)
-    out = ["| benchmark | ns per operation | texels per search | hit rate |", "|---|---|---|---|"]
+    out = ["| benchmark | ns per operation | texels per search | hit rate | texels kept |", "|---|---|---|---|---|"]
+    to_ns = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
     for name, r in m.items():
         extra = [r.get("texels_per_search"), r.get("hit_rate")]
         extra = [f"{float(x):.2f}" if x is not None else "-" for x in extra]
-        out.append(f"| {name} | {float(r['real_time']):.1f} | {extra[0]} | {extra[1]} |")
+        kept = f"{100 * float(r['kept']):.1f}%" if r.get("kept") is not None else "-"
+        ns = float(r["real_time"]) * to_ns[r.get("time_unit", "ns")]
+        out.append(f"| {name} | {ns:.1f} | {extra[0]} | {extra[1]} | {kept} |")
     return "\n".join(out) + "\n"
 
 
@@ -304,7 +307,10 @@ def main():
            "One operation on the reflected rays of behind-32's main sphere; CDCT searches on a cube filled by tracing every "
            "texel. `cct_store` stores into a cube emptied every 4096 stores, so most of its stores allocate their tile "
            "(1.4 KiB, zeroed). A secant search's reads form one dependent chain (texel choice, tile table, texel word, "
-           "square roots): it costs more than the ray it answers here.", "", micro_table(results)]
+           "square roots): it costs more than the ray it answers here. `exact_invalidation` is one move's exact invalidation "
+           "of behind-32's caches (one of the 32 spheres moved, path records kept: the dynamic benchmark's scene, warmed "
+           "for 20 frames at 512 x 512 and loaded from a cache file before each iteration), on 1 thread and on every "
+           "core (`/0`): the same state every time, so builds compare side by side.", "", micro_table(results)]
     with open(output, "w") as f:
         f.write("\n".join(md))
     print(f"wrote {output}")
