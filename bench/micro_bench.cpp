@@ -227,8 +227,8 @@ void exact_invalidation(benchmark::State& state, int technique) {
     }
     state.counters["kept"] = benchmark::Counter(kept, benchmark::Counter::kAvgIterations);
 }
-BENCHMARK_CAPTURE(exact_invalidation, behind_32_cct, 0)->Arg(1)->Arg(0)->Iterations(60)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(exact_invalidation, behind_32_cdct, 1)->Arg(1)->Arg(0)->Iterations(60)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(exact_invalidation, behind_32_cct, 0)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(exact_invalidation, behind_32_cdct, 1)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 } // namespace
 
