@@ -477,7 +477,8 @@ public:
             for (int row = t.row0; row < t.row1; ++row) {
                 const int slot = slot_of(TexelAddress{t.face, t.column0, row});
                 const std::uint64_t bits = (recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask;
-                if constexpr (record_edge == 2) t.valid_texels += static_cast<int>(bits - (bits >> 1)); // 0, 1, 1, 2
+                // Two bits count as v - (v >> 1) (0, 1, 1, 2): 6% of a CCT move's instructions below bit_count().
+                if constexpr (record_edge == 2) t.valid_texels += static_cast<int>(bits - (bits >> 1));
                 else t.valid_texels += bit_count(bits);
             }
             // A block holding no value answers for no path: its union is not read (most blocks of a
