@@ -162,7 +162,7 @@ struct MovedSphere {
     rcx::Scene scene = rcx::bench::behind_with_one_mover();
     rcx::embree::Tracer tracer{scene};
     raycache::SceneIdentity identity{rcx::scene_hash(scene), scene.name};
-    std::unique_ptr<raycache::embree::SceneCache> caches[2];
+    rcx::bench::Variant variants[2]; // the CCT's and the CDCT's caches
     std::string files[2];
     raycache::embree::SceneChange next_move;
     raycache::embree::SceneChange move_back; // puts the moved sphere's cube back where the files expect it
@@ -171,27 +171,22 @@ struct MovedSphere {
         const raycache::embree::Technique techniques[2] = {raycache::embree::Technique::cct, raycache::embree::Technique::cdct};
         const rcx::CacheMode modes[2] = {rcx::CacheMode::cct, rcx::CacheMode::cdct};
         for (int k = 0; k < 2; ++k) {
-            caches[k] = rcx::bench::dynamic_scene_cache(techniques[k]);
-            tracer.attach_caches(*caches[k], 0);
+            variants[k].mode = modes[k];
+            variants[k].caches = rcx::bench::dynamic_scene_cache(techniques[k]);
+            tracer.attach_caches(*variants[k].caches, 0);
         }
         for (int f = 0; f < warm_frames; ++f) {
             if (f > 0) {
                 const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
-                for (auto& c : caches) rcx::embree::scene_changed(*c, change, raycache::embree::Invalidation::exact);
+                for (auto& v : variants) rcx::embree::scene_changed(*v.caches, change, raycache::embree::Invalidation::exact);
             }
-            for (int k = 0; k < 2; ++k) {
-                rcx::bench::Variant v;
-                v.mode = modes[k];
-                v.caches = std::move(caches[k]);
-                rcx::bench::render(tracer, v, scene.camera_at(f), 512, 512);
-                caches[k] = std::move(v.caches);
-            }
+            for (auto& v : variants) rcx::bench::render(tracer, v, scene.camera_at(f), 512, 512);
         }
         next_move = tracer.move_to(scene.at_frame(warm_frames));
         move_back = tracer.move_to(scene.at_frame(warm_frames - 1));
         for (int k = 0; k < 2; ++k) {
             files[k] = (std::filesystem::temp_directory_path() / ("raycache_micro_bench_" + std::to_string(k) + ".rcache")).string();
-            caches[k]->save(files[k], identity);
+            variants[k].caches->save(files[k], identity);
         }
     }
     ~MovedSphere() {
@@ -207,7 +202,7 @@ MovedSphere& moved_sphere() {
 // technique: 0 CCT, 1 CDCT; state.range(0): invalidation threads (0: every core).
 void exact_invalidation(benchmark::State& state, int technique) {
     MovedSphere& m = moved_sphere();
-    raycache::embree::SceneCache& caches = *m.caches[technique];
+    raycache::embree::SceneCache& caches = *m.variants[technique].caches;
     // Written between the load and the timed pass, so that the cubes are not all in the cores' caches, as
     // after a frame's rendering.
     std::vector<char> evict(32u << 20);
