@@ -19,6 +19,7 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "raycache/invalidation.hpp"
@@ -461,6 +462,71 @@ TEST_CASE("stores with path records from 4 threads, then exact invalidation betw
     CHECK(one.first.blocks == four.first.blocks); // the same tiles' blocks read
     CHECK(tiles > 4 * 16);                        // more than four runs of tiles to share
     CHECK(one.second == four.second);
+}
+
+TEST_CASE("the passes of two cubes, their runs dealt from one list to 4 threads in reverse, empty what each cube's serial invalidation empties") {
+    // As SceneCache spreads every cube's runs over its threads at once: the CCT cube above and a CDCT cube
+    // filled from the same store list; object 3 moves. Expected: the texels and counts of invalidate_changes()
+    // on one thread, cube by cube.
+    const std::vector<StoreItem> items = make_store_list(40000);
+    const raycache::CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    const raycache::ReliefParameters relief{};
+    auto fill = [&](auto& cube) {
+        for (const StoreItem& item : items) {
+            raycache::PathRecord path;
+            path.hit(static_cast<std::uint64_t>(raycache::shared::raycache_face_of(item.direction)), 4.0f * glm::normalize(item.direction));
+            path.lit = true;
+            if constexpr (std::is_same_v<std::decay_t<decltype(cube)>, raycache::CdctCube>)
+                cube.store(item.direction, raycache::DepthSample{item.colour, 4.0f}, path);
+            else
+                cube.store(item.direction, item.colour, path);
+        }
+        cube.begin_frame();
+    };
+    raycache::SceneChanges changes;
+    changes.moved.push_back({3, {glm::vec3(3.0f, 0.5f, 0.0f), 0.4f}, {glm::vec3(3.0f, 0.8f, 0.2f), 0.4f}});
+    changes.lights.push_back(glm::vec3(0.0f, 8.0f, 0.0f));
+    auto contents = [&](const auto& cube) {
+        std::vector<std::uint64_t> content(static_cast<std::size_t>(texel_count));
+        cube.for_each_valid_texel([&](const TexelAddress& a) { content[raycache::texel_linear_index(a, face_size)] = 1u + cube.load_word(a); });
+        return content;
+    };
+    raycache::CctCube cct_serial(face_size), cct_pooled(face_size);
+    raycache::CdctCube cdct_serial(face_size), cdct_pooled(face_size);
+    fill(cct_serial), fill(cct_pooled), fill(cdct_serial), fill(cdct_pooled);
+    const raycache::CubeRays cct_rays{bounds, 0.1f};
+    const raycache::InvalidationCounts cct_expected = raycache::invalidate_changes(cct_serial, cct_rays, changes);
+    const raycache::InvalidationCounts cdct_expected = raycache::invalidate_changes(cdct_serial, bounds, relief, changes);
+
+    std::vector<std::unique_ptr<raycache::InvalidationPass>> passes;
+    passes.push_back(raycache::make_invalidation_pass(cct_pooled, cct_rays, changes));
+    passes.push_back(raycache::make_invalidation_pass(cdct_pooled, raycache::CubeRays{bounds}, relief, changes));
+    std::vector<std::pair<std::size_t, std::size_t>> runs;
+    for (std::size_t p = 0; p < passes.size(); ++p)
+        for (std::size_t r = 0; r < passes[p]->runs(); ++r) runs.emplace_back(p, r);
+    REQUIRE(passes[0]->runs() > 4);
+    REQUIRE(passes[1]->runs() > 4);
+    std::reverse(runs.begin(), runs.end());
+    run_threads(thread_count, [&](int t) {
+        for (std::size_t i = static_cast<std::size_t>(t); i < runs.size(); i += static_cast<std::size_t>(thread_count))
+            passes[runs[i].first]->run(runs[i].second);
+    });
+    const raycache::InvalidationCounts got[2] = {passes[0]->finish(), passes[1]->finish()};
+    const raycache::InvalidationCounts expected[2] = {cct_expected, cdct_expected};
+    for (int k = 0; k < 2; ++k) {
+        CAPTURE(k);
+        CHECK(expected[k].dropped > 0);
+        CHECK(expected[k].dropped < expected[k].valid_before);
+        CHECK(got[k].valid_before == expected[k].valid_before);
+        CHECK(got[k].dropped == expected[k].dropped);
+        CHECK(got[k].dropped_by_path == expected[k].dropped_by_path);
+        CHECK(got[k].dropped_by_cone == expected[k].dropped_by_cone);
+        CHECK(got[k].blocks == expected[k].blocks);
+        CHECK(got[k].blocks_by_path == expected[k].blocks_by_path);
+        CHECK(got[k].blocks_by_texel == expected[k].blocks_by_texel);
+    }
+    CHECK(contents(cct_pooled) == contents(cct_serial));
+    CHECK(contents(cdct_pooled) == contents(cdct_serial));
 }
 
 TEST_CASE("the confidence test spread over bands on 4 threads marks exactly the pairs a brute-force pass over every texel finds") {

@@ -31,7 +31,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -304,47 +306,100 @@ struct SerialFor {
     }
 };
 
-// invalidate_changes() below; reach(texel): where the rays a texel answers end (TexelReach: nowhere for the
-// CCT); texel_rays_may_end: whether reach() can return an end at all (else blocks skip the walk over their
-// texels' ends). parallel_for(count, f) calls f(i) once for each i in [0, count), on any threads,
-// and returns when all have: runs of tiles go to f, and tiles share nothing they write but the cube's
-// atomic counts, so the result does not depend on the threads.
-template <class Texel, class Reach, class ParallelFor>
-InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach&& reach,
-                              bool texel_rays_may_end, ParallelFor&& parallel_for) {
-    cube.assert_between_frames();
-    check_scene_changes(changes);
-    cube.settle_budget(); // the tiles this frame keeps, before their records are read
-    InvalidationCounts counts;
-    counts.valid_before = cube.valid_texels();
-    const int n = cube.face_size();
-    const bool nothing = changes.moved.empty() && changes.changed.empty() && !changes.light_moved;
-    if (nothing) return counts;
-    // Top level: which faces' cones, from the whole cube's ball, can meet a moved sphere at all.
-    bool face_meets[RAYCACHE_FACE_COUNT];
-    const OriginBall cube_ball = origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f));
-    for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
-        face_meets[face] = any_sphere_in_cone(cube_ball, [&] { return shared::raycache_region_cone(face, 0, 0, n, n, n); }, changes.moved);
+} // namespace detail
 
+// One cube's exact invalidation, its tiles split into runs that any threads may take: for a scheduler that
+// invalidates many cubes at once (SceneCache spreads every cube's runs over its threads in one go, so a
+// large cube's tiles and the small cubes share the threads). Made by make_invalidation_pass() below, which
+// checks the changes and settles the cube's budget (on the calling thread); then run(r) once for each r in
+// [0, runs()), on any threads (runs share nothing they write but the cube's atomic counts); then finish(),
+// once, after every run: the counts, added in run order, so the result does not depend on the threads.
+// The cube, the changes and the pass's other arguments must outlive it. Between frames only.
+class InvalidationPass {
+public:
+    virtual ~InvalidationPass() = default;
+    virtual std::size_t runs() const noexcept = 0;
+    virtual void run(std::size_t r) = 0;
+    virtual InvalidationCounts finish() = 0;
+};
+
+// Runs a pass made by make_invalidation_pass() and finishes it: parallel_for(count, f) calls f(i) once for
+// each i in [0, count), on any threads, and returns when all have.
+template <class ParallelFor>
+InvalidationCounts run_invalidation_pass(InvalidationPass& pass, ParallelFor&& parallel_for) {
+    if (pass.runs() > 0) parallel_for(pass.runs(), [&pass](std::size_t r) { pass.run(r); });
+    return pass.finish();
+}
+
+namespace detail {
+
+// A cube's pass; reach(texel): where the rays a texel answers end (TexelReach: nowhere for the CCT);
+// texel_rays_may_end: whether reach() can return an end at all (else blocks skip the walk over their
+// texels' ends); finished(counts): after the runs (a CDCT cache's pyramid follows its texels).
+template <class Texel, class Reach>
+class CubeInvalidation final : public InvalidationPass {
+public:
+    CubeInvalidation(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes, Reach reach, bool texel_rays_may_end,
+                     std::function<void(const InvalidationCounts&)> finished = {})
+        : cube_(cube), rays_(rays), changes_(changes), reach_(std::move(reach)), texel_rays_may_end_(texel_rays_may_end),
+          finished_(std::move(finished)), n_(cube.face_size()),
+          geometric_(!changes.moved.empty() || changes.light_moved), // else only names of changed objects
+          cube_ball_(origin_ball(rays, false, glm::vec3(0.0f), glm::vec3(0.0f))) {
+        cube.assert_between_frames();
+        check_scene_changes(changes);
+        cube.settle_budget(); // the tiles this frame keeps, before their records are read
+        counts_.valid_before = cube.valid_texels();
+        const bool nothing = changes.moved.empty() && changes.changed.empty() && !changes.light_moved;
+        if (nothing) return;
+        // Top level: which faces' cones, from the whole cube's ball, can meet a moved sphere at all.
+        for (int face = 0; face < RAYCACHE_FACE_COUNT; ++face)
+            face_meets_[face] = any_sphere_in_cone(cube_ball_, [&] { return shared::raycache_region_cone(face, 0, 0, n_, n_, n_); }, changes.moved);
+        tiles_ = cube.allocated_tile_indices();
+        runs_.resize((tiles_.size() + tiles_per_run - 1) / tiles_per_run);
+    }
+
+    std::size_t runs() const noexcept override { return runs_.size(); }
+
+    void run(std::size_t r) override {
+        Scratch scratch;
+        for (std::size_t i = r * tiles_per_run; i < std::min(tiles_.size(), (r + 1) * tiles_per_run); ++i) tile(tiles_[i], runs_[r], scratch);
+    }
+
+    InvalidationCounts finish() override {
+        InvalidationCounts counts = counts_;
+        for (const InvalidationCounts& r : runs_) {
+            counts.blocks += r.blocks;
+            counts.dropped += r.dropped;
+            counts.dropped_by_path += r.dropped_by_path;
+            counts.dropped_by_cone += r.dropped_by_cone;
+            counts.dropped_unrecorded += r.dropped_unrecorded;
+            counts.blocks_by_path += r.blocks_by_path;
+            counts.blocks_by_texel += r.blocks_by_texel;
+        }
+        if (finished_) finished_(counts);
+        return counts;
+    }
+
+private:
     using Block = typename CacheCube<Texel>::BlockState;
-    const bool geometric = !changes.moved.empty() || changes.light_moved; // else only names of changed objects
-
+    // Runs of this many allocated tiles, each reading its own tiles' records.
+    static constexpr std::size_t tiles_per_run = 16;
     // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
     // 4 x 4 texels), then by block, then by texel: the union of a group's paths and the group's cone are
     // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
     // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
     // have no hit points to start from makes its group's union unbounded (PathRecord::merge). A group
     // repeats only the path tests its tile's union met, and a block only those its group's met (PathTest).
-    constexpr int edge = CacheCube<Texel>::tile_edge;
-    constexpr int per_side = edge / CacheCube<Texel>::record_edge;
-    constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
-    constexpr int groups_per_side = per_side / group_edge;
-    constexpr std::size_t group_count = groups_per_side * groups_per_side;
+    static constexpr int edge = CacheCube<Texel>::tile_edge;
+    static constexpr int per_side = edge / CacheCube<Texel>::record_edge;
+    static constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
+    static constexpr int groups_per_side = per_side / group_edge;
+    static constexpr std::size_t group_count = groups_per_side * groups_per_side;
     static_assert(per_side % group_edge == 0, "groups tile a tile");
-    auto group_of = [](int block) { // (unsigned: divisions by the powers of two are shifts)
+    static std::size_t group_of(int block) { // (unsigned: divisions by the powers of two are shifts)
         const auto b = static_cast<unsigned>(block);
         return static_cast<std::size_t>(b / per_side / group_edge * groups_per_side + b % per_side / group_edge);
-    };
+    }
     struct Group {
         PathRecord paths; // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
         bool any = false;
@@ -360,15 +415,19 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
         std::array<PathRecord, CacheCube<Texel>::record_blocks> records; // blocks[i]'s, converted once
         std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
     };
+
     // Tile `index`, its blocks read here (on the run's thread) into `scratch`, counted into `c`.
-    auto tile = [&](std::size_t index, InvalidationCounts& c, Scratch& scratch) {
+    void tile(std::size_t index, InvalidationCounts& c, Scratch& scratch) {
+        CacheCube<Texel>& cube = cube_;
+        const SceneChanges& changes = changes_;
+        const int n = n_;
         const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
         if (!summary) return;
         // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
-        const OriginBall ball = origin_ball(rays, summary->has_origins, summary->origin_lo, summary->origin_hi);
+        const OriginBall ball = origin_ball(rays_, summary->has_origins, summary->origin_lo, summary->origin_hi);
         const int face = summary->face, c0 = summary->column0, r0 = summary->row0;
         const bool tile_cone_meets =
-            geometric && face_meets[face] &&
+            geometric_ && face_meets_[face] &&
             any_sphere_in_cone(ball, [&] { return shared::raycache_region_cone(face, c0, r0, std::min(n, c0 + edge), std::min(n, r0 + edge), n); },
                                changes.moved);
         // A tile whose cone misses, whose every value came with a record, and whose union of paths (a
@@ -418,7 +477,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 continue;
             }
             const bool any_recorded = t.valid_texels > t.unrecorded_texels;
-            if (!geometric) { // unrecorded texels went in the first pass
+            if (!geometric_) { // unrecorded texels went in the first pass
                 keeps_recorded[i] = any_recorded;
                 continue;
             }
@@ -432,23 +491,23 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 // Rays that end (a CDCT's): the segments to the shell of the ends of all the block's
                 // recorded texels, which holds each texel's, tested first; most blocks miss it, and their
                 // texels then need no test of their own.
-                if (cone_meets && texel_rays_may_end && any_recorded) {
+                if (cone_meets && texel_rays_may_end_ && any_recorded) {
                     TexelReach shell{std::numeric_limits<float>::infinity(), 0.0f};
                     cube.for_each_value_of_block(t, [&](const TexelAddress& a, bool recorded) {
                         if (!recorded) return;
-                        const TexelReach r = reach(a);
+                        const TexelReach r = reach_(a);
                         reaches[reached++] = {a, r};
                         shell.near = std::min(shell.near, r.near);
                         shell.far = std::max(shell.far, r.far);
                     });
-                    cone_meets = texel_rays_meet(ball, [&] { return cone; }, changes.moved, cube_ball, shell);
+                    cone_meets = texel_rays_meet(ball, [&] { return cone; }, changes.moved, cube_ball_, shell);
                 }
             }
             // A recorded texel's reach, from the walk above when it made one (in the same texel order).
             std::size_t next_reach = 0;
             auto reach_of = [&](const TexelAddress& a) {
                 if (next_reach < reached && reaches[next_reach].address == a) return reaches[next_reach++].reach;
-                return reach(a);
+                return reach_(a);
             };
             if (cone_meets) ++c.blocks_by_texel;
             else if (t.unrecorded_texels == 0) { // nothing here can have changed
@@ -458,7 +517,7 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
             c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
                 const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
-                                                                 changes.moved, cube_ball, reach_of(a));
+                                                                 changes.moved, cube_ball_, reach_of(a));
                 c.dropped_by_cone += meets;
                 keeps_recorded[i] = keeps_recorded[i] || !meets;
                 return meets;
@@ -470,29 +529,79 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
                 if (keeps_recorded[i]) kept.merge(records[i]);
             cube.retighten_tile_union(index, kept);
         }
-    };
-    // Runs of tiles_per_run allocated tiles for parallel_for, each reading its own tiles' records; their
-    // counts are added in order.
-    constexpr std::size_t tiles_per_run = 16;
-    const std::vector<std::size_t> tiles = cube.allocated_tile_indices();
-    std::vector<InvalidationCounts> runs((tiles.size() + tiles_per_run - 1) / tiles_per_run);
-    parallel_for(runs.size(), [&](std::size_t r) {
-        Scratch scratch;
-        for (std::size_t i = r * tiles_per_run; i < std::min(tiles.size(), (r + 1) * tiles_per_run); ++i) tile(tiles[i], runs[r], scratch);
-    });
-    for (const InvalidationCounts& r : runs) {
-        counts.blocks += r.blocks;
-        counts.dropped += r.dropped;
-        counts.dropped_by_path += r.dropped_by_path;
-        counts.dropped_by_cone += r.dropped_by_cone;
-        counts.dropped_unrecorded += r.dropped_unrecorded;
-        counts.blocks_by_path += r.blocks_by_path;
-        counts.blocks_by_texel += r.blocks_by_texel;
     }
-    return counts;
-}
+
+    CacheCube<Texel>& cube_;
+    const CubeRays rays_;
+    const SceneChanges& changes_;
+    const Reach reach_;
+    const bool texel_rays_may_end_;
+    const std::function<void(const InvalidationCounts&)> finished_;
+    const int n_;
+    const bool geometric_;
+    const OriginBall cube_ball_;
+    InvalidationCounts counts_;        // valid_before
+    bool face_meets_[RAYCACHE_FACE_COUNT] = {};
+    std::vector<std::size_t> tiles_;   // the allocated tiles, in index order
+    std::vector<InvalidationCounts> runs_; // each run's counts
+};
+
+// Where a CCT texel's rays end: nowhere (its cone).
+struct NoReach {
+    TexelReach operator()(const TexelAddress&) const noexcept { return {}; }
+};
+
+// Where a CDCT texel's rays end: its searches end on its stored surface, within `gap` of its distance
+// (make_invalidation_pass for a CdctCube).
+struct CdctReach {
+    const CdctCube* cube;
+    float gap, max_depth;
+    TexelReach operator()(const TexelAddress& a) const {
+        const CdctTexel::Word word = cube->load_word(a); // the distance alone: the colour is not needed
+        TexelReach reach;
+        if (!CdctTexel::is_valid(word)) return reach;
+        const float distance = shared::raycache_cdct_distance(CdctTexel::to_pair(word));
+        if (!(distance < max_depth) || !std::isfinite(gap)) return reach; // an escape, clamped, or no limit
+        reach.near = std::max(0.0f, (distance - gap) * 0.9999f - 1e-4f);
+        reach.far = (distance + gap) * 1.0001f + 1e-4f;
+        return reach;
+    }
+};
 
 } // namespace detail
+
+// The pass of invalidate_changes() over a CCT cube (`rays` with its origin test), or over a CDCT cube as a
+// CCT's (rays that never end: their cones).
+template <class Texel>
+std::unique_ptr<InvalidationPass> make_invalidation_pass(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes) {
+    return std::make_unique<detail::CubeInvalidation<Texel, detail::NoReach>>(cube, rays, changes, detail::NoReach{}, false);
+}
+
+// The pass of invalidate_changes() over a CDCT cube whose rays leave from within rays.origin_radius of its
+// centre (rays.origin_drift is not used: the CDCT has no origin test), searched with `p`: a texel holding
+// distance s answers only rays that meet its stored surface, within epsilon of it or at most max_gap behind
+// it (the searches' tests; or at the box's exit, inside the box's ball), so its rays end between s - g and
+// s + g from the centre, g = max(p.max_gap, p.epsilon): only a moved sphere that meets the segments from the
+// box's ball to that shell can have changed it (an escape's rays, or any with no gap limit, do not end:
+// the texel's cone).
+inline std::unique_ptr<InvalidationPass> make_invalidation_pass(CdctCube& cube, const CubeRays& rays, const ReliefParameters& p,
+                                                                const SceneChanges& changes) {
+    const float gap = std::max(p.max_gap, p.epsilon);
+    return std::make_unique<detail::CubeInvalidation<CdctTexel, detail::CdctReach>>(
+        cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes, detail::CdctReach{&cube, gap, p.max_depth}, std::isfinite(gap));
+}
+
+// The pass over a CDCT cache's cube whose rays leave from within origin_radius of its centre (infinity: from
+// anywhere in its box); finish() then rebuilds its depth pyramid when texels were dropped.
+inline std::unique_ptr<InvalidationPass> make_invalidation_pass(CdctCache& cache, float origin_radius, const SceneChanges& changes) {
+    const ReliefParameters& p = cache.parameters();
+    const float gap = std::max(p.max_gap, p.epsilon);
+    return std::make_unique<detail::CubeInvalidation<CdctTexel, detail::CdctReach>>(
+        cache.cube(), CubeRays{cache.bounds(), -1.0f, origin_radius}, changes, detail::CdctReach{&cache.cube(), gap, p.max_depth},
+        std::isfinite(gap), [&cache](const InvalidationCounts& counts) {
+            if (counts.dropped > 0) cache.rebuild_pyramid();
+        });
+}
 
 // One pass of exact invalidation over a cube: a CCT cube (`rays` with its origin test), or a CDCT cube
 // (rays from anywhere in its box: origin_drift < 0; a CdctCache: the overloads below). Between frames only.
@@ -503,15 +612,10 @@ InvalidationCounts invalidate(CacheCube<Texel>& cube, const CubeRays& rays, cons
 template <class Texel, class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CacheCube<Texel>& cube, const CubeRays& rays, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
-    return detail::invalidate(cube, rays, changes, [](const TexelAddress&) { return detail::TexelReach{}; }, false, parallel_for);
+    return run_invalidation_pass(*make_invalidation_pass(cube, rays, changes), parallel_for);
 }
 
-// invalidate_changes() over a CDCT cube in `bounds`, searched with `p`: its rays leave from anywhere in the
-// box, and a texel holding distance s answers only rays that meet its stored surface, within epsilon of it
-// or at most max_gap behind it (the searches' tests; or at the box's exit, inside the box's ball), so its
-// rays end between s - g and s + g from the centre, g = max(p.max_gap, p.epsilon): only a moved sphere that
-// meets the segments from the box's ball to that shell can have changed it (an escape's rays, or any with
-// no gap limit, do not end: the texel's cone).
+// invalidate_changes() over a CDCT cube in `bounds`, searched with `p` (make_invalidation_pass()).
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, const ReliefParameters& p, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
@@ -523,20 +627,7 @@ InvalidationCounts invalidate_changes(CdctCube& cube, const CubeBounds& bounds, 
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCube& cube, const CubeRays& rays, const ReliefParameters& p, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
-    const float gap = std::max(p.max_gap, p.epsilon);
-    return detail::invalidate(
-        cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes,
-        [&](const TexelAddress& a) {
-            const CdctTexel::Word word = cube.load_word(a); // the distance alone: the colour is not needed
-            detail::TexelReach reach;
-            if (!CdctTexel::is_valid(word)) return reach;
-            const float distance = shared::raycache_cdct_distance(CdctTexel::to_pair(word));
-            if (!(distance < p.max_depth) || !std::isfinite(gap)) return reach; // an escape, clamped, or no limit
-            reach.near = std::max(0.0f, (distance - gap) * 0.9999f - 1e-4f);
-            reach.far = (distance + gap) * 1.0001f + 1e-4f;
-            return reach;
-        },
-        std::isfinite(gap), parallel_for);
+    return run_invalidation_pass(*make_invalidation_pass(cube, rays, p, changes), parallel_for);
 }
 
 // invalidate_changes() over a CDCT cache's cube (its rays leave from anywhere in its box), then its depth
@@ -550,10 +641,7 @@ InvalidationCounts invalidate_changes(CdctCache& cache, const SceneChanges& chan
 template <class ParallelFor = detail::SerialFor>
 InvalidationCounts invalidate_changes(CdctCache& cache, float origin_radius, const SceneChanges& changes,
                                       ParallelFor&& parallel_for = {}) {
-    const InvalidationCounts counts =
-        invalidate_changes(cache.cube(), CubeRays{cache.bounds(), -1.0f, origin_radius}, cache.parameters(), changes, parallel_for);
-    if (counts.dropped > 0) cache.rebuild_pyramid();
-    return counts;
+    return run_invalidation_pass(*make_invalidation_pass(cache, origin_radius, changes), parallel_for);
 }
 
 // After a cube was resampled into another (raycache/adaptive_resolution.hpp, resample_into: each texel of

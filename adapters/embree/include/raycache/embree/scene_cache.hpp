@@ -686,18 +686,21 @@ public:
                 todo.clear();
                 for (std::size_t i = 0; i < entries_.size(); ++i)
                     if (!changed[i]) todo.push_back(i);
+                // Every cube's runs of tiles in one parallel_for: a cube of many tiles (a mirror that fills
+                // the view) shares its tiles among the threads while the small cubes' runs fill the gaps,
+                // with no wait between cubes. The passes are made here, in entry order (each settles its
+                // cube's budget), and finished in parallel (a CDCT pyramid each).
+                std::vector<std::unique_ptr<InvalidationPass>> passes;
+                std::vector<std::pair<std::size_t, std::size_t>> runs; // (pass, run)
+                for (std::size_t k = 0; k < todo.size(); ++k) {
+                    passes.push_back(invalidation_pass(entries_[todo[k]], c));
+                    for (std::size_t r = 0; r < passes.back()->runs(); ++r) runs.emplace_back(k, r);
+                }
+                const std::function<void(std::size_t)> run = [&](std::size_t j) { passes[runs[j].first]->run(runs[j].second); };
+                parallel_for(runs.size(), run);
                 counts.assign(todo.size(), InvalidationCounts{});
-                // A cube of many tiles (a mirror that fills the view) would keep one thread busy while the
-                // others wait, so such cubes share their tiles among the threads, one cube after another;
-                // the other cubes go one to a task.
-                std::vector<std::size_t> small, large;
-                for (std::size_t k = 0; k < todo.size(); ++k)
-                    (allocated_tiles(entries_[todo[k]]) > shared_cube_tiles ? large : small).push_back(k);
-                const std::function<void(std::size_t)> one = [&](std::size_t j) {
-                    counts[small[j]] = invalidate_entry(entries_[todo[small[j]]], c, detail::SerialFor{});
-                };
-                parallel_for(small.size(), one);
-                for (std::size_t k : large) counts[k] = invalidate_entry(entries_[todo[k]], c, parallel_for);
+                const std::function<void(std::size_t)> finish = [&](std::size_t k) { counts[k] = passes[k]->finish(); };
+                parallel_for(todo.size(), finish);
                 for (std::size_t k = 0; k < todo.size(); ++k) {
                     stats.dropped += counts[k].dropped;
                     (transitive ? stats.dropped_transitively : stats.dropped_by_path) += counts[k].dropped_by_path;
@@ -921,19 +924,13 @@ private:
         else e.cdct->clear(); // and its pyramid
         return valid;
     }
-    // Cubes with more tiles than this share them among the threads in scene_changed() (16 tiles a task).
-    static constexpr std::size_t shared_cube_tiles = 64;
-    std::size_t allocated_tiles(const Entry& e) const {
-        return with_cube(e, [](const auto& cube) { return cube.allocated_tiles(); });
-    }
-    // One exact pass over an entry's cube, its tiles spread by parallel_for (invalidate_changes()).
-    template <class ParallelFor>
-    InvalidationCounts invalidate_entry(Entry& e, const SceneChanges& changes, ParallelFor&& parallel_for) {
+    // The exact invalidation pass over an entry's cube (make_invalidation_pass()).
+    std::unique_ptr<InvalidationPass> invalidation_pass(Entry& e, const SceneChanges& changes) {
         // Every origin stored from or answered so far, within the box's ball (tested at most).
         const float reach = e.origins->restrict_to_seen(box_origin_radius(e.bounds));
-        if (!e.cct) return invalidate_changes(*e.cdct, reach, changes, parallel_for); // and its pyramid
+        if (!e.cct) return make_invalidation_pass(*e.cdct, reach, changes); // and its pyramid
         const float drift = origin_drift_ >= 0.0f ? origin_drift_ * e.bounds.half_size : -1.0f;
-        return invalidate_changes(*e.cct, CubeRays{e.bounds, drift, reach}, changes, parallel_for);
+        return make_invalidation_pass(*e.cct, CubeRays{e.bounds, drift, reach}, changes);
     }
 
     // The entry of `id`: a plain geometry, an (instance, geometry) pair, or else the whole instance; in a
