@@ -400,8 +400,7 @@ public:
     }
 
     // One record block (record_edge x record_edge texels) of an allocated tile, for invalidation
-    // (raycache/invalidation.hpp): its texels, the union of the path records stored into them, and the box
-    // of the origins its tile's texels were stored from (visible and pending).
+    // (raycache/invalidation.hpp): its texels and the union of the path records stored into them.
     struct BlockState {
         std::size_t tile;                // the tile's index
         int block;                       // the block within the tile
@@ -410,8 +409,6 @@ public:
         glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
         glm::vec3 escape_lo, escape_hi;  // box of their escaped bounces' unit directions; empty while lo.x > hi.x
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
-        bool has_origins;
-        glm::vec3 origin_lo, origin_hi;  // box of the origins stored from (when has_origins)
         int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
         int valid_texels;                // texels of the block holding a value (recorded or not)
 
@@ -429,8 +426,8 @@ public:
         }
     };
 
-    // f(const BlockState&) for every record block of every allocated tile that lies on the face, in tile
-    // then block order. Between frames only.
+    // f(const BlockState&) for every record block holding a value, of every allocated tile, in tile then
+    // block order. Between frames only.
     template <class F>
     void for_each_block_state(F&& f) const {
         for (std::size_t i = 0; i < tile_count(); ++i) for_each_block_state_of_tile(i, f);
@@ -457,7 +454,6 @@ public:
         BlockState t{};
         t.tile = i;
         t.face = first.face;
-        t.has_origins = origins_of(*tile, t.origin_lo, t.origin_hi);
         for (int b = 0; b < record_blocks; ++b) {
             t.block = b;
             t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
@@ -481,10 +477,11 @@ public:
                 if constexpr (record_edge == 2) t.valid_texels += static_cast<int>(bits - (bits >> 1));
                 else t.valid_texels += bit_count(bits);
             }
-            // A block holding no value answers for no path: its union is not read (most blocks of a
-            // sparse tile after a cold frame are such).
-            static const PathUnion none; // also every block's of a cube without records
-            const PathUnion& r = tile->records && t.valid_texels > 0 ? tile->records[b] : none;
+            // A block holding no value answers for no path and has nothing to empty: it is passed over
+            // (most blocks of a sparse tile after a cold frame are such).
+            if (t.valid_texels == 0) continue;
+            static const PathUnion none; // every block's of a cube without records
+            const PathUnion& r = tile->records ? tile->records[b] : none;
             t.objects = r.objects.load(std::memory_order_relaxed);
             t.path_flags = r.flags.load(std::memory_order_relaxed);
             read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);

@@ -110,7 +110,7 @@ struct InvalidationCounts {
     std::size_t dropped_by_path = 0;    // ... with blocks whose path records met a change
     std::size_t dropped_by_cone = 0;    // ... whose own rays' cone met a moved sphere
     std::size_t dropped_unrecorded = 0; // ... whose store brought no path record
-    std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those of tiles a change may reach
+    std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those holding a value in tiles a change may reach
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
     std::size_t blocks_by_texel = 0; // blocks whose rays (their cone; a CDCT's, up to where its texels' rays
                                      // end) can meet a moved sphere, so each texel was tested
@@ -438,10 +438,8 @@ private:
         auto& blocks = scratch.blocks;
         auto& records = scratch.records;
         std::size_t count = 0;
-        cube.for_each_block_state_of_tile(index, [&](const Block& b) {
-            ++c.blocks;
-            if (b.valid_texels > 0) blocks[count++] = b;
-        });
+        cube.for_each_block_state_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
+        c.blocks += count;
         const std::size_t dropped_before = c.dropped;
         std::array<Group, group_count> groups{};
         for (std::size_t i = 0; i < count; ++i) {
