@@ -671,6 +671,29 @@ TEST_CASE("a cube resampled to a coarser size leaves out the paths of blocks who
     CHECK(found);
 }
 
+TEST_CASE("a coarser cube's block that took no texel in resampling takes no path record: its first store starts it afresh") {
+    // A 16-texel face resampled to 7 texels (a coarse texel spans 16 / 7 = 2.29 fine ones): the fine block
+    // of columns 4 and 5 overlaps coarse blocks 0 (coarse columns 0 and 1: fine [0, 4.57)) and 1 (fine
+    // [4.57, 9.14)), but its one texel, column 4 (centre 4.5), lands in coarse column 1, block 0. Block 1
+    // holds nothing, so it must not take that texel's path (object 5): a texel stored there later with its
+    // own path (object 6) is not a texel that saw 5, and 5's move must leave it.
+    CctCube from(16);
+    REQUIRE(from.store_at({RAYCACHE_FACE_POSITIVE_X, 4, 0}, glm::vec3(0.5f), saw(5)));
+    from.begin_frame();
+    CctCube to(7);
+    REQUIRE(raycache::resample_into(from, to) == 1);
+    raycache::carry_path_records(from, to);
+    to.begin_frame();
+    REQUIRE(to.load({RAYCACHE_FACE_POSITIVE_X, 1, 0}).has_value()); // where the resampled texel went
+    REQUIRE(to.store_at({RAYCACHE_FACE_POSITIVE_X, 2, 0}, glm::vec3(0.25f), saw(6))); // coarse block 1
+    to.begin_frame();
+    REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(to, {box, -1.0f}, far_along_minus_x(5));
+    CHECK(counts.dropped == 1);
+    CHECK_FALSE(to.load({RAYCACHE_FACE_POSITIVE_X, 1, 0}).has_value());
+    CHECK(to.load({RAYCACHE_FACE_POSITIVE_X, 2, 0}).has_value());
+}
+
 TEST_CASE("two rays stored into one texel in one frame leave the same path record whichever came first") {
     // The smaller word wins a same-frame rivalry either way; the texel's block must record both paths
     // either way too, or which texels a move drops (and so later frames) would depend on thread timing.
