@@ -96,6 +96,12 @@ double mean(const std::vector<double>& v) {
         if (std::isfinite(x)) s += x, ++n;
     return n ? s / n : std::numeric_limits<double>::quiet_NaN();
 }
+// The mean PSNR of the frames that differ from the uncached ones; infinite when none does (every frame
+// identical, as `all` makes them).
+double mean_psnr(const std::vector<double>& v) {
+    const bool all_identical = !v.empty() && std::all_of(v.begin(), v.end(), [](double x) { return x == std::numeric_limits<double>::infinity(); });
+    return all_identical ? std::numeric_limits<double>::infinity() : mean(v);
+}
 double minimum(const std::vector<double>& v) {
     double m = std::numeric_limits<double>::infinity();
     for (double x : v) m = std::min(m, x);
@@ -224,7 +230,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
         const Track& t = tracks[k];
         const double must_drop = changed[t.technique_index];
         out.summary_csv << label << "," << techniques[t.technique_index].label << "," << t.policy->label << "," << mean(t.kept) << "," << minimum(t.kept) << "," << mean(t.hit) << ","
-                        << mean(t.speedup) << "," << mean(t.psnr) << "," << minimum(t.psnr) << "," << mean(t.inval_ms) << ","
+                        << mean(t.speedup) << "," << mean_psnr(t.psnr) << "," << minimum(t.psnr) << "," << mean(t.inval_ms) << ","
                         << maximum(t.inval_ms) << "," << mean(t.ms_per_moved) << "," << must_drop;
         for (const std::vector<double>& w : t.why) out.summary_csv << "," << mean(w);
         out.summary_csv << "\n";
@@ -235,7 +241,7 @@ void scenario(const Options& o, const std::string& label, const rcx::Scene& scen
                                  (r + 2 < reason_count ? ", " : r + 1 < reason_count ? " and " : ".\n");
         }
         out.rows.push_back({label, techniques[t.technique_index].label, t.policy->label, fmt(100.0 * mean(t.kept), 1) + "%", fmt(100.0 * minimum(t.kept), 1) + "%",
-                            fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean(t.psnr), 1), fmt(minimum(t.psnr), 1),
+                            fmt(100.0 * mean(t.hit), 1) + "%", fmt(mean(t.speedup)) + "x", fmt(mean_psnr(t.psnr), 1), fmt(minimum(t.psnr), 1),
                             fmt(mean(t.inval_ms), 3), fmt(maximum(t.inval_ms), 3), fmt(mean(t.ms_per_moved), 3),
                             t.policy->policy == Invalidation::exact ? fmt(100.0 * (1.0 - must_drop), 1) + "%" : "-"});
     }
@@ -307,7 +313,8 @@ int main(int argc, char** argv) {
            << "policies of `SceneCache::scene_changed`, rendered every frame, interleaved in one process (one Tracer, moved once a frame, "
            << "its BVH rebuilt). Over frames 1.." << o.frames - 1 << ": *kept* = valid texels the invalidation kept (mean, "
            << "minimum), hit rate of the frame's leaving rays, *speed-up* = mean over frames of off ms / ms (a cached frame's "
-           << "ms includes its invalidation and `begin_frame()`), PSNR against the uncached frame, invalidation time of the "
+           << "ms includes its invalidation and `begin_frame()`), PSNR against the uncached frame (the mean over the frames that "
+           << "differ from it; inf: every frame identical), invalidation time of the "
            << "frame and per moved object (each pass's cubes spread over "
            << (o.invalidation_threads > 0 ? std::to_string(o.invalidation_threads) + " thread(s)" : std::string("every core"))
            << ", `SceneCache::scene_changed` with a parallel_for); *could keep* = the valid texels the move did not change, by the stale-texel oracle "

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "bench_embree.hpp"
 #include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
@@ -185,7 +187,10 @@ struct MovedSphere {
         next_move = tracer.move_to(scene.at_frame(warm_frames));
         move_back = tracer.move_to(scene.at_frame(warm_frames - 1));
         for (int k = 0; k < 2; ++k) {
-            files[k] = (std::filesystem::temp_directory_path() / ("raycache_micro_bench_" + std::to_string(k) + ".rcache")).string();
+            // Named by the process, so that two benchmarks at once do not overwrite each other's.
+            files[k] = (std::filesystem::temp_directory_path() /
+                        ("raycache_micro_bench_" + std::to_string(::getpid()) + "_" + std::to_string(k) + ".rcache"))
+                           .string();
             variants[k].caches->save(files[k], identity);
         }
     }
