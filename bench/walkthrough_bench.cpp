@@ -14,7 +14,8 @@
 // also printed on stdout); bench/make_results.py plots the frames and puts walkthrough.md at the top of docs/RESULTS.md.
 //
 // Usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST]
-//        [--paths LIST] [--modes LIST] [--face-size N] [--startup LIST] [--startup-budget-mib N] [--warm-start LIST]
+//        [--paths LIST] [--modes LIST] [--face-size N] [--rays-per-texel F] [--min-hit-rate F] [--startup LIST]
+//        [--startup-budget-mib N] [--warm-start LIST]
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -68,18 +69,20 @@ struct Options {
     double startup_budget_mib = 8192.0;
     std::vector<std::string> warm_start{"behind-32"};
     std::optional<float> min_hit_rate; // SceneCacheSettings::min_hit_rate (unset: the technique's default)
+    std::optional<float> rays_per_texel; // AdaptiveResolution::rays_per_texel (unset: its default)
 };
 
 const char* const usage =
     "usage: raycache_walkthrough_bench [--quick] [--out DIR] [--size N] [--frames N] [--scenes LIST] [--paths LIST]\n"
-    "       [--modes LIST] [--face-size N] [--min-hit-rate F] [--startup LIST] [--startup-budget-mib N]\n"
-    "       [--warm-start LIST]\n"
+    "       [--modes LIST] [--face-size N] [--rays-per-texel F] [--min-hit-rate F] [--startup LIST]\n"
+    "       [--startup-budget-mib N] [--warm-start LIST]\n"
     "  --size N             N x N pixels                                                [1024]\n"
     "  --frames N           frames per path, 1 degree apart                             [30]\n"
     "  --scenes LIST        comma-separated scenes            [behind-32,grid-32,reflective-32]\n"
     "  --paths LIST         fixed, orbit, pan                                [fixed,orbit,pan]\n"
     "  --modes LIST         off, cct, cdct, ceiling (off is always rendered: the reference)\n"
     "  --face-size N|auto   texels per cube face side; auto: adaptive (the tracer's default) [auto]\n"
+    "  --rays-per-texel F   auto faces: a frame's leaving rays per covered texel [AdaptiveResolution's]\n"
     "  --min-hit-rate F     cubes answering fewer of their rays rest; 0: never\n"
     "                       [each cube's break-even from its rays' work (SceneCacheSettings::lookup_work)]\n"
     "  --startup LIST       scenes of the start-up section, or none    [mirrors-1000,behind-32]\n"
@@ -101,6 +104,7 @@ std::unique_ptr<SceneCache> make_scene_cache(const rcx::embree::Tracer& tracer, 
     settings.depth_pyramid = true;
     if (first_face_size > 0) settings.adaptive.first_face_size = first_face_size;
     settings.min_hit_rate = o.min_hit_rate;
+    if (o.rays_per_texel) settings.adaptive.rays_per_texel = *o.rays_per_texel;
     auto caches = std::make_unique<SceneCache>(mode == CacheMode::cct ? Technique::cct : Technique::cdct, settings);
     tracer.attach_caches(*caches, o.face_size);
     return caches;
@@ -526,6 +530,12 @@ Options parse_options(int argc, char** argv) {
             if (!(rate >= 0.0f)) throw rcx::UsageError(a + ": must be >= 0, got '" + v + "'");
             o.min_hit_rate = rate;
         }
+        else if (a == "--rays-per-texel") {
+            const std::string v = value();
+            const float rays = rcx::parse_float_value(a, v, false);
+            if (!(rays > 0.0f) || !std::isfinite(rays)) throw rcx::UsageError(a + ": must be a finite number > 0, got '" + v + "'");
+            o.rays_per_texel = rays;
+        }
         else if (a == "--scenes") o.scenes = rcx::bench::split_list(value());
         else if (a == "--paths") o.paths = parse_each<PathKind>(a, value(), rcx::parse_path_kind, "fixed, orbit, pan");
         else if (a == "--modes") o.modes = parse_each<CacheMode>(a, value(), rcx::parse_cache_mode, "off, cct, cdct, ceiling");
@@ -601,7 +611,9 @@ int main(int argc, char** argv) {
            << o.size << "x" << o.size << " pixels, " << o.frames << " frames per path, " << fmt(o.step_degrees, 0)
            << " degree a frame (orbit: the eye around the target; pan: the view around the eye; fixed: no motion), "
            << (o.face_size > 0 ? std::to_string(o.face_size) + "-texel faces on every cached object"
-                               : std::string("adaptive faces (each cube's size follows its object's rays; nearest-texel CCT lookups)"))
+                               : std::string("adaptive faces (each cube's size follows its object's rays") +
+                                     (o.rays_per_texel ? ", " + fmt(*o.rays_per_texel) + " rays per texel" : std::string()) +
+                                     "; nearest-texel CCT lookups)")
            << ", recursion depth 5. Every frame is rendered in every "
            << "mode, interleaved in one process in a rotating order, on one Tracer; each caching mode keeps its own "
            << "caches along the path (filled only by rendering, cold at frame 0). CCT: confidence test at 0.1 (texels at "
