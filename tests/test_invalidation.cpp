@@ -9,8 +9,9 @@
 
 #include <cmath>
 #include <limits>
-#include <stdexcept>
+#include <memory>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -714,6 +715,27 @@ TEST_CASE("two rays stored into one texel in one frame leave the same path recor
     const std::uint64_t both = raycache::object_bits(5) | raycache::object_bits(6);
     CHECK(objects_after(dim, saw_5, bright, saw_6) == both);   // the larger word came second and lost
     CHECK(objects_after(bright, saw_6, dim, saw_5) == both);   // the larger word came first and was replaced
+}
+
+TEST_CASE("an invalidation pass has a run for every 16 allocated tiles and refuses a run it does not have") {
+    // Face +X of a 64-texel cube holds 16 tiles; face -X one more: 17 tiles, so 2 runs. Nothing moved that
+    // its rays can reach, so the passes keep every texel, and run(2) is refused before touching anything.
+    CctCube cube(64);
+    for (int row = 0; row < 64; row += 16)
+        for (int column = 0; column < 64; column += 16) REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.5f), saw(6)));
+    REQUIRE(cube.store_at({RAYCACHE_FACE_NEGATIVE_X, 0, 0}, glm::vec3(0.5f), saw(6)));
+    cube.begin_frame();
+    REQUIRE(cube.allocated_tiles() == 17u);
+    const raycache::SceneChanges changes = far_along_minus_x(5);
+    const std::unique_ptr<raycache::InvalidationPass> pass = raycache::make_invalidation_pass(cube, {box, -1.0f}, changes);
+    CHECK(pass->runs() == 2u);
+    CHECK_THROWS_AS(pass->run(2), std::out_of_range);
+    pass->run(1);
+    pass->run(0);
+    const raycache::InvalidationCounts counts = pass->finish();
+    CHECK(counts.valid_before == 17u);
+    CHECK(counts.dropped == 0u);
+    CHECK(cube.valid_texels() == 17u);
 }
 
 TEST_CASE("changes with a sphere or light that is not finite, or a negative radius, are refused before any texel goes") {

@@ -110,7 +110,8 @@ struct InvalidationCounts {
     std::size_t dropped_by_path = 0;    // ... with blocks whose path records met a change
     std::size_t dropped_by_cone = 0;    // ... whose own rays' cone met a moved sphere
     std::size_t dropped_unrecorded = 0; // ... whose store brought no path record
-    std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those holding a value in tiles a change may reach
+    std::size_t blocks = 0;          // record blocks read (CacheCube::BlockState): those holding a value, in
+                                     // tiles a change may reach
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
     std::size_t blocks_by_texel = 0; // blocks whose rays (their cone; a CDCT's, up to where its texels' rays
                                      // end) can meet a moved sphere, so each texel was tested
@@ -314,6 +315,7 @@ struct SerialFor {
 // checks the changes and settles the cube's budget (on the calling thread); then run(r) once for each r in
 // [0, runs()), on any threads (runs share nothing they write but the cube's atomic counts); then finish(),
 // once, after every run: the counts, added in run order, so the result does not depend on the threads.
+// run(r) throws std::out_of_range for r >= runs().
 // The cube, the changes and the pass's other arguments must outlive it. Between frames only.
 class InvalidationPass {
 public:
@@ -361,6 +363,9 @@ public:
     std::size_t runs() const noexcept override { return runs_.size(); }
 
     void run(std::size_t r) override {
+        if (r >= runs_.size())
+            throw std::out_of_range("RayCache: InvalidationPass::run(" + std::to_string(r) + "): the pass has " +
+                                    std::to_string(runs_.size()) + " runs");
         Scratch scratch;
         for (std::size_t i = r * tiles_per_run; i < std::min(tiles_.size(), (r + 1) * tiles_per_run); ++i) tile(tiles_[i], runs_[r], scratch);
     }
