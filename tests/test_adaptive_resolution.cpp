@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -110,6 +111,80 @@ TEST_CASE("adaptive settings are validated with a message naming the field") {
     a = AdaptiveResolution{};
     a.hysteresis_steps = 0;
     CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("hysteresis_steps"), std::invalid_argument);
+    a = AdaptiveResolution{};
+    a.still_rays_per_texel = std::numeric_limits<float>::infinity();
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("still_rays_per_texel"), std::invalid_argument);
+    a = AdaptiveResolution{};
+    a.still_frames = 0;
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("still_frames"), std::invalid_argument);
+}
+
+TEST_CASE("a cube's rays hold still after still_frames frames of at least 60% hits and at most 5% empty texels, and move on at more than 20% empty") {
+    AdaptiveResolution a; // still_frames 3
+    using raycache::StillRays;
+    auto after = [&](StillRays s, std::uint64_t looked_up, std::uint64_t hits, std::uint64_t empty) {
+        return raycache::next_still_rays(s, looked_up, hits, empty, a);
+    };
+    // The thresholds, at their edges: 60 of 100 hits and 5 empty settle; 59 hits, or 6 empty, do not.
+    CHECK(after({}, 100, 60, 5).settled_frames == 1);
+    CHECK(after({}, 100, 59, 0).settled_frames == 0);
+    CHECK(after({}, 100, 90, 6).settled_frames == 0);
+    CHECK(after({}, 0, 0, 0).settled_frames == 0); // no lookups: nothing to go by
+    // Three settled frames in a row make it fine; one unsettled frame between starts the count again.
+    StillRays s;
+    s = after(s, 100, 80, 0);
+    s = after(s, 100, 80, 0);
+    CHECK_FALSE(s.fine);
+    s = after(s, 100, 50, 0); // too few hits
+    s = after(s, 100, 80, 0);
+    s = after(s, 100, 80, 0);
+    CHECK_FALSE(s.fine);
+    s = after(s, 100, 80, 0);
+    CHECK(s.fine);
+    CHECK(s.settled_frames == 3);
+    // Unsettled frames keep it fine while at most 20% of the lookups find empty texels; 21% end it.
+    s = after(s, 100, 30, 20);
+    CHECK(s.fine);
+    CHECK(s.settled_frames == 0);
+    s = after(s, 100, 30, 21);
+    CHECK_FALSE(s.fine);
+    // The frame after a resize (or an emptying) is not judged: the state stays, and the next frame counts.
+    StillRays resized;
+    resized.fine = true;
+    resized.settled_frames = 2;
+    resized.resized = true;
+    const StillRays skipped = after(resized, 100, 0, 100);
+    CHECK(skipped.fine);
+    CHECK(skipped.settled_frames == 2);
+    CHECK_FALSE(skipped.resized);
+    CHECK_FALSE(after(skipped, 100, 0, 100).fine);
+}
+
+TEST_CASE("a cube whose rays hold still takes the size of still_rays_per_texel at once, then moves with the hysteresis") {
+    AdaptiveResolution a; // hysteresis 2 half octaves
+    a.still_rays_per_texel = 0.5f;
+    raycache::StillRays s;
+    s.fine = true;
+    // 6144 rays over every direction: 32 at one ray a texel; at half a ray an ideal of 45.25, one half octave
+    // finer, which the hysteresis alone would not take: the step 45, at once.
+    CHECK(raycache::still_face_size(32, 32, s, 6144, 1.0, a) == 45);
+    CHECK(s.refined);
+    // Then with the hysteresis at half a ray a texel: 45 stays for the same rays, and for 9000 (ideal 54.8,
+    // 0.55 half octaves away); 24576 rays (ideal 90.5, 2 half octaves) move it to 91.
+    CHECK(raycache::still_face_size(45, 32, s, 6144, 1.0, a) == 45);
+    CHECK(raycache::still_face_size(45, 32, s, 9000, 1.0, a) == 45);
+    CHECK(raycache::still_face_size(45, 64, s, 24576, 1.0, a) == 91);
+    // Never coarser than the size at one ray a texel; no rays: that size.
+    CHECK(raycache::still_face_size(45, 128, s, 6144, 1.0, a) == 128);
+    CHECK(raycache::still_face_size(45, 45, s, 0, 0.0, a) == 45);
+    // Not fine: the size at one ray a texel, and it is no longer refined.
+    s.fine = false;
+    CHECK(raycache::still_face_size(45, 32, s, 6144, 1.0, a) == 32);
+    CHECK_FALSE(s.refined);
+    // Off (still_rays_per_texel >= rays_per_texel): always the size at one ray a texel.
+    s.fine = true;
+    a.still_rays_per_texel = 1.0f;
+    CHECK(raycache::still_face_size(32, 32, s, 6144, 1.0, a) == 32);
 }
 
 TEST_CASE("direction coverage counts the 16 x 16 cells per face that rays took, from many threads") {

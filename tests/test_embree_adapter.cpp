@@ -269,6 +269,31 @@ TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the nex
     CHECK(caches.face_size({w.mirror}) == 32);
 }
 
+TEST_CASE("an adaptive cube whose rays come back to the same texels frame after frame takes finer faces, once") {
+    // The 6144 rays of the test above, every frame (a still camera). Frame 1 sizes the cube to 32 (one ray
+    // a texel); frame 2, right after that resize, is not judged; frames 3 to 5 hit every ray (still_frames
+    // = 3), so the cube takes still_rays_per_texel = 0.25: sqrt(6144 / (0.25 * 6)) = 64. Frame 6 starts
+    // that cube empty (not judged either); from frame 7 it hits every ray again and keeps 64.
+    World w;
+    SceneCache caches(Technique::cct);
+    caches.attach(w.scene, {w.mirror});
+    std::vector<glm::vec3> directions;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 32; ++row)
+            for (int column = 0; column < 32; ++column)
+                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
+    std::vector<int> sizes;
+    std::vector<std::uint64_t> hits;
+    for (int f = 1; f <= 9; ++f) {
+        for (const glm::vec3& d : directions)
+            caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
+        hits.push_back(caches.begin_frame().hits);
+        sizes.push_back(caches.face_size({w.mirror}));
+    }
+    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64});
+    CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144});
+}
+
 TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the statistics and the adaptive size still see its rays") {
     // As the test above: 6144 rays, one through each texel centre of a 32 x 32 cube, call for N = 32. Here
     // the ball moves between the frame and its begin_frame(), which empties (Invalidation::all) or replaces

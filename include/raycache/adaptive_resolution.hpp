@@ -52,6 +52,14 @@ struct AdaptiveResolution {
     // change costs the finer texels (a shrink keeps the rest) or a cold frame (a growth), so a size
     // hovering between two steps must not flip back and forth.
     int hysteresis_steps = 2;
+    // Once a cube's rays hold still (a still camera: for still_frames frames in a row it answered at least
+    // 60% of its lookups and found at most 5% of them in texels nobody had stored), it takes the finer
+    // faces of this many rays a texel: the same rays come back to the same texels, so finer faces cost
+    // them nothing but a cold frame and answer each ray with a colour closer to its own. It goes back to
+    // rays_per_texel when more than 20% of its lookups find texels nobody stored (the rays moved on).
+    // >= rays_per_texel: off.
+    float still_rays_per_texel = 0.25f;
+    int still_frames = 3;
 };
 
 // Throws std::invalid_argument naming the field when `a` cannot be used.
@@ -64,6 +72,10 @@ inline void validate(const AdaptiveResolution& a) {
         throw std::invalid_argument("RayCache: AdaptiveResolution::first_face_size must be 1 to 4096");
     if (a.hysteresis_steps < 1)
         throw std::invalid_argument("RayCache: AdaptiveResolution::hysteresis_steps must be at least 1");
+    if (!(a.still_rays_per_texel > 0.0f) || !std::isfinite(a.still_rays_per_texel))
+        throw std::invalid_argument("RayCache: AdaptiveResolution::still_rays_per_texel must be a finite number > 0");
+    if (a.still_frames < 1)
+        throw std::invalid_argument("RayCache: AdaptiveResolution::still_frames must be at least 1");
 }
 
 // Which of 6 x 16 x 16 direction cells a frame's rays took. mark() from any number of threads at once
@@ -170,6 +182,52 @@ inline int first_face_size(int current, std::uint64_t rays, double covered_fract
 inline int adapted_face_size(int current, bool sized, std::uint64_t rays, double covered_fraction,
                              const AdaptiveResolution& a) noexcept {
     return sized ? next_face_size(current, rays, covered_fraction, a) : first_face_size(current, rays, covered_fraction, a);
+}
+
+// Whether a cube's rays hold still, from frame to frame (AdaptiveResolution::still_rays_per_texel).
+struct StillRays {
+    int settled_frames = 0; // frames in a row whose lookups looked still
+    bool fine = false;      // the cube takes still_rays_per_texel
+    bool resized = false;   // the cube was resized (or made) before the frame being judged
+    bool refined = false;   // sized at still_rays_per_texel since it became fine (still_face_size())
+};
+
+// The state after a frame in which the cube made `looked_up` lookups (its resting rays left out), `hits`
+// of them answered and `empty` missed on texels nobody had stored. A frame right after a resize says
+// nothing (a grown cube starts empty, a shrunk one coarser): the state stays. Deterministic.
+inline StillRays next_still_rays(StillRays s, std::uint64_t looked_up, std::uint64_t hits, std::uint64_t empty,
+                                 const AdaptiveResolution& a) noexcept {
+    if (s.resized) {
+        s.resized = false;
+        return s;
+    }
+    const double n = static_cast<double>(looked_up);
+    const bool settled = looked_up > 0 && static_cast<double>(hits) >= 0.6 * n && static_cast<double>(empty) <= 0.05 * n;
+    s.settled_frames = settled ? s.settled_frames + 1 : 0;
+    if (s.settled_frames >= a.still_frames) s.fine = true;
+    if (looked_up > 0 && static_cast<double>(empty) > 0.2 * n) s.fine = false;
+    return s;
+}
+
+// The face size of an adaptive cube of face size `current` after a frame of `rays` leaving rays over
+// `covered_fraction` of the directions, given `next`, adapted_face_size()'s at a.rays_per_texel. While its
+// rays hold still (`still.fine`), the size they call for at a.still_rays_per_texel instead: at once, without
+// the hysteresis, when they have just come to hold still (still.refined was false: the rays came back to the
+// same texels for still_frames frames), and with it after (still.refined), so that it does not flip between
+// neighbouring sizes. Never coarser than `next`. Sets still.refined.
+inline int still_face_size(int current, int next, StillRays& still, std::uint64_t rays, double covered_fraction,
+                           const AdaptiveResolution& a) noexcept {
+    if (!still.fine || !(a.still_rays_per_texel < a.rays_per_texel)) {
+        still.refined = false;
+        return next;
+    }
+    const double ideal = ideal_face_size(rays, covered_fraction, a.still_rays_per_texel);
+    if (ideal <= 0.0) return next; // no ray came: nothing to go by
+    AdaptiveResolution fine = a;
+    fine.rays_per_texel = a.still_rays_per_texel;
+    const int size = still.refined ? next_face_size(current, rays, covered_fraction, fine) : nearest_face_size_step(ideal, a);
+    still.refined = true;
+    return std::max(next, size);
 }
 
 // The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile

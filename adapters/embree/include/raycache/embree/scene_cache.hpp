@@ -415,6 +415,7 @@ class SceneCache {
         // frames (raycache::next_work_estimate): a warm cube on a still camera, or a resting one, stores
         // little, yet its hits save what its texels' rays cost.
         WorkEstimate work{};
+        StillRays still{}; // adaptive: whether its rays hold still (finer faces: still_rays_per_texel)
     };
 
     // Primitives first .. end - 1 of one geometry, which have the cube entries_[entry].
@@ -918,6 +919,7 @@ private:
     std::size_t empty_cube(Entry& e) {
         carry_counts(e);
         e.cold = true;
+        e.still.resized = true; // its next frame's misses say nothing about whether its rays moved
         e.origins->forget();
         const std::size_t valid = with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         if (e.cct) e.cct->clear();
@@ -1065,6 +1067,7 @@ private:
     void make_cube(Entry& e, int face_size) {
         if (e.cct || e.cdct) carry_counts(e); // a cube replaced within a frame: its counts stay the frame's
         e.cold = true; // empty (begin_frame() looks again after filling a smaller one from the old)
+        e.still.resized = true; // its next frame's misses say nothing about whether its rays moved
         if (technique_ == Technique::cct) {
             e.cct = std::make_unique<CctCube>(face_size, budget_, path_records_);
         } else {
@@ -1109,14 +1112,19 @@ private:
             if (!e.coverage) continue;
             if (e.rest.resting) { // its coverage holds the probes' cells alone; the size it had stays
                 e.coverage->reset();
+                e.still.settled_frames = 0;
                 continue;
             }
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
-            const std::uint64_t rays = counts_of(e).lookups;
-            const int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
+            const CubeStatistics frame = counts_of(e);
+            const std::uint64_t rays = frame.lookups;
+            e.still = next_still_rays(e.still, frame.looked_up(), frame.hits,
+                                      frame.misses_by[static_cast<std::size_t>(MissReason::empty)], adaptive_);
+            int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
+            if (e.sized) next = still_face_size(current, next, e.still, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
-            if (next != current) resizes.push_back(Resize{i, next});
+            if (next != current) resizes.push_back(Resize{i, next}), e.still.resized = true;
         }
         return resizes;
     }
