@@ -1124,7 +1124,7 @@ private:
             if (e.sized) next = still_face_size(current, next, e.still, rays, e.coverage->fraction(), adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
-            if (next != current) resizes.push_back(Resize{i, next}), e.still.resized = true;
+            if (next != current) resizes.push_back(Resize{i, next}); // make_cube() marks it resized
         }
         return resizes;
     }
