@@ -571,6 +571,16 @@ struct CdctReach {
     }
 };
 
+// A CDCT cube's pass (make_invalidation_pass() below), `finished` after its runs.
+inline std::unique_ptr<InvalidationPass> cdct_invalidation_pass(CdctCube& cube, const CubeRays& rays, const ReliefParameters& p,
+                                                                const SceneChanges& changes,
+                                                                std::function<void(const InvalidationCounts&)> finished = {}) {
+    const float gap = std::max(p.max_gap, p.epsilon);
+    return std::make_unique<CubeInvalidation<CdctTexel, CdctReach>>(cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes,
+                                                                    CdctReach{&cube, gap, p.max_depth}, std::isfinite(gap),
+                                                                    std::move(finished));
+}
+
 } // namespace detail
 
 // The pass of invalidate_changes() over a CCT cube (`rays` with its origin test), or over a CDCT cube as a
@@ -589,21 +599,16 @@ std::unique_ptr<InvalidationPass> make_invalidation_pass(CacheCube<Texel>& cube,
 // the texel's cone).
 inline std::unique_ptr<InvalidationPass> make_invalidation_pass(CdctCube& cube, const CubeRays& rays, const ReliefParameters& p,
                                                                 const SceneChanges& changes) {
-    const float gap = std::max(p.max_gap, p.epsilon);
-    return std::make_unique<detail::CubeInvalidation<CdctTexel, detail::CdctReach>>(
-        cube, CubeRays{rays.bounds, -1.0f, rays.origin_radius}, changes, detail::CdctReach{&cube, gap, p.max_depth}, std::isfinite(gap));
+    return detail::cdct_invalidation_pass(cube, rays, p, changes);
 }
 
 // The pass over a CDCT cache's cube whose rays leave from within origin_radius of its centre (infinity: from
 // anywhere in its box); finish() then rebuilds its depth pyramid when texels were dropped.
 inline std::unique_ptr<InvalidationPass> make_invalidation_pass(CdctCache& cache, float origin_radius, const SceneChanges& changes) {
-    const ReliefParameters& p = cache.parameters();
-    const float gap = std::max(p.max_gap, p.epsilon);
-    return std::make_unique<detail::CubeInvalidation<CdctTexel, detail::CdctReach>>(
-        cache.cube(), CubeRays{cache.bounds(), -1.0f, origin_radius}, changes, detail::CdctReach{&cache.cube(), gap, p.max_depth},
-        std::isfinite(gap), [&cache](const InvalidationCounts& counts) {
-            if (counts.dropped > 0) cache.rebuild_pyramid();
-        });
+    return detail::cdct_invalidation_pass(cache.cube(), CubeRays{cache.bounds(), -1.0f, origin_radius}, cache.parameters(), changes,
+                                          [&cache](const InvalidationCounts& counts) {
+                                              if (counts.dropped > 0) cache.rebuild_pyramid();
+                                          });
 }
 
 // One pass of exact invalidation over a cube: a CCT cube (`rays` with its origin test), or a CDCT cube
