@@ -59,9 +59,10 @@ TEST_CASE("a direction's coverage cell is its texel on a 16-texel face, by hand"
                     CHECK(shared::raycache_coverage_cell_of_texel({face, column, row}, n) ==
                           shared::raycache_coverage_cell(texel_direction(t, n)));
                 }
-    // The frame buffer keeps 48 words of cells per cube after its 5 counters and its resting word.
-    CHECK(RAYCACHE_FRAME_CUBE_WORDS == 54u);
-    CHECK(shared::raycache_frame_coverage_word(2, 47) == 8u + 2u * 54u + 6u + 47u);
+    // The frame buffer keeps 48 words of cells per cube after its 5 counters, its resting word and its count
+    // of misses on empty texels.
+    CHECK(RAYCACHE_FRAME_CUBE_WORDS == 55u);
+    CHECK(shared::raycache_frame_coverage_word(2, 47) == 8u + 2u * 55u + 7u + 47u);
 }
 
 TEST_CASE("GPU cubes take the face size their rays call for: at once the first time, then with hysteresis") {

@@ -1,8 +1,8 @@
 // raycache/gpu_frame.hpp: the frame buffer's layout and start words, the end-of-frame pass's group counts,
 // the statistics read back and the face sizes fitted to a storage buffer, against values worked out by hand:
-// - header 8 words, 54 a cube (5 counters, the resting word, 48 words of direction-cell bits): 3 cubes and
-//   100 list entries take 8 + 162 + 100 = 270 words (1080 bytes), of which the first 170 (680 bytes) are
-//   rewritten before each frame; entry 0 is word 170.
+// - header 8 words, 55 a cube (5 counters, the resting word, the count of misses on empty texels, 48 words
+//   of direction-cell bits): 3 cubes and 100 list entries take 8 + 165 + 100 = 273 words (1092 bytes), of
+//   which the first 173 (692 bytes) are rewritten before each frame; entry 0 is word 173.
 // - groups of 256: 1 entry -> 1 group, 256 -> 1, 257 -> 2, 65535 * 256 -> 65535, one more -> still 65535.
 // - fitting: faces 8, 100, 100 of CCT texels (4 bytes) into 6 * (64 + 2 * 50^2) * 4 = 121,536 bytes gives a
 //   cap of 50 (51 would need 6 * (64 + 2 * 2601) * 4 = 126,384): 8, 50, 50.
@@ -16,21 +16,22 @@
 
 using namespace raycache;
 
-TEST_CASE("the frame buffer holds a header, five counters, the resting word and the cell bits a cube, and the store list") {
+TEST_CASE("the frame buffer holds a header, five counters, the resting word, the empty count and the cell bits a cube, and the store list") {
     const GpuFrameLayout f = gpu_frame_layout(3, 100);
-    CHECK(f.words == 270u);
-    CHECK(f.bytes == 1080u);
-    CHECK(f.start_bytes == 680u);
-    CHECK(shared::raycache_frame_list_word(3, 0) == 170u);
-    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_REFUSED) == 8u + 108u + 3u);
-    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_RESTED) == 8u + 108u + 4u);
-    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_RESTING) == 8u + 108u + 5u);
-    CHECK(shared::raycache_frame_coverage_word(2, 0) == 8u + 108u + 6u);
-    CHECK_THROWS_AS(gpu_frame_layout(3, 100, 1079), std::invalid_argument);
-    CHECK_NOTHROW(gpu_frame_layout(3, 100, 1080));
-    // The largest list that fits 1080 bytes with 3 cubes is 100 entries; never more than the texels.
-    CHECK(gpu_frame_list_capacity(3, 1000, 1080) == 100u);
-    CHECK(gpu_frame_list_capacity(3, 40, 1080) == 40u);
+    CHECK(f.words == 273u);
+    CHECK(f.bytes == 1092u);
+    CHECK(f.start_bytes == 692u);
+    CHECK(shared::raycache_frame_list_word(3, 0) == 173u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_REFUSED) == 8u + 110u + 3u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_RESTED) == 8u + 110u + 4u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_RESTING) == 8u + 110u + 5u);
+    CHECK(shared::raycache_frame_counter_word(2, RAYCACHE_FRAME_EMPTY) == 8u + 110u + 6u);
+    CHECK(shared::raycache_frame_coverage_word(2, 0) == 8u + 110u + 7u);
+    CHECK_THROWS_AS(gpu_frame_layout(3, 100, 1091), std::invalid_argument);
+    CHECK_NOTHROW(gpu_frame_layout(3, 100, 1092));
+    // The largest list that fits 1092 bytes with 3 cubes is 100 entries; never more than the texels.
+    CHECK(gpu_frame_list_capacity(3, 1000, 1092) == 100u);
+    CHECK(gpu_frame_list_capacity(3, 40, 1092) == 40u);
     CHECK(gpu_frame_list_capacity(3, 1000, 600) == 0u);
     // One dimension of 65535 groups of 256 covers 16,776,960 entries: no longer list.
     CHECK(gpu_frame_list_capacity(3, 1ull << 30, 1ull << 32) == 16776960u);
@@ -41,7 +42,7 @@ TEST_CASE("the frame buffer holds a header, five counters, the resting word and 
 TEST_CASE("the start words empty the list, state capacity and cube count, dispatch {0, 1, 1}, the coverage flag, and zero the counters") {
     const GpuFrameLayout f = gpu_frame_layout(2, 10);
     const std::vector<std::uint32_t> w = gpu_frame_start_words(f);
-    REQUIRE(w.size() == 8u + 2u * 54u);
+    REQUIRE(w.size() == 8u + 2u * 55u);
     const std::vector<std::uint32_t> header = {0, 10, 2, 0, 0, 1, 1, 1}; // the last: lookups mark their cells
     CHECK(std::vector<std::uint32_t>(w.begin(), w.begin() + 8) == header);
     for (std::size_t i = 8; i < w.size(); ++i) CHECK(w[i] == 0u); // counters and cell bits
@@ -77,11 +78,12 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     std::vector<std::uint32_t> w = gpu_frame_start_words(f);
     w[RAYCACHE_FRAME_LIST_COUNT] = 7; // two past the capacity
     w[RAYCACHE_FRAME_OVERFLOW] = 2;
-    const std::uint32_t cube0[] = {10, 5, 4, 1, 0}, cube1[] = {0, 3, 2, 6, 0}; // hits, misses, stores, refused, rested
-    for (std::uint32_t k = 0; k < 5; ++k) w[8 + k] = cube0[k], w[62 + k] = cube1[k];
+    // hits, misses, stores, refused, rested, the resting word, misses on empty texels
+    const std::uint32_t cube0[] = {10, 5, 4, 1, 0, 0, 3}, cube1[] = {0, 3, 2, 6, 0, 0, 2};
+    for (std::uint32_t k = 0; k < 7; ++k) w[8 + k] = cube0[k], w[63 + k] = cube1[k];
     // Cube 1's cells: 3 bits in its first word, all 32 of its last: 35 of 1536.
-    w[62 + 6] = 0x00010003u;
-    w[62 + 53] = 0xFFFFFFFFu;
+    w[63 + 7] = 0x00010003u;
+    w[63 + 54] = 0xFFFFFFFFu;
     const GpuFrameStatistics s = read_gpu_statistics(w.data(), f);
     REQUIRE(s.coverage.size() == 2u);
     CHECK(s.coverage[0] == 0.0);
@@ -90,6 +92,9 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     CHECK(s.cubes[0].lookups == 15u);
     CHECK(s.cubes[0].hits == 10u);
     CHECK(s.cubes[0].misses == 5u);
+    CHECK(s.cubes[0].misses_by[static_cast<std::size_t>(MissReason::empty)] == 3u);
+    CHECK(s.cubes[1].misses_by[static_cast<std::size_t>(MissReason::empty)] == 2u);
+    CHECK(s.total.misses_by[static_cast<std::size_t>(MissReason::empty)] == 5u);
     CHECK(s.cubes[1].stores == 2u);
     CHECK(s.cubes[1].refused_stores == 6u);
     CHECK(s.total.lookups == 18u);
@@ -97,12 +102,12 @@ TEST_CASE("GPU statistics read per cube and in all, misses apart from hits, the 
     CHECK(s.total.refused_stores == 7u);
     CHECK(s.listed == 5u);
     CHECK(s.overflow == 2u);
-    // The list starts at word 8 + 2 x 54 = 116: a CCT texel, a tile, a CDCT texel, a tile, a CDCT entry with
+    // The list starts at word 8 + 2 x 55 = 118: a CCT texel, a tile, a CDCT texel, a tile, a CDCT entry with
     // the tile bit set (a CDCT element), and past the capacity a tile that is not counted: 2 tiles.
     w.resize(static_cast<std::size_t>(f.words), 0u);
     const std::uint32_t entries[] = {17u, RAYCACHE_FRAME_TILE_ENTRY | 3u, RAYCACHE_FRAME_CDCT_ENTRY | 9u, RAYCACHE_FRAME_TILE_ENTRY,
                                      RAYCACHE_FRAME_CDCT_ENTRY | RAYCACHE_FRAME_TILE_ENTRY | 1u};
-    for (std::uint32_t k = 0; k < 5; ++k) w[116 + k] = entries[k];
+    for (std::uint32_t k = 0; k < 5; ++k) w[118 + k] = entries[k];
     w.push_back(RAYCACHE_FRAME_TILE_ENTRY | 4u);
     CHECK(gpu_listed_tiles(w.data(), f) == 2u);
 }

@@ -1,6 +1,6 @@
 // raycache/gpu_resting.hpp and the frame buffer's resting words (raycache/gpu_frame.hpp), against values
 // worked out by hand from the rule written in raycache/resting.hpp:
-// - the start words put cube k's resting word in word 8 + 54 k + 5 and 0 elsewhere among the counters;
+// - the start words put cube k's resting word in word 8 + 55 k + 5 and 0 elsewhere among the counters;
 // - a frame's rested rays are misses of reason `resting`, beside the lookups' own misses, so that the
 //   looked-up rays are hits + misses of lookups alone;
 // - with min_hit_rate 0.5: a cube's first frame (started empty) decides nothing whatever it hit; 10 hits of
@@ -43,13 +43,13 @@ struct FrameWords {
 TEST_CASE("the start words carry each cube's resting word, and refuse another number of words") {
     const GpuFrameLayout f = gpu_frame_layout(3, 10);
     const std::vector<std::uint32_t> w = gpu_frame_start_words(f, true, {4u, 0u, 7u});
-    REQUIRE(w.size() == 8u + 3u * 54u);
+    REQUIRE(w.size() == 8u + 3u * 55u);
     for (std::size_t i = 8; i < w.size(); ++i) {
-        const std::uint32_t expected = i == 8 + 5 ? 4u : i == 8 + 2 * 54 + 5 ? 7u : 0u; // cubes 0 and 2
+        const std::uint32_t expected = i == 8 + 5 ? 4u : i == 8 + 2 * 55 + 5 ? 7u : 0u; // cubes 0 and 2
         CHECK(w[i] == expected);
     }
     const std::vector<std::uint32_t> none = gpu_frame_start_words(f, true, {0u, 0u, 0u});
-    for (std::uint32_t k = 0; k < 3; ++k) CHECK(none[8 + 54 * k + 5] == 0u);
+    for (std::uint32_t k = 0; k < 3; ++k) CHECK(none[8 + 55 * k + 5] == 0u);
     CHECK_THROWS_AS(gpu_frame_start_words(f, true, {4u, 0u}), std::invalid_argument);
 }
 

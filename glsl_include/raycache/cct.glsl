@@ -74,6 +74,11 @@ raycache_cct_result raycache_cct_peek_element(uint i) {
     return result;
 }
 
+/* True when element i lies in the buffer and its texel holds no value (a doubtful texel holds one). */
+bool raycache_cct_element_is_empty(uint i) {
+    return i < uint(raycache_cct_texels.length()) && !raycache_cct_is_valid(raycache_cct_texels[i]);
+}
+
 /* The colour cached for `direction` (need not be unit length) in `cube`, without counting. A miss when the
  * texel is empty, was stored this frame, is doubtful, or `direction` is not a direction (zero, NaN, infinite). */
 raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
@@ -82,8 +87,10 @@ raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
 
 /* raycache_cct_peek, counted as a hit or a miss of the cube in the frame buffer (and its direction cell marked). */
 raycache_cct_result raycache_cct_lookup(raycache_gpu_cube cube, vec3 direction) {
-    raycache_cct_result result = raycache_cct_peek(cube, direction);
+    uint element = raycache_cube_texel(cube, direction);
+    raycache_cct_result result = raycache_cct_peek_element(element);
     raycache_count_lookup_toward(cube, direction, result.hit);
+    if (!result.hit && raycache_cct_element_is_empty(element)) raycache_count_empty(cube);
     return result;
 }
 
@@ -129,7 +136,9 @@ void raycache_cct_list_tile(uint r) {
  * RAYCACHE_READ_ONLY) and refills from the current rays. As C++'s CacheCube::lookup(direction, origin, tolerance). */
 raycache_cct_result raycache_cct_lookup_from(raycache_gpu_cube cube, vec3 direction, vec3 origin, raycache_origin_tolerance tolerance) {
     raycache_texel_address a = raycache_cube_texel_address(cube, direction);
-    raycache_cct_result result = raycache_cct_peek_element(raycache_cube_element(cube, a));
+    uint element = raycache_cube_element(cube, a);
+    raycache_cct_result result = raycache_cct_peek_element(element);
+    bool empty = !result.hit && raycache_cct_element_is_empty(element);
     if (result.hit) {
         uint r = raycache_cct_origin_record(cube, a);
         vec3 lo, hi;
@@ -150,6 +159,7 @@ raycache_cct_result raycache_cct_lookup_from(raycache_gpu_cube cube, vec3 direct
         if (!result.hit) result.color = vec3(0.0);
     }
     raycache_count_lookup_toward(cube, direction, result.hit);
+    if (empty) raycache_count_empty(cube);
     return result;
 }
 #endif

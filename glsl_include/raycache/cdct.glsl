@@ -64,12 +64,20 @@ bool raycache_cube_box_is_usable(raycache_gpu_cube cube) {
     return raycache_box_is_usable(cube.centre, cube.half_size);
 }
 
-/* The texel that the vector v from the cube's centre points at (empty when none, or doubtful: so the
- * searches miss on a doubtful texel as on an empty one). */
-uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
+/* The texel that the vector v from the cube's centre points at (invalid when none, or doubtful: so the
+ * searches miss on a doubtful texel as on an empty one); `empty`: the texel holds no value. */
+uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v, out bool empty) {
     uint i = raycache_cube_texel(cube, v);
-    if (i >= uint(raycache_cdct_texels.length()) || raycache_cdct_is_doubtful(i)) return raycache_cdct_invalid_texel();
-    return raycache_cdct_texels[i];
+    empty = false;
+    if (i >= uint(raycache_cdct_texels.length())) return raycache_cdct_invalid_texel();
+    uvec2 texel = raycache_cdct_texels[i];
+    empty = !raycache_cdct_is_valid(texel); /* holds no value (a doubtful texel holds one) */
+    if (raycache_cdct_is_doubtful(i)) return raycache_cdct_invalid_texel();
+    return texel;
+}
+uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
+    bool empty;
+    return raycache_cdct_texel_at(cube, v, empty);
 }
 
 /* Thesis Algorithm 4 on the cube's depth image, as raycache::relief_search without a pyramid
@@ -83,13 +91,15 @@ uvec2 raycache_cdct_texel_at(raycache_gpu_cube cube, vec3 v) {
 raycache_relief_result raycache_relief_search(raycache_gpu_cube cube, vec3 origin, vec3 direction,
                                               raycache_relief_parameters p) {
     raycache_relief_walk w = raycache_relief_start(origin, direction, cube.centre, cube.half_size, p, false);
+    bool empty = false; /* the last read's texel held no value: a miss then counts as on an empty texel */
     while (w.status == RAYCACHE_RELIEF_READ) {
-        uvec2 texel = raycache_cdct_texel_at(cube, raycache_relief_point(w, w.t));
+        uvec2 texel = raycache_cdct_texel_at(cube, raycache_relief_point(w, w.t), empty);
         w = raycache_relief_step(w, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
                                  raycache_cdct_color(texel));
     }
     raycache_relief_result result = raycache_relief_walk_result(w);
     raycache_count_lookup_toward(cube, direction, result.hit);
+    if (!result.hit && empty) raycache_count_empty(cube);
     return result;
 }
 
@@ -105,13 +115,15 @@ raycache_relief_result raycache_cdct_secant_search(raycache_gpu_cube cube, vec3 
                                                    raycache_relief_parameters p) {
     raycache_secant_search s = raycache_secant_start(origin, direction, cube.centre, cube.half_size, p.epsilon,
                                                      p.max_gap, p.max_reads);
+    bool empty = false; /* the last read's texel held no value: a miss then counts as on an empty texel */
     while (s.status == RAYCACHE_SECANT_READ) {
-        uvec2 texel = raycache_cdct_texel_at(cube, raycache_secant_point(s, s.t));
+        uvec2 texel = raycache_cdct_texel_at(cube, raycache_secant_point(s, s.t), empty);
         raycache_secant_advance(s, raycache_cdct_is_valid(texel), raycache_cdct_distance(texel),
                                 raycache_cdct_color(texel));
     }
     raycache_relief_result result = raycache_secant_result(s, origin);
     raycache_count_lookup_toward(cube, direction, result.hit);
+    if (!result.hit && empty) raycache_count_empty(cube);
     return result;
 }
 

@@ -108,6 +108,16 @@ void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
 #endif
 }
 
+/* Counts a miss of `cube` on a texel that holds no value (a texel stored earlier in the same frame is among
+ * them: lookups read published texels alone), from which the host tells whether the cube's rays come back to
+ * texels already filled (raycache/gpu_adaptive.hpp: finer faces for still cameras). Nothing under
+ * RAYCACHE_READ_ONLY. */
+void raycache_count_empty(raycache_gpu_cube cube) {
+#ifndef RAYCACHE_READ_ONLY
+    raycache_frame_count(cube.index, RAYCACHE_FRAME_EMPTY);
+#endif
+}
+
 /* raycache_count_lookup for a ray going in `direction`, also marking its direction cell (when the frame's
  * flags ask for it), from which the host chooses adaptive face sizes (raycache/gpu_adaptive.hpp). The CCT's
  * lookup and the CDCT's searches call it. */

@@ -136,8 +136,9 @@ inline GpuGroups gpu_sweep_groups(std::uint64_t elements, std::uint32_t group_si
 // What one frame's frame buffer says: per cube (descriptor index) and in all.
 struct GpuFrameStatistics {
     // lookups (every ray that reached the cube), hits, misses (with the rays a resting cube let through, also
-    // counted in misses_by[MissReason::resting], as C++ counts them), stores (reached the pending word),
-    // refused_stores
+    // counted in misses_by[MissReason::resting], as C++ counts them; those on a texel holding no value also in
+    // misses_by[MissReason::empty], with the texels stored earlier in the frame, which C++ counts as fresh),
+    // stores (reached the pending word), refused_stores
     std::vector<CubeStatistics> cubes;
     std::vector<double> coverage;      // per cube: the share of the 1536 direction cells its lookups took (0..1)
     std::vector<bool> resting;         // per cube: the frame was started with it resting
@@ -171,11 +172,13 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
         c.hits = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_HITS)];
         c.misses = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_MISSES)] + rested;
         c.misses_by[static_cast<std::size_t>(MissReason::resting)] = rested;
+        c.misses_by[static_cast<std::size_t>(MissReason::empty)] = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_EMPTY)];
         c.lookups = c.hits + c.misses;
         c.stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_STORES)];
         c.refused_stores = words[shared::raycache_frame_counter_word(k, RAYCACHE_FRAME_REFUSED)];
         s.total.hits += c.hits, s.total.misses += c.misses, s.total.lookups += c.lookups;
         s.total.misses_by[static_cast<std::size_t>(MissReason::resting)] += rested;
+        s.total.misses_by[static_cast<std::size_t>(MissReason::empty)] += c.misses_by[static_cast<std::size_t>(MissReason::empty)];
         s.total.stores += c.stores, s.total.refused_stores += c.refused_stores;
     }
     s.listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);

@@ -43,7 +43,8 @@ struct CubeStatistics {
     std::uint64_t lookups = 0;          // hits + misses
     std::uint64_t hits = 0;             // lookups answered by a visible, valid texel
     std::uint64_t misses = 0;           // lookups that found nothing usable (the caller traced the ray)
-    // misses by MissReason (their sum is `misses` for C++ cubes; GPU frames count only MissReason::resting)
+    // misses by MissReason (their sum is `misses` for C++ cubes; GPU frames count only MissReason::resting and
+    // MissReason::empty)
     std::array<std::uint64_t, miss_reason_count> misses_by{};
     std::uint64_t stores = 0;           // stores that wrote a texel
     std::uint64_t refused_stores = 0;   // stores ignored: bad key or value, visible texel kept, lost a same-frame tie
@@ -66,7 +67,8 @@ struct CubeStatistics {
     }
     // Lookups the cube made: its resting misses (raycache/resting.hpp) left out, since it read nothing for them.
     std::uint64_t looked_up() const noexcept { return looked_up_count(lookups, misses_by); }
-    // The share of the lookups that missed for `why`, 0..1 (on GPU statistics 0 for every cause but resting).
+    // The share of the lookups that missed for `why`, 0..1 (on GPU statistics 0 for every cause but resting and
+    // empty).
     double miss_share(MissReason why) const noexcept {
         return lookups ? static_cast<double>(misses_by[static_cast<std::size_t>(why)]) / static_cast<double>(lookups) : 0.0;
     }

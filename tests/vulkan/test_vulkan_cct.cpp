@@ -131,16 +131,22 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
 
     // The GPU's counters, per cube, equal the C++ cubes' own for the same lookups (made just above).
     const raycache::GpuFrameStatistics gpu_stats = frame.statistics();
+    std::uint64_t empties = 0;
     for (std::size_t k = 0; k < s.cubes.size(); ++k) {
         CAPTURE(k);
         const raycache::CubeStatistics cpu = s.cubes[k].statistics();
         CHECK(gpu_stats.cubes[k].lookups == cpu.lookups);
         CHECK(gpu_stats.cubes[k].hits == cpu.hits);
         CHECK(gpu_stats.cubes[k].misses == cpu.misses);
+        // Misses on texels holding no value (the host's still-camera rule), as C++ counts them.
+        CHECK(gpu_stats.cubes[k].misses_by[static_cast<std::size_t>(raycache::MissReason::empty)] ==
+              cpu.misses_by[static_cast<std::size_t>(raycache::MissReason::empty)]);
+        empties += cpu.misses_by[static_cast<std::size_t>(raycache::MissReason::empty)];
         CHECK(gpu_stats.cubes[k].stores == 0u);
         CHECK(gpu_stats.cubes[k].refused_stores == 0u);
     }
     CHECK(gpu_stats.total.lookups == queries.size());
+    CHECK(empties > 0u); // some lookups met empty texels
     CHECK(gpu_stats.listed == 0u);
 
     // Each cube's coverage bits in the frame buffer are the cells C++'s DirectionCoverage marks for the

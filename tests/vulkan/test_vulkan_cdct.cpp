@@ -81,6 +81,7 @@ std::vector<Query> search_queries(const Scene& s, std::mt19937& rng, int per_cub
 struct Comparison {
     std::size_t same = 0, hits = 0;
     long long texels = 0;
+    std::uint64_t empty = 0; // GPU searches counted as misses on empty texels
 };
 
 // Compares GPU search results with the C++ search of each query's mode (0: relief_search, 4: secant_search,
@@ -139,14 +140,20 @@ struct GpuSearches {
         frame.start();
         vk.dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &push, sizeof(push),
                     rcx::vk::group_count(queries.size(), 64));
-        const Comparison c = compare_searches(s, queries, results.as<Result>(), p);
-        // Every search is one lookup of its cube, a hit when it answered.
+        const auto empty = static_cast<std::size_t>(MissReason::empty);
+        std::vector<std::uint64_t> empty_before(s.cubes.size());
+        for (std::size_t k = 0; k < s.cubes.size(); ++k) empty_before[k] = s.cubes[k].statistics().misses_by[empty];
+        Comparison c = compare_searches(s, queries, results.as<Result>(), p);
+        // Every search is one lookup of its cube, a hit when it answered; a miss ended by a read of a texel
+        // holding no value counts as empty, as the same C++ searches (just above) count it.
         const raycache::GpuFrameStatistics stats = frame.statistics();
         std::vector<std::uint64_t> lookups(s.cubes.size(), 0), hits(s.cubes.size(), 0);
         for (std::size_t i = 0; i < queries.size(); ++i) ++lookups[queries[i].cube], hits[queries[i].cube] += results.as<Result>()[i].hit != 0u;
         for (std::size_t k = 0; k < s.cubes.size(); ++k) {
             CHECK(stats.cubes[k].lookups == lookups[k]);
             CHECK(stats.cubes[k].hits == hits[k]);
+            CHECK(stats.cubes[k].misses_by[empty] == s.cubes[k].statistics().misses_by[empty] - empty_before[k]);
+            c.empty += stats.cubes[k].misses_by[empty];
         }
         return c;
     }
@@ -438,6 +445,7 @@ TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on 
         GpuSearches gpu(*vk, cross, s, search_queries(s, rng, 1000, 4));
         const std::vector<Query>& queries = gpu.queries;
         std::size_t hits = 0;
+        std::uint64_t empty = 0;
         for (const ReliefParameters& p : rcx_test::secant_parameter_sets()) {
             CAPTURE(p.epsilon);
             CAPTURE(p.max_gap);
@@ -453,8 +461,10 @@ TEST_CASE("the secant search in GLSL equals C++'s secant_search bit for bit, on 
             compared += queries.size();
             all_same += c.same;
             hits += c.hits;
+            empty += c.empty;
         }
         CHECK(hits > queries.size()); // both kinds of cube answer many searches over the sets
+        CHECK(empty > 0u);            // and miss on empty texels, which the GPU counts as C++ does
     }
     std::printf("CDCT secant search: %zu of %zu GLSL searches equal to C++ bit for bit\n", all_same, compared);
     CHECK(compared >= 20000);
