@@ -262,3 +262,50 @@ TEST_CASE("moving GPU cubes carries their tiles' origin boxes: copied, united wh
     CHECK(plain == new_words);
     for (std::uint32_t w : untouched) CHECK(w == 0x12345678u);
 }
+
+TEST_CASE("a GPU cube whose rays hold still takes finer faces after three settled frames, and goes back when they move on") {
+    // One cube at 91 texels, sized, 6144 rays a frame over a sixth of the directions. At 1 ray a texel they
+    // want 78.4 texels (91 stays); once three frames in a row answered them all with no miss on an empty
+    // texel, at 0.25 rays a texel they want sqrt(6144 / (0.25 x 6 / 6)) = 156.8: the nearest step, 181 (0.21
+    // octave away; 128 is 0.29), at once. The frame after the resize is not judged; then 156.8 is within the
+    // hysteresis of 181. A frame whose misses are 30% on empty texels (over 20%) ends it: 78.4 is 2.4
+    // half-octaves below 181, so the nearest step, 91. A resting frame starts the count again.
+    const GpuBufferLayout at_91 = gpu_buffer_layout<CctTexel>({GpuCubeShape{91, {}}});
+    const GpuBufferLayout at_181 = gpu_buffer_layout<CctTexel>({GpuCubeShape{181, {}}});
+    const AdaptiveResolution a;
+    std::vector<bool> sized(1, true);
+    std::vector<StillRays> still(1);
+    auto frame = [](std::uint64_t hits, std::uint64_t empty) {
+        GpuFrameStatistics f = frame_with(1, 0, 6144, 256);
+        f.cubes[0].hits = hits;
+        f.cubes[0].misses = 6144 - hits;
+        f.cubes[0].misses_by[static_cast<std::size_t>(MissReason::empty)] = empty;
+        return f;
+    };
+    auto next = [&](const GpuBufferLayout& layout, const GpuFrameStatistics& f) {
+        return next_gpu_face_sizes<CctTexel>(a, layout, f, sized, ~std::uint64_t{0}, &still).face_sizes[0];
+    };
+    CHECK(next(at_91, frame(6144, 0)) == 91);
+    CHECK(next(at_91, frame(6144, 0)) == 91);
+    CHECK_FALSE(still[0].resized);
+    CHECK(next(at_91, frame(6144, 0)) == 181);
+    CHECK(still[0].fine);
+    CHECK(still[0].resized);
+    CHECK(next(at_181, frame(0, 6144)) == 181); // the cold frame after the resize: not judged
+    CHECK(still[0].fine);
+    CHECK(next(at_181, frame(6144, 0)) == 181);
+    CHECK(next(at_181, frame(4300, 1844)) == 91); // 1844 of 6144: 30% empty
+    CHECK_FALSE(still[0].fine);
+    // Settled again twice, then a frame resting: the count starts over.
+    still[0] = StillRays{};
+    CHECK(next(at_91, frame(6144, 0)) == 91);
+    CHECK(next(at_91, frame(6144, 0)) == 91);
+    GpuFrameStatistics resting = frame(6144, 0);
+    resting.resting.assign(1, true);
+    CHECK(next(at_91, resting) == 91);
+    CHECK(still[0].settled_frames == 0);
+    CHECK(next(at_91, frame(6144, 0)) == 91);
+    // One state per cube, or an error.
+    std::vector<StillRays> two(2);
+    CHECK_THROWS_AS(next_gpu_face_sizes<CctTexel>(a, at_91, frame(6144, 0), sized, ~std::uint64_t{0}, &two), std::invalid_argument);
+}

@@ -61,12 +61,13 @@ struct Tracer::Impl {
     std::uint32_t texel_count = 0;
     bool cdct = false;
     // The cubes: one per cached object (shapes, in object order; shape_of: per object, its cube or -1), placed
-    // in the texel buffer by `layout`. Adaptive sizes (settings.adaptive): `sized` per cube, for
+    // in the texel buffer by `layout`. Adaptive sizes (settings.adaptive): `sized` and `still` per cube, for
     // raycache::next_gpu_face_sizes.
     std::vector<raycache::GpuCubeShape> shapes;
     std::vector<int> shape_of;
     raycache::GpuBufferLayout layout;
     std::vector<bool> sized;
+    std::vector<raycache::StillRays> still;
     std::uint64_t max_buffer = 0; // maxStorageBufferRange
     std::uint64_t cube_room = 0;  // of it, what the cubes may take (the frame buffer's counters come first; the budget)
 
@@ -249,6 +250,7 @@ Tracer::Tracer(vk::Context& context, const Scene& scene, const std::string& spir
     t.shapes = std::move(packed.shapes);
     t.shape_of = std::move(packed.shape_of);
     t.sized.assign(t.shapes.size(), false);
+    t.still.assign(t.shapes.size(), raycache::StillRays{});
     t.place_cubes(std::vector<int>(t.shapes.size(), t.settings.face_size));
     if (caching) {
         // Negative: the technique's default; NaN passes on to GpuResting, which refuses it.
@@ -311,6 +313,8 @@ void Tracer::load_caches(const std::string& path, const raycache::SceneIdentity&
                                   t.doubtful->as<std::uint32_t>(), t.origins ? t.origins->as<std::uint32_t>() : nullptr);
         for (std::size_t k = 0; k < cubes.size(); ++k) {
             t.sized[k] = cubes[k].cube->valid_texels() > 0;
+            t.still[k] = raycache::StillRays{};
+            t.still[k].resized = true; // replaced: its first frame says nothing about its rays, as a made C++ cube's
             if (t.resting) t.resting->restart(t.layout.cubes[k].index, t.sized[k]); // works, as the Embree adapter's
         }
     });
@@ -499,7 +503,8 @@ Image Tracer::render(const Camera& camera, int width, int height, FrameStats* st
         if (!t.settings.adaptive || t.shapes.empty()) return;
         const auto resize_start = std::chrono::steady_clock::now();
         const raycache::GpuFaceSizes next = t.with_texel([&](auto texel) {
-            return raycache::next_gpu_face_sizes<decltype(texel)>(t.settings.adaptive_resolution, t.layout, frame_stats, t.sized, t.cube_room);
+            return raycache::next_gpu_face_sizes<decltype(texel)>(t.settings.adaptive_resolution, t.layout, frame_stats, t.sized, t.cube_room,
+                                                                 &t.still);
         });
         if (next.changed) {
             for (std::size_t k = 0; k < next.face_sizes.size(); ++k) resized += next.face_sizes[k] != t.layout.cubes[k].face_size;

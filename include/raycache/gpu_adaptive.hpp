@@ -54,12 +54,16 @@ struct GpuFaceSizes {
 // until then it moves to the ideal size at once, and waits at adaptive.min_face_size (or its own size, if
 // smaller) while it gets no ray at all. Then, if the cubes would pass `max_buffer_bytes` (the
 // device's maxStorageBufferRange), the largest are lowered to fit (fit_gpu_face_sizes); a cube so lowered
-// grows again only when the cap rises by the hysteresis. Throws
-// std::invalid_argument when `sized` does not have one flag per cube, a descriptor's index has no
-// statistics, or a size is not 1..4096.
+// grows again only when the cap rises by the hysteresis. With `still` (one state per cube, default-made
+// before the first frame; updated here), a cube whose rays hold still takes finer faces, at
+// adaptive.still_rays_per_texel, by SceneCache's rule (next_still_rays, still_face_size: hits and misses on
+// texels holding no value, RAYCACHE_FRAME_EMPTY, say whether its rays come back to the same texels; a
+// resized cube's next frame is not judged). Throws std::invalid_argument when `sized` (or `still`) does not
+// have one entry per cube, a descriptor's index has no statistics, or a size is not 1..4096.
 template <class Texel>
 GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBufferLayout& layout,
-                                 const GpuFrameStatistics& frame, std::vector<bool>& sized, std::uint64_t max_buffer_bytes) {
+                                 const GpuFrameStatistics& frame, std::vector<bool>& sized, std::uint64_t max_buffer_bytes,
+                                 std::vector<StillRays>* still = nullptr) {
     validate(adaptive);
     if (!frame.coverage_marked)
         throw std::invalid_argument("RayCache: next_gpu_face_sizes needs the frame's direction cells: start the frame with "
@@ -67,6 +71,9 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
     if (sized.size() != layout.cubes.size())
         throw std::invalid_argument("RayCache: next_gpu_face_sizes needs one `sized` flag per cube (" +
                                     std::to_string(layout.cubes.size()) + "), got " + std::to_string(sized.size()));
+    if (still && still->size() != layout.cubes.size())
+        throw std::invalid_argument("RayCache: next_gpu_face_sizes needs one StillRays per cube (" +
+                                    std::to_string(layout.cubes.size()) + "), got " + std::to_string(still->size()));
     std::vector<int> sizes;
     sizes.reserve(layout.cubes.size());
     for (std::size_t k = 0; k < layout.cubes.size(); ++k) {
@@ -79,13 +86,21 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
         // A cube that rested (raycache/gpu_resting.hpp) marked only its probes' cells: the size it had stays.
         if (cube.index < frame.resting.size() && frame.resting[cube.index]) {
             sizes.push_back(cube.face_size);
+            if (still) (*still)[k].settled_frames = 0;
             continue;
         }
         // A cube no ray has reached yet waits at the smallest size: unlike a CPU cube, whose tiles cost only
         // once stored into, a GPU cube's texels are all allocated (an object seen only in other objects'
         // reflections may never get a lookup of its own: the GLSL tracers do not recurse).
-        if (!sized[k] && rays == 0) sizes.push_back(std::max(std::min(cube.face_size, adaptive.min_face_size), 1));
-        else sizes.push_back(adapted_face_size(cube.face_size, sized[k], rays, frame.coverage[cube.index], adaptive));
+        int size = !sized[k] && rays == 0 ? std::max(std::min(cube.face_size, adaptive.min_face_size), 1)
+                                          : adapted_face_size(cube.face_size, sized[k], rays, frame.coverage[cube.index], adaptive);
+        if (still) {
+            const CubeStatistics& c = frame.cubes[cube.index];
+            StillRays& s = (*still)[k];
+            s = next_still_rays(s, c.looked_up(), c.hits, c.misses_by[static_cast<std::size_t>(MissReason::empty)], adaptive);
+            if (sized[k]) size = still_face_size(cube.face_size, size, s, rays, frame.coverage[cube.index], adaptive);
+        }
+        sizes.push_back(size);
         sized[k] = sized[k] || rays > 0;
     }
     GpuFaceSizes next;
@@ -99,6 +114,8 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
             2.0 * std::log2(static_cast<double>(fitted) / current) < adaptive.hysteresis_steps - 1e-9)
             next.face_sizes[k] = current;
         next.changed = next.changed || next.face_sizes[k] != current;
+        // A resized cube starts empty or coarser: its next frame's misses say nothing about its rays.
+        if (still && next.face_sizes[k] != current) (*still)[k].resized = true;
     }
     return next;
 }
