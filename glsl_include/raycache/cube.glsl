@@ -110,11 +110,12 @@ void raycache_count_lookup(raycache_gpu_cube cube, bool hit) {
 
 /* Counts a miss of `cube` on a texel that holds no value (a texel stored earlier in the same frame is among
  * them: lookups read published texels alone), from which the host tells whether the cube's rays come back to
- * texels already filled (raycache/gpu_adaptive.hpp: finer faces for still cameras). Nothing under
- * RAYCACHE_READ_ONLY. */
+ * texels already filled (raycache/gpu_adaptive.hpp: finer faces for still cameras). Only while the frame's
+ * flags hold RAYCACHE_FRAME_MARK_COVERAGE (adaptive sizes, its one reader), so fixed-size frames pay no
+ * second atomic on a miss; nothing under RAYCACHE_READ_ONLY. */
 void raycache_count_empty(raycache_gpu_cube cube) {
 #ifndef RAYCACHE_READ_ONLY
-    raycache_frame_count(cube.index, RAYCACHE_FRAME_EMPTY);
+    if ((raycache_frame[RAYCACHE_FRAME_FLAGS] & RAYCACHE_FRAME_MARK_COVERAGE) != 0u) raycache_frame_count(cube.index, RAYCACHE_FRAME_EMPTY);
 #endif
 }
 

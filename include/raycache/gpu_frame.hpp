@@ -137,7 +137,8 @@ inline GpuGroups gpu_sweep_groups(std::uint64_t elements, std::uint32_t group_si
 struct GpuFrameStatistics {
     // lookups (every ray that reached the cube), hits, misses (with the rays a resting cube let through, also
     // counted in misses_by[MissReason::resting], as C++ counts them; those on a texel holding no value also in
-    // misses_by[MissReason::empty], with the texels stored earlier in the frame, which C++ counts as fresh),
+    // misses_by[MissReason::empty], with the texels stored earlier in the frame, which C++ counts as fresh;
+    // only in frames started with mark_coverage),
     // stores (reached the pending word), refused_stores
     std::vector<CubeStatistics> cubes;
     std::vector<double> coverage;      // per cube: the share of the 1536 direction cells its lookups took (0..1)

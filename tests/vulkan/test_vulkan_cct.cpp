@@ -169,8 +169,8 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
     }
     CHECK(cells_marked > 4 * RAYCACHE_COVERAGE_CELLS / 2); // the directions spread over most cells of every cube
 
-    // Started without RAYCACHE_FRAME_MARK_COVERAGE (fixed face sizes), the same lookups mark no cell and
-    // count as before.
+    // Started without RAYCACHE_FRAME_MARK_COVERAGE (fixed face sizes), the same lookups mark no cell, count no
+    // miss on an empty texel, and count hits and lookups as before.
     frame.start(false);
     vk->dispatch(cross, {texels, pending, cubes, query_buffer, results, frame.buffer}, &count, 4, rcx::vk::group_count(count, 64));
     const raycache::GpuFrameStatistics unmarked = frame.statistics();
@@ -181,6 +181,7 @@ TEST_CASE("CCT texels written by C++ give the same lookups in GLSL as in C++") {
         CHECK(unmarked.coverage[k] == 0.0);
         CHECK(unmarked.cubes[k].lookups == gpu_stats.cubes[k].lookups);
         CHECK(unmarked.cubes[k].hits == gpu_stats.cubes[k].hits);
+        CHECK(unmarked.cubes[k].misses_by[static_cast<std::size_t>(raycache::MissReason::empty)] == 0u); // adaptive frames alone
     }
     CHECK(words_set == 0u);
 }

@@ -132,8 +132,9 @@ namespace shared {
 #define RAYCACHE_FRAME_RESTING 5u  /* written by the host: 0 when the cube works this frame, else it rests
                                       and probes one direction in 2^word (clamped to RAYCACHE_PROBE_BITS..
                                       RAYCACHE_MAX_PROBE_BITS: raycache_is_probe_direction_of) */
-#define RAYCACHE_FRAME_EMPTY 6u    /* lookups that missed on a texel holding no value (among MISSES): whether the
-                                      cube's rays come back to texels already filled (raycache/gpu_adaptive.hpp) */
+#define RAYCACHE_FRAME_EMPTY 6u    /* lookups that missed on a texel holding no value (among MISSES; counted in
+                                      frames that mark coverage): whether the cube's rays come back to texels
+                                      already filled (raycache/gpu_adaptive.hpp) */
 #define RAYCACHE_FRAME_COVERAGE 7u /* RAYCACHE_COVERAGE_WORDS words: the direction cells its lookups took */
 #define RAYCACHE_FRAME_CUBE_WORDS (RAYCACHE_FRAME_COVERAGE + RAYCACHE_COVERAGE_WORDS)
 /* A store-list entry for a CDCT texel (else CCT); the rest of the entry is the texel's element. */
