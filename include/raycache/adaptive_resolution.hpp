@@ -33,6 +33,7 @@
 #include "raycache/cache_cube.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/shared/coverage.h"
+#include "raycache/statistics.hpp"
 
 namespace raycache {
 
@@ -228,6 +229,16 @@ inline int still_face_size(int current, int next, StillRays& still, std::uint64_
     const int size = still.refined ? next_face_size(current, rays, covered_fraction, fine) : nearest_face_size_step(ideal, a);
     still.refined = true;
     return std::max(next, size);
+}
+
+// The still rule after a frame of a working (not resting) adaptive cube of face size `current`, whose
+// counters were `frame` (lookups, hits, misses on empty texels) over `covered_fraction` of the directions:
+// updates `still` (next_still_rays) and, once a frame has sized the cube (`sized`), returns still_face_size()
+// of `next`, adapted_face_size()'s; else `next`. SceneCache's and the GPU's sizing (gpu_adaptive.hpp) both.
+inline int face_size_with_still_rule(int current, int next, bool sized, const CubeStatistics& frame, double covered_fraction,
+                                     StillRays& still, const AdaptiveResolution& a) noexcept {
+    still = next_still_rays(still, frame.looked_up(), frame.hits, frame.misses_by[static_cast<std::size_t>(MissReason::empty)], a);
+    return sized ? still_face_size(current, next, still, frame.lookups, covered_fraction, a) : next;
 }
 
 // The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile

@@ -94,12 +94,9 @@ GpuFaceSizes next_gpu_face_sizes(const AdaptiveResolution& adaptive, const GpuBu
         // reflections may never get a lookup of its own: the GLSL tracers do not recurse).
         int size = !sized[k] && rays == 0 ? std::max(std::min(cube.face_size, adaptive.min_face_size), 1)
                                           : adapted_face_size(cube.face_size, sized[k], rays, frame.coverage[cube.index], adaptive);
-        if (still) {
-            const CubeStatistics& c = frame.cubes[cube.index];
-            StillRays& s = (*still)[k];
-            s = next_still_rays(s, c.looked_up(), c.hits, c.misses_by[static_cast<std::size_t>(MissReason::empty)], adaptive);
-            if (sized[k]) size = still_face_size(cube.face_size, size, s, rays, frame.coverage[cube.index], adaptive);
-        }
+        if (still)
+            size = face_size_with_still_rule(cube.face_size, size, sized[k], frame.cubes[cube.index], frame.coverage[cube.index],
+                                             (*still)[k], adaptive);
         sizes.push_back(size);
         sized[k] = sized[k] || rays > 0;
     }

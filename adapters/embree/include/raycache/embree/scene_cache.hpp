@@ -1118,10 +1118,9 @@ private:
             const int current = with_cube(e, [](const auto& cube) { return cube.face_size(); });
             const CubeStatistics frame = counts_of(e);
             const std::uint64_t rays = frame.lookups;
-            e.still = next_still_rays(e.still, frame.looked_up(), frame.hits,
-                                      frame.misses_by[static_cast<std::size_t>(MissReason::empty)], adaptive_);
-            int next = adapted_face_size(current, e.sized, rays, e.coverage->fraction(), adaptive_);
-            if (e.sized) next = still_face_size(current, next, e.still, rays, e.coverage->fraction(), adaptive_);
+            const double covered = e.coverage->fraction();
+            const int next = face_size_with_still_rule(current, adapted_face_size(current, e.sized, rays, covered, adaptive_), e.sized,
+                                                       frame, covered, e.still, adaptive_);
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
             if (next != current) resizes.push_back(Resize{i, next}); // make_cube() marks it resized
