@@ -272,8 +272,9 @@ TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the nex
 TEST_CASE("an adaptive cube whose rays come back to the same texels frame after frame takes finer faces, once") {
     // The 6144 rays of the test above, every frame (a still camera). Frame 1 sizes the cube to 32 (one ray
     // a texel); frame 2, right after that resize, is not judged; frames 3 to 5 hit every ray (still_frames
-    // = 3), so the cube takes still_rays_per_texel = 0.25: sqrt(6144 / (0.25 * 6)) = 64. Frame 6 starts
-    // that cube empty (not judged either); from frame 7 it hits every ray again and keeps 64.
+    // = 3), so the cube takes still_rays_per_texel = 0.1: sqrt(6144 / (0.1 * 6)) = 101.2, whose nearest step
+    // is 91 (0.15 octave away; 128 is 0.34). Frame 6 starts that cube empty (not judged either); from frame
+    // 7 it hits every ray again and keeps 91 (101.2 is within the hysteresis).
     World w;
     SceneCache caches(Technique::cct);
     caches.attach(w.scene, {w.mirror});
@@ -290,7 +291,7 @@ TEST_CASE("an adaptive cube whose rays come back to the same texels frame after 
         hits.push_back(caches.begin_frame().hits);
         sizes.push_back(caches.face_size({w.mirror}));
     }
-    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64});
+    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 91, 91, 91, 91, 91});
     CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144});
 }
 

@@ -266,12 +266,12 @@ TEST_CASE("moving GPU cubes carries their tiles' origin boxes: copied, united wh
 TEST_CASE("a GPU cube whose rays hold still takes finer faces after three settled frames, and goes back when they move on") {
     // One cube at 91 texels, sized, 6144 rays a frame over a sixth of the directions. At 1 ray a texel they
     // want 78.4 texels (91 stays); once three frames in a row answered them all with no miss on an empty
-    // texel, at 0.25 rays a texel they want sqrt(6144 / (0.25 x 6 / 6)) = 156.8: the nearest step, 181 (0.21
-    // octave away; 128 is 0.29), at once. The frame after the resize is not judged; then 156.8 is within the
-    // hysteresis of 181. A frame whose misses are 30% on empty texels (over 20%) ends it: 78.4 is 2.4
-    // half-octaves below 181, so the nearest step, 91. A resting frame starts the count again.
+    // texel, at 0.1 rays a texel they want sqrt(6144 / (0.1 x 6 / 6)) = 247.9: the nearest step, 256 (0.05
+    // octave away; 181 is 0.45), at once. The frame after the resize is not judged; then 247.9 is within the
+    // hysteresis of 256. A frame whose misses are 30% on empty texels (over 20%) ends it: 78.4 is 3.4
+    // half-octaves below 256, so the nearest step, 91. A resting frame starts the count again.
     const GpuBufferLayout at_91 = gpu_buffer_layout<CctTexel>({GpuCubeShape{91, {}}});
-    const GpuBufferLayout at_181 = gpu_buffer_layout<CctTexel>({GpuCubeShape{181, {}}});
+    const GpuBufferLayout at_256 = gpu_buffer_layout<CctTexel>({GpuCubeShape{256, {}}});
     const AdaptiveResolution a;
     std::vector<bool> sized(1, true);
     std::vector<StillRays> still(1);
@@ -288,13 +288,13 @@ TEST_CASE("a GPU cube whose rays hold still takes finer faces after three settle
     CHECK(next(at_91, frame(6144, 0)) == 91);
     CHECK(next(at_91, frame(6144, 0)) == 91);
     CHECK_FALSE(still[0].resized);
-    CHECK(next(at_91, frame(6144, 0)) == 181);
+    CHECK(next(at_91, frame(6144, 0)) == 256);
     CHECK(still[0].fine);
     CHECK(still[0].resized);
-    CHECK(next(at_181, frame(0, 6144)) == 181); // the cold frame after the resize: not judged
+    CHECK(next(at_256, frame(0, 6144)) == 256); // the cold frame after the resize: not judged
     CHECK(still[0].fine);
-    CHECK(next(at_181, frame(6144, 0)) == 181);
-    CHECK(next(at_181, frame(4300, 1844)) == 91); // 1844 of 6144: 30% empty
+    CHECK(next(at_256, frame(6144, 0)) == 256);
+    CHECK(next(at_256, frame(4300, 1844)) == 91); // 1844 of 6144: 30% empty
     CHECK_FALSE(still[0].fine);
     // Settled again twice, then a frame resting: the count starts over.
     still[0] = StillRays{};

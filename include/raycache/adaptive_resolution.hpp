@@ -59,7 +59,7 @@ struct AdaptiveResolution {
     // them nothing but a cold frame and answer each ray with a colour closer to its own. It goes back to
     // rays_per_texel when more than 20% of its lookups find texels nobody stored (the rays moved on).
     // >= rays_per_texel: off.
-    float still_rays_per_texel = 0.25f;
+    float still_rays_per_texel = 0.1f;
     int still_frames = 3;
 };
 
