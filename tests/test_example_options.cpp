@@ -11,6 +11,8 @@
 #include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
 
+#include <raycache/adaptive_resolution.hpp>
+
 namespace {
 
 rcx::Options parse(std::vector<const char*> args) {
@@ -222,6 +224,9 @@ TEST_CASE("values: negative numbers, short flags, inf and auto keep their meanin
     CHECK(parse({"--face-size=64"}).face_size == 64);
     CHECK(usage_error({"--face-size", "big"}) == "--face-size: 'big' is not an integer");
     CHECK(parse({}).first_face_size == 256); // raycache::AdaptiveResolution's default
+    CHECK(parse({}).still_rays_per_texel == raycache::AdaptiveResolution{}.still_rays_per_texel);
+    CHECK(parse({"--still-rays-per-texel", "0.5"}).still_rays_per_texel == 0.5f);
+    CHECK(usage_error({"--still-rays-per-texel", "0"}) == "--still-rays-per-texel: must be > 0, got 0");
     CHECK(parse({"--first-face-size", "64"}).first_face_size == 64);
     CHECK(usage_error({"--first-face-size", "0"}) == "--first-face-size: 0 is out of range 1..4096");
     CHECK(usage_error({"--size", "8"}) == "--size: '8' is not WIDTHxHEIGHT (for example 512x512)");

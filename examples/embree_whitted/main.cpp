@@ -114,6 +114,7 @@ int run(const rcx::Options& o) {
             cache_settings.relief = relief;
             cache_settings.depth_pyramid = o.pyramid;
             cache_settings.adaptive.rays_per_texel = o.rays_per_texel;
+            cache_settings.adaptive.still_rays_per_texel = o.still_rays_per_texel;
             cache_settings.adaptive.first_face_size = o.first_face_size;
             cache_settings.budget_bytes = static_cast<std::size_t>(o.budget_mib) << 20;
             cache_settings.filtered = o.filtered;

@@ -120,6 +120,7 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     settings.face_size = o.face_size > 0 ? o.face_size : o.first_face_size;
     settings.adaptive = o.face_size <= 0; // auto: each cube's size follows its rays (raycache/gpu_adaptive.hpp)
     settings.adaptive_resolution.rays_per_texel = o.rays_per_texel;
+    settings.adaptive_resolution.still_rays_per_texel = o.still_rays_per_texel;
     settings.adaptive_resolution.first_face_size = o.first_face_size;
     settings.budget_bytes = budget_bytes;
     settings.secant = o.secant;

@@ -154,6 +154,10 @@ CommandLine::CommandLine(const std::string& program)
                "auto: a frame's leaving rays per covered texel; smaller is sharper\n"
                "and fills more slowly " + shown_default(d.rays_per_texel),
                number("--rays-per-texel", o.rays_per_texel, true));
+    add_option("--still-rays-per-texel", "F",
+               "auto: the same once a cube's rays hold still (a still camera: the same\n"
+               "rays come back to its texels); >= --rays-per-texel: off " + shown_default(d.still_rays_per_texel),
+               number("--still-rays-per-texel", o.still_rays_per_texel, true));
     add_option("--first-face-size", "N",
                "auto: the face size cubes start at, 1..4096; smaller makes a first\n"
                "frame cheaper and its cubes coarser [" + std::to_string(d.first_face_size) + "]",

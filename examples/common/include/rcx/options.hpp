@@ -45,6 +45,7 @@ struct Options {
     CacheMode cache = CacheMode::cct;
     int face_size = 0;                // texels per cube face side; 0 = auto (adaptive, see --help)
     float rays_per_texel = 1.0f;      // auto face sizes: leaving rays of a frame per covered texel
+    float still_rays_per_texel = 0.1f; // auto face sizes, once a cube's rays hold still (AdaptiveResolution's default)
     int first_face_size = 256;        // auto face sizes: before a cube's first frame (AdaptiveResolution's default)
     int budget_mib = 256;             // bytes all cubes may take, MiB (SceneCacheSettings::budget_bytes's default;
                                       // Vulkan: raycache::gpu_texel_bytes_within)
