@@ -71,6 +71,29 @@ TEST_CASE("the first sizing, after the first counted frame, goes straight to the
     CHECK(raycache::first_face_size(256, 0, 0.0, a) == 256);
 }
 
+TEST_CASE("a still camera's finer faces take the largest step whose rays' tiles fit the budget's room") {
+    // By hand, 1000-byte tiles and 8-byte table entries: N = 91 has 216 tiles, so its table is 1728 bytes and
+    // its tiles 216000; rays over a quarter of the directions reach a quarter of them: 1728 + 54000 = 55728.
+    // N = 64: 96 tiles, 768 + 96000 x covered; N = 45: 54 tiles, 432 + 54000 x covered.
+    CHECK(raycache::rays_cube_bytes(91, 1.0, 1000, 8) == 217728u); // all of it: full_cube_bytes
+    CHECK(raycache::rays_cube_bytes(91, 0.25, 1000, 8) == 55728u);
+    CHECK(raycache::rays_cube_bytes(64, 0.5, 1000, 8) == 48768u);
+    CHECK(raycache::rays_cube_bytes(64, 2.0, 1000, 8) == 96768u); // shares clamp to [0, 1]
+    CHECK(raycache::rays_cube_bytes(64, -1.0, 1000, 8) == 768u);
+    // From 32 towards 91, every direction covered: 91 at its bytes, one byte less 64, then 45, then none
+    // above the floor (32 stays).
+    CHECK(raycache::largest_face_size_within(32, 91, 1.0, 217728, 1000, 8) == 91);
+    CHECK(raycache::largest_face_size_within(32, 91, 1.0, 217727, 1000, 8) == 64);
+    CHECK(raycache::largest_face_size_within(32, 91, 1.0, 96767, 1000, 8) == 45);
+    CHECK(raycache::largest_face_size_within(32, 91, 1.0, 54431, 1000, 8) == 32);
+    // A quarter covered: 91 fits 55728 bytes; one byte less, 64 (24768).
+    CHECK(raycache::largest_face_size_within(32, 91, 0.25, 55728, 1000, 8) == 91);
+    CHECK(raycache::largest_face_size_within(32, 91, 0.25, 55727, 1000, 8) == 64);
+    // Only ladder steps up to `wanted` (100: 91 at most), and never below the floor.
+    CHECK(raycache::largest_face_size_within(32, 100, 1.0, 1u << 30, 1000, 8) == 91);
+    CHECK(raycache::largest_face_size_within(91, 64, 1.0, 1u << 30, 1000, 8) == 91);
+}
+
 TEST_CASE("the first face size is the largest step at which every cube sharing the budget could fill all its tiles") {
     const raycache::AdaptiveResolution a; // first 256, min 8
     // By hand: a cube of N texels a face has 6 ceil(N/16)^2 tiles; with 1000-byte tiles and 8-byte table

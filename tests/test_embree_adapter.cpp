@@ -295,6 +295,38 @@ TEST_CASE("an adaptive cube whose rays come back to the same texels frame after 
     CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144});
 }
 
+TEST_CASE("a still camera's cube takes only the finer faces its budget has room for, and keeps them") {
+    // The rays of the test above under a budget of 200,000 bytes. By hand (CCT tiles of a static scene:
+    // 1280 bytes, 8-byte table entries): the first faces are the largest step a full cube fits, 64 (96
+    // tiles, 123,648 bytes; 91 would take 278,208), and the cold frame's rays call for 32. After frame 5
+    // the still rule wants 91, which the room (200,000 less the 32-cube, whose own 30,912 bytes go with it)
+    // cannot hold for rays over every direction; 64 fits: frame 6 starts it empty, and from frame 7 it
+    // answers every ray and stays. Without the cap the 91-cube could not keep its tiles, its misses on
+    // empty texels would end the still rule and it would shrink and refine again.
+    World w;
+    raycache::embree::SceneCacheSettings settings;
+    settings.budget_bytes = 200000;
+    SceneCache caches(Technique::cct, settings);
+    caches.attach(w.scene, {w.mirror});
+    CHECK(caches.face_size({w.mirror}) == 64);
+    std::vector<glm::vec3> directions;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < 32; ++row)
+            for (int column = 0; column < 32; ++column)
+                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
+    std::vector<int> sizes;
+    std::vector<std::uint64_t> hits;
+    for (int f = 1; f <= 12; ++f) {
+        for (const glm::vec3& d : directions)
+            caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
+        hits.push_back(caches.begin_frame().hits);
+        sizes.push_back(caches.face_size({w.mirror}));
+    }
+    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64, 64, 64, 64});
+    CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144, 6144, 6144, 6144});
+    CHECK(caches.statistics().allocated_bytes <= 200000u);
+}
+
 TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the statistics and the adaptive size still see its rays") {
     // As the test above: 6144 rays, one through each texel centre of a 32 x 32 cube, call for N = 32. Here
     // the ball moves between the frame and its begin_frame(), which empties (Invalidation::all) or replaces

@@ -248,6 +248,32 @@ inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::s
     return std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge * (tile_bytes + entry_bytes);
 }
 
+// The bytes a cube of `face_size` takes once its rays, covering `covered_fraction` of the directions (the
+// share of DirectionCoverage's cells they marked), have reached every tile of those directions: its whole
+// tile table and that share of its tiles. An estimate from above when they cover the cells they mark
+// densely, as a still camera's rays at still_rays_per_texel do.
+inline std::size_t rays_cube_bytes(int face_size, double covered_fraction, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+    const std::size_t per_edge = (static_cast<std::size_t>(face_size) + 15) / 16;
+    const std::size_t tiles = std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
+    const double covered = std::min(std::max(covered_fraction, 0.0), 1.0);
+    return tiles * entry_bytes + static_cast<std::size_t>(std::ceil(covered * static_cast<double>(tiles * tile_bytes)));
+}
+
+// The largest ladder step in (floor, wanted] whose cube fits `room` bytes by rays_cube_bytes(); `floor`
+// when none does. The still rule's finer faces take only what the budget has room for: a cube that cannot
+// hold its rays' tiles keeps missing on empty texels, which reads as rays that moved on, so it would
+// shrink and refine again every few frames, each time with a cold frame.
+inline int largest_face_size_within(int floor, int wanted, double covered_fraction, std::size_t room, std::size_t tile_bytes,
+                                    std::size_t entry_bytes) noexcept {
+    int best = floor;
+    for (int i = 0;; ++i) {
+        const int size = face_size_step(i);
+        if (size > wanted || size > RAYCACHE_MAX_FACE_SIZE) break;
+        if (size > floor && rays_cube_bytes(size, covered_fraction, tile_bytes, entry_bytes) <= room) best = size;
+    }
+    return best;
+}
+
 // The face size adaptive cubes start at when `cubes` of them share a budget of `budget_bytes`:
 // a.first_face_size, or the largest ladder step below it (not below a.min_face_size) at which each
 // cube could fill every tile within an equal share of the budget. So a cold frame's stores fit however the

@@ -1107,6 +1107,8 @@ private:
     // lookups after this). Resets the entries' direction coverage.
     std::vector<Resize> plan_resizes() {
         std::vector<Resize> resizes;
+        // What the budget has room for: the still rule's finer faces take no more (largest_face_size_within).
+        std::size_t room = budget_->limit() > budget_->used() ? budget_->limit() - budget_->used() : 0;
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
             if (!e.coverage) continue;
@@ -1119,8 +1121,14 @@ private:
             const CubeStatistics frame = counts_of(e);
             const std::uint64_t rays = frame.lookups;
             const double covered = e.coverage->fraction();
-            const int next = face_size_with_still_rule(current, adapted_face_size(current, e.sized, rays, covered, adaptive_), e.sized,
-                                                       frame, covered, e.still, adaptive_);
+            const int adapted = adapted_face_size(current, e.sized, rays, covered, adaptive_);
+            int next = face_size_with_still_rule(current, adapted, e.sized, frame, covered, e.still, adaptive_);
+            if (next > std::max(current, adapted)) { // finer faces for still rays: within the room, its own bytes freed
+                const std::size_t held = with_cube(e, [](const auto& cube) { return cube.bytes(); });
+                next = largest_face_size_within(std::max(current, adapted), next, covered, room + held, tile_bytes(), sizeof(void*));
+                const std::size_t taken = rays_cube_bytes(next, covered, tile_bytes(), sizeof(void*));
+                if (next > current) room = room + held > taken ? room + held - taken : 0;
+            }
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
             if (next != current) resizes.push_back(Resize{i, next}); // make_cube() marks it resized
