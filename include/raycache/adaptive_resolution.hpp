@@ -53,8 +53,8 @@ struct AdaptiveResolution {
     // change costs the finer texels (a shrink keeps the rest) or a cold frame (a growth), so a size
     // hovering between two steps must not flip back and forth.
     int hysteresis_steps = 2;
-    // Once a cube's rays hold still (a still camera: for still_frames frames in a row it answered at least
-    // 60% of its lookups and found at most 5% of them in texels nobody had stored), it takes the finer
+    // Once a cube's rays hold still (a still camera: for still_frames frames in a row at most 5% of its
+    // lookups found texels nobody had stored, whether the others hit or met colour edges), it takes the finer
     // faces of this many rays a texel: the same rays come back to the same texels, so finer faces cost
     // them nothing but a cold frame and answer each ray with a colour closer to its own. It goes back to
     // rays_per_texel when more than 20% of its lookups find texels nobody stored (the rays moved on).
@@ -193,17 +193,18 @@ struct StillRays {
     bool refined = false;   // sized at still_rays_per_texel since it became fine (still_face_size())
 };
 
-// The state after a frame in which the cube made `looked_up` lookups (its resting rays left out), `hits`
-// of them answered and `empty` missed on texels nobody had stored. A frame right after a resize says
-// nothing (a grown cube starts empty, a shrunk one coarser): the state stays. Deterministic.
-inline StillRays next_still_rays(StillRays s, std::uint64_t looked_up, std::uint64_t hits, std::uint64_t empty,
-                                 const AdaptiveResolution& a) noexcept {
+// The state after a frame in which the cube made `looked_up` lookups (its resting rays left out), `empty`
+// of them missing on texels nobody had stored. The rays came back to the texels they stored when few did:
+// texels at colour edges count as come back to (the confidence test traces them), and finer faces are what
+// thins those edges. A frame right after a resize says nothing (a grown cube starts empty, a shrunk one
+// coarser): the state stays. Deterministic.
+inline StillRays next_still_rays(StillRays s, std::uint64_t looked_up, std::uint64_t empty, const AdaptiveResolution& a) noexcept {
     if (s.resized) {
         s.resized = false;
         return s;
     }
     const double n = static_cast<double>(looked_up);
-    const bool settled = looked_up > 0 && static_cast<double>(hits) >= 0.6 * n && static_cast<double>(empty) <= 0.05 * n;
+    const bool settled = looked_up > 0 && static_cast<double>(empty) <= 0.05 * n;
     s.settled_frames = settled ? s.settled_frames + 1 : 0;
     if (s.settled_frames >= a.still_frames) s.fine = true;
     if (looked_up > 0 && static_cast<double>(empty) > 0.2 * n) s.fine = false;
@@ -232,12 +233,12 @@ inline int still_face_size(int current, int next, StillRays& still, std::uint64_
 }
 
 // The still rule after a frame of a working (not resting) adaptive cube of face size `current`, whose
-// counters were `frame` (lookups, hits, misses on empty texels) over `covered_fraction` of the directions:
+// counters were `frame` (lookups, misses on empty texels) over `covered_fraction` of the directions:
 // updates `still` (next_still_rays) and, once a frame has sized the cube (`sized`), returns still_face_size()
 // of `next`, adapted_face_size()'s; else `next`. SceneCache's and the GPU's sizing (gpu_adaptive.hpp) both.
 inline int face_size_with_still_rule(int current, int next, bool sized, const CubeStatistics& frame, double covered_fraction,
                                      StillRays& still, const AdaptiveResolution& a) noexcept {
-    still = next_still_rays(still, frame.looked_up(), frame.hits, frame.misses_by[static_cast<std::size_t>(MissReason::empty)], a);
+    still = next_still_rays(still, frame.looked_up(), frame.misses_by[static_cast<std::size_t>(MissReason::empty)], a);
     return sized ? still_face_size(current, next, still, frame.lookups, covered_fraction, a) : next;
 }
 

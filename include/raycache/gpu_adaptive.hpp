@@ -56,7 +56,7 @@ struct GpuFaceSizes {
 // device's maxStorageBufferRange), the largest are lowered to fit (fit_gpu_face_sizes); a cube so lowered
 // grows again only when the cap rises by the hysteresis. With `still` (one state per cube, default-made
 // before the first frame; updated here), a cube whose rays hold still takes finer faces, at
-// adaptive.still_rays_per_texel, by SceneCache's rule (next_still_rays, still_face_size: hits and misses on
+// adaptive.still_rays_per_texel, by SceneCache's rule (next_still_rays, still_face_size: the misses on
 // texels holding no value, RAYCACHE_FRAME_EMPTY, say whether its rays come back to the same texels; a
 // resized cube's next frame is not judged). Throws std::invalid_argument when `sized` (or `still`) does not
 // have one entry per cube, a descriptor's index has no statistics, or a size is not 1..4096.
