@@ -325,6 +325,17 @@ TEST_CASE("a still camera's cube takes only the finer faces its budget has room 
     CHECK(sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64, 64, 64, 64});
     CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144, 6144, 6144, 6144});
     CHECK(caches.statistics().allocated_bytes <= 200000u);
+    // No limit (the largest budget): the finer faces are the ones wanted, 91, as under the default budget.
+    raycache::embree::SceneCacheSettings unlimited;
+    unlimited.budget_bytes = std::numeric_limits<std::size_t>::max();
+    SceneCache free_caches(Technique::cct, unlimited);
+    free_caches.attach(w.scene, {w.mirror});
+    for (int f = 1; f <= 6; ++f) {
+        for (const glm::vec3& d : directions)
+            free_caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
+        free_caches.begin_frame();
+    }
+    CHECK(free_caches.face_size({w.mirror}) == 91);
 }
 
 TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the statistics and the adaptive size still see its rays") {

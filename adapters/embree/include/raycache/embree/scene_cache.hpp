@@ -1125,9 +1125,10 @@ private:
             int next = face_size_with_still_rule(current, adapted, e.sized, frame, covered, e.still, adaptive_);
             if (next > std::max(current, adapted)) { // finer faces for still rays: within the room, its own bytes freed
                 const std::size_t held = with_cube(e, [](const auto& cube) { return cube.bytes(); });
-                next = largest_face_size_within(std::max(current, adapted), next, covered, room + held, tile_bytes(), sizeof(void*));
+                const std::size_t available = room > SIZE_MAX - held ? SIZE_MAX : room + held; // no limit: SIZE_MAX
+                next = largest_face_size_within(std::max(current, adapted), next, covered, available, tile_bytes(), sizeof(void*));
                 const std::size_t taken = rays_cube_bytes(next, covered, tile_bytes(), sizeof(void*));
-                if (next > current) room = room + held > taken ? room + held - taken : 0;
+                if (next > current && available != SIZE_MAX) room = available > taken ? available - taken : 0;
             }
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
