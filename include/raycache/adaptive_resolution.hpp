@@ -242,11 +242,16 @@ inline int face_size_with_still_rule(int current, int next, bool sized, const Cu
     return sized ? still_face_size(current, next, still, frame.lookups, covered_fraction, a) : next;
 }
 
-// The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile
-// table (`entry_bytes` a tile) and its tiles (`tile_bytes` each, 16 x 16 texels).
-inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+// The tiles (16 x 16 texels) of a cube of `face_size`: 6 ceil(N / 16)^2.
+inline std::size_t cube_tile_count(int face_size) noexcept {
     const std::size_t per_edge = (static_cast<std::size_t>(face_size) + 15) / 16;
-    return std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge * (tile_bytes + entry_bytes);
+    return std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
+}
+
+// The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile
+// table (`entry_bytes` a tile) and its tiles (`tile_bytes` each).
+inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+    return cube_tile_count(face_size) * (tile_bytes + entry_bytes);
 }
 
 // The bytes a cube of `face_size` takes once its rays, covering `covered_fraction` of the directions (the
@@ -254,8 +259,7 @@ inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::s
 // tile table and that share of its tiles. An estimate from above when they cover the cells they mark
 // densely, as a still camera's rays at still_rays_per_texel do.
 inline std::size_t rays_cube_bytes(int face_size, double covered_fraction, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
-    const std::size_t per_edge = (static_cast<std::size_t>(face_size) + 15) / 16;
-    const std::size_t tiles = std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
+    const std::size_t tiles = cube_tile_count(face_size);
     const double covered = std::min(std::max(covered_fraction, 0.0), 1.0);
     return tiles * entry_bytes + static_cast<std::size_t>(std::ceil(covered * static_cast<double>(tiles * tile_bytes)));
 }
