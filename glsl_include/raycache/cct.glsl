@@ -61,22 +61,24 @@ struct raycache_cct_result {
     vec3 color;
 };
 
-/* The colour element i's texel holds for lookups (a miss when it is empty or doubtful, or i is past the buffer). */
-raycache_cct_result raycache_cct_peek_element(uint i) {
+/* The colour element i's texel holds for lookups (a miss when it is empty or doubtful, or i is past the buffer);
+ * `empty`: the texel holds no value (a doubtful texel holds one). */
+raycache_cct_result raycache_cct_peek_element(uint i, out bool empty) {
     raycache_cct_result result;
     result.hit = false;
     result.color = vec3(0.0);
+    empty = false;
     if (i >= uint(raycache_cct_texels.length())) return result;
     uint word = raycache_cct_texels[i];
-    if (!raycache_cct_is_valid(word) || raycache_cct_is_doubtful(i)) return result;
+    empty = !raycache_cct_is_valid(word);
+    if (empty || raycache_cct_is_doubtful(i)) return result;
     result.hit = true;
     result.color = raycache_unpack_rgb9e5(word);
     return result;
 }
-
-/* True when element i lies in the buffer and its texel holds no value (a doubtful texel holds one). */
-bool raycache_cct_element_is_empty(uint i) {
-    return i < uint(raycache_cct_texels.length()) && !raycache_cct_is_valid(raycache_cct_texels[i]);
+raycache_cct_result raycache_cct_peek_element(uint i) {
+    bool empty;
+    return raycache_cct_peek_element(i, empty);
 }
 
 /* The colour cached for `direction` (need not be unit length) in `cube`, without counting. A miss when the
@@ -87,10 +89,10 @@ raycache_cct_result raycache_cct_peek(raycache_gpu_cube cube, vec3 direction) {
 
 /* raycache_cct_peek, counted as a hit or a miss of the cube in the frame buffer (and its direction cell marked). */
 raycache_cct_result raycache_cct_lookup(raycache_gpu_cube cube, vec3 direction) {
-    uint element = raycache_cube_texel(cube, direction);
-    raycache_cct_result result = raycache_cct_peek_element(element);
+    bool empty;
+    raycache_cct_result result = raycache_cct_peek_element(raycache_cube_texel(cube, direction), empty);
     raycache_count_lookup_toward(cube, direction, result.hit);
-    if (!result.hit && raycache_cct_element_is_empty(element)) raycache_count_empty(cube);
+    if (empty) raycache_count_empty(cube);
     return result;
 }
 
@@ -136,9 +138,8 @@ void raycache_cct_list_tile(uint r) {
  * RAYCACHE_READ_ONLY) and refills from the current rays. As C++'s CacheCube::lookup(direction, origin, tolerance). */
 raycache_cct_result raycache_cct_lookup_from(raycache_gpu_cube cube, vec3 direction, vec3 origin, raycache_origin_tolerance tolerance) {
     raycache_texel_address a = raycache_cube_texel_address(cube, direction);
-    uint element = raycache_cube_element(cube, a);
-    raycache_cct_result result = raycache_cct_peek_element(element);
-    bool empty = !result.hit && raycache_cct_element_is_empty(element);
+    bool empty; /* holds no value: counted as such below, whatever the origin test says */
+    raycache_cct_result result = raycache_cct_peek_element(raycache_cube_element(cube, a), empty);
     if (result.hit) {
         uint r = raycache_cct_origin_record(cube, a);
         vec3 lo, hi;
