@@ -1127,8 +1127,10 @@ private:
                 const std::size_t held = with_cube(e, [](const auto& cube) { return cube.bytes(); });
                 const std::size_t available = room > SIZE_MAX - held ? SIZE_MAX : room + held; // no limit: SIZE_MAX
                 next = largest_face_size_within(std::max(current, adapted), next, covered, available, tile_bytes(), sizeof(void*));
-                const std::size_t taken = rays_cube_bytes(next, covered, tile_bytes(), sizeof(void*));
-                if (next > current && available != SIZE_MAX) room = available > taken ? available - taken : 0;
+                if (next > current && available != SIZE_MAX) { // what the finer cube takes is no room for the next
+                    const std::size_t taken = rays_cube_bytes(next, covered, tile_bytes(), sizeof(void*));
+                    room = available > taken ? available - taken : 0;
+                }
             }
             e.sized = e.sized || rays > 0;
             e.coverage->reset();
