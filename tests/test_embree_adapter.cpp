@@ -77,6 +77,33 @@ unsigned add_instance(RTCDevice device, RTCScene top, RTCScene inner, glm::vec3 
     return id;
 }
 
+// One unit direction through each texel centre of an N x N cube: 6 N^2 rays over every direction.
+std::vector<glm::vec3> texel_centres(int n) {
+    std::vector<glm::vec3> directions;
+    for (int face = 0; face < 6; ++face)
+        for (int row = 0; row < n; ++row)
+            for (int column = 0; column < n; ++column)
+                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, n)));
+    return directions;
+}
+
+// A still camera: `frames` frames of the same rays leaving `mirror` at (1, 2, 3) in `directions`, traced to
+// the colour 0.5 + 0.5 d; per frame, the hits its begin_frame() reported and the cube's face size after it.
+struct StillFrames {
+    std::vector<std::uint64_t> hits;
+    std::vector<int> sizes;
+};
+StillFrames still_frames(SceneCache& caches, unsigned mirror, const std::vector<glm::vec3>& directions, int frames) {
+    StillFrames out;
+    for (int f = 0; f < frames; ++f) {
+        for (const glm::vec3& d : directions)
+            caches.leaving_ray({mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
+        out.hits.push_back(caches.begin_frame().hits);
+        out.sizes.push_back(caches.face_size({mirror}));
+    }
+    return out;
+}
+
 } // namespace
 
 TEST_CASE("cube bounds come from the Embree geometry: centre of its box, largest half-extent") {
@@ -238,11 +265,7 @@ TEST_CASE("an adaptive cube shrinks to the size a frame's rays fill, and the nex
     CHECK(caches.face_size({w.mirror}) == 256);
     // One ray through each texel centre of a 32 x 32 cube: 6144 rays over every direction, so one ray a
     // texel at N = 32 (6 * 32^2 = 6144), the size the cube must take.
-    std::vector<glm::vec3> directions;
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < 32; ++row)
-            for (int column = 0; column < 32; ++column)
-                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
+    const std::vector<glm::vec3> directions = texel_centres(32);
     auto colour_of = [](glm::vec3 d) { return 0.5f + 0.5f * d; };
     int traced = 0;
     auto frame = [&] {
@@ -278,21 +301,9 @@ TEST_CASE("an adaptive cube whose rays come back to the same texels frame after 
     World w;
     SceneCache caches(Technique::cct);
     caches.attach(w.scene, {w.mirror});
-    std::vector<glm::vec3> directions;
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < 32; ++row)
-            for (int column = 0; column < 32; ++column)
-                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
-    std::vector<int> sizes;
-    std::vector<std::uint64_t> hits;
-    for (int f = 1; f <= 9; ++f) {
-        for (const glm::vec3& d : directions)
-            caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
-        hits.push_back(caches.begin_frame().hits);
-        sizes.push_back(caches.face_size({w.mirror}));
-    }
-    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 91, 91, 91, 91, 91});
-    CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144});
+    const StillFrames frames = still_frames(caches, w.mirror, texel_centres(32), 9);
+    CHECK(frames.sizes == std::vector<int>{32, 32, 32, 32, 91, 91, 91, 91, 91});
+    CHECK(frames.hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144});
 }
 
 TEST_CASE("a still camera's cube takes only the finer faces its budget has room for, and keeps them") {
@@ -309,33 +320,17 @@ TEST_CASE("a still camera's cube takes only the finer faces its budget has room 
     SceneCache caches(Technique::cct, settings);
     caches.attach(w.scene, {w.mirror});
     CHECK(caches.face_size({w.mirror}) == 64);
-    std::vector<glm::vec3> directions;
-    for (int face = 0; face < 6; ++face)
-        for (int row = 0; row < 32; ++row)
-            for (int column = 0; column < 32; ++column)
-                directions.push_back(glm::normalize(texel_direction(raycache::TexelAddress{face, column, row}, 32)));
-    std::vector<int> sizes;
-    std::vector<std::uint64_t> hits;
-    for (int f = 1; f <= 12; ++f) {
-        for (const glm::vec3& d : directions)
-            caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
-        hits.push_back(caches.begin_frame().hits);
-        sizes.push_back(caches.face_size({w.mirror}));
-    }
-    CHECK(sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64, 64, 64, 64});
-    CHECK(hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144, 6144, 6144, 6144});
+    const std::vector<glm::vec3> directions = texel_centres(32);
+    const StillFrames frames = still_frames(caches, w.mirror, directions, 12);
+    CHECK(frames.sizes == std::vector<int>{32, 32, 32, 32, 64, 64, 64, 64, 64, 64, 64, 64});
+    CHECK(frames.hits == std::vector<std::uint64_t>{0, 6144, 6144, 6144, 6144, 0, 6144, 6144, 6144, 6144, 6144, 6144});
     CHECK(caches.statistics().allocated_bytes <= 200000u);
     // No limit (the largest budget): the finer faces are the ones wanted, 91, as under the default budget.
     raycache::embree::SceneCacheSettings unlimited;
     unlimited.budget_bytes = std::numeric_limits<std::size_t>::max();
     SceneCache free_caches(Technique::cct, unlimited);
     free_caches.attach(w.scene, {w.mirror});
-    for (int f = 1; f <= 6; ++f) {
-        for (const glm::vec3& d : directions)
-            free_caches.leaving_ray({w.mirror}, glm::vec3(1, 2, 3), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
-        free_caches.begin_frame();
-    }
-    CHECK(free_caches.face_size({w.mirror}) == 91);
+    CHECK(still_frames(free_caches, w.mirror, directions, 6).sizes.back() == 91);
 }
 
 TEST_CASE("a frame's counts survive scene_changed before its begin_frame: the statistics and the adaptive size still see its rays") {
