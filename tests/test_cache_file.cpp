@@ -563,7 +563,8 @@ TEST_CASE("a load that the memory budget cannot hold is refused and leaves the c
     fill_randomly(saved, rng, 200); // every one of its 96 tiles
     ScratchFolder folder("budget");
     raycache::save_cube(folder.file("cube.rcc"), saved, bounds, scene);
-    auto budget = std::make_shared<raycache::MemoryBudget>(CctCube::tile_bytes() * 10 + 6 * 4 * 4 * 8 * 2);
+    // Room for the target's and the loaded cube's fixed parts, and 10 tiles: not the file's 96.
+    auto budget = std::make_shared<raycache::MemoryBudget>(CctCube::tile_bytes() * 10 + CctCube::fixed_bytes(64) * 2);
     CctCube target(64, budget);
     CHECK(target.store(glm::vec3(1, 0, 0), glm::vec3(0.25f)));
     target.begin_frame();
@@ -572,6 +573,16 @@ TEST_CASE("a load that the memory budget cannot hold is refused and leaves the c
     CHECK(target.valid_texels() == 1u);
     CHECK(target.lookup(glm::vec3(1, 0, 0)).has_value());
     CHECK(budget->used() == used); // the refused load gave every tile back
+
+    // A budget with no room for the loaded cube's fixed part refuses before it makes the cube.
+    auto full = std::make_shared<raycache::MemoryBudget>(CctCube::fixed_bytes(64) + CctCube::tile_bytes());
+    CctCube held(64, full);
+    CHECK(held.store(glm::vec3(1, 0, 0), glm::vec3(0.25f)));
+    held.begin_frame();
+    CHECK(full->used() == full->limit());
+    CHECK(contains(cache_file_error([&] { raycache::load_cube(folder.file("cube.rcc"), held, bounds, scene); }), "memory budget"));
+    CHECK(held.lookup(glm::vec3(1, 0, 0)).has_value());
+    CHECK(full->used() == full->limit());
 }
 
 TEST_CASE("saving into a folder that does not exist, or loading a file that is missing or a folder, throws naming the file") {

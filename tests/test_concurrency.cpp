@@ -367,7 +367,7 @@ TEST_CASE("cubes sharing a budget never exceed it under random concurrent stores
     // of their tiles; four threads store random texels into random cubes while a fifth watches the budget.
     using raycache::MemoryBudget;
     constexpr int cubes_n = 3;
-    const std::size_t tables = cubes_n * 6 * 16 * sizeof(void*);
+    const std::size_t tables = cubes_n * CctCube::fixed_bytes(face_size); // each cube's table, bitmaps and counters
     const std::size_t limit = tables + 100 * CctCube::tile_bytes() + CctCube::tile_bytes() / 2;
     auto budget = std::make_shared<MemoryBudget>(limit);
     std::vector<std::unique_ptr<CctCube>> cubes;

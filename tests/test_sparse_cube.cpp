@@ -123,8 +123,8 @@ TEST_CASE("a face smaller than a tile has one tile, and its texels map into it")
 TEST_CASE("clear gives every tile back to the cube and to its budget") {
     auto budget = std::make_shared<MemoryBudget>(1u << 20);
     CctCube cube(32, budget);
-    const std::size_t table = budget->used(); // 6 faces x 2 x 2 tile pointers
-    CHECK(table == 6u * 4u * sizeof(void*));
+    const std::size_t table = budget->used(); // the cube's fixed part: 6 faces x 2 x 2 tile pointers, bitmaps, counters
+    CHECK(table == CctCube::fixed_bytes(32));
     for (int face = 0; face < 6; ++face) cube.store_at(TexelAddress{face, 0, 0}, grey);
     CHECK(budget->used() == table + 6 * cct_tile);
     cube.clear();
@@ -133,8 +133,33 @@ TEST_CASE("clear gives every tile back to the cube and to its budget") {
     CHECK_FALSE(cube.load(TexelAddress{0, 0, 0}));
 }
 
+TEST_CASE("a cube's fixed part grows by a table entry a tile and a bitmap word per 64 tiles, within the planners' bounds, and is what its budget is charged before any tile") {
+    // By hand: 6 ceil(N / 16)^2 tiles; each takes an 8-byte table pointer, and two bitmaps take a 64-bit word
+    // for every 64 tiles or part of 64. 16 -> 6 tiles (1 word each), 32 -> 24 (1), 64 -> 96 (2), 91 -> 216 (4).
+    CHECK(CctCube::fixed_bytes(32) - CctCube::fixed_bytes(16) == (24u - 6u) * 8u);
+    CHECK(CctCube::fixed_bytes(64) - CctCube::fixed_bytes(32) == (96u - 24u) * 8u + 2u * 8u);
+    CHECK(CdctCube::fixed_bytes(91) - CdctCube::fixed_bytes(64) == (216u - 96u) * 8u + 2u * 2u * 8u);
+    CHECK(CctCube::fixed_bytes(1) == CctCube::fixed_bytes(16)); // one tile a face below 16 texels
+    // The bounds SceneCache plans budgets with hold for every face size.
+    for (int n = 1; n <= 4096; ++n) {
+        const std::size_t tiles = 6u * static_cast<std::size_t>((n + 15) / 16) * static_cast<std::size_t>((n + 15) / 16);
+        CHECK(CctCube::fixed_bytes(n) <= CctCube::fixed_bytes_per_cube() + tiles * CctCube::fixed_bytes_per_tile);
+        CHECK(CdctCube::fixed_bytes(n) <= CdctCube::fixed_bytes_per_cube() + tiles * CdctCube::fixed_bytes_per_tile);
+    }
+    auto budget = std::make_shared<MemoryBudget>(1u << 20);
+    {
+        CdctCube cube(45, budget);
+        CHECK(budget->used() == CdctCube::fixed_bytes(45));
+        CHECK(cube.bytes() == CdctCube::fixed_bytes(45));
+        CHECK(cube.store_at(TexelAddress{2, 40, 40}, raycache::DepthSample{grey, 1.0f}));
+        CHECK(budget->used() == cube.bytes());
+        CHECK(cube.bytes() == CdctCube::fixed_bytes(45) + cdct_tile);
+    }
+    CHECK(budget->used() == 0u);
+}
+
 TEST_CASE("a budget that holds one tile refuses the second tile's stores, the frame's first tile comes back empty, and fills") {
-    auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + cct_tile);
+    auto budget = std::make_shared<MemoryBudget>(CctCube::fixed_bytes(32) + cct_tile);
     {
         CctCube cube(32, budget);
         CHECK(cube.store_at(TexelAddress{0, 0, 0}, grey));
@@ -158,10 +183,11 @@ TEST_CASE("a budget that holds one tile refuses the second tile's stores, the fr
 }
 
 TEST_CASE("cubes sharing a budget draw on it together") {
-    auto budget = std::make_shared<MemoryBudget>(26000);
-    CdctCube a(16, budget), b(16, budget); // one tile a face each; tables 6 x 8 bytes
-    CHECK(budget->used() == 2u * 48u);
-    // 26000 - 96 = 25904 bytes: four CDCT tiles (25856), not five (32320).
+    const std::size_t fixed = CdctCube::fixed_bytes(16); // one tile a face: a table of 6 x 8 bytes, bitmaps, counters
+    auto budget = std::make_shared<MemoryBudget>(2 * fixed + 25904);
+    CdctCube a(16, budget), b(16, budget);
+    CHECK(budget->used() == 2u * fixed);
+    // 25904 bytes left: four CDCT tiles (25856), not five (32320).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});
@@ -169,7 +195,7 @@ TEST_CASE("cubes sharing a budget draw on it together") {
     }
     CHECK(stored == 4);
     CHECK(a.allocated_tiles() + b.allocated_tiles() == 4u);
-    CHECK(budget->used() == 96u + 4u * cdct_tile);
+    CHECK(budget->used() == 2u * fixed + 4u * cdct_tile);
 }
 
 TEST_CASE("try_reserve takes bytes only when they fit, and release gives them back") {
@@ -249,7 +275,7 @@ TEST_CASE("a frame the budget refused gives back its new tiles and allocates the
     const TexelAddress a{0, 16, 0}, b{0, 0, 0}, c{4, 3, 3}; // tiles 1, 0 and 16 of a 32-texel cube
     for (const bool reversed : {false, true}) {
         CAPTURE(reversed);
-        auto budget = std::make_shared<MemoryBudget>(6u * 4u * sizeof(void*) + 2u * cct_tile); // the table and two tiles
+        auto budget = std::make_shared<MemoryBudget>(CctCube::fixed_bytes(32) + 2u * cct_tile); // the fixed part and two tiles
         CctCube cube(32, budget);
         const TexelAddress order[3] = {reversed ? c : a, b, reversed ? a : c};
         int stored = 0;
@@ -281,7 +307,7 @@ TEST_CASE("under a full budget the texels a cube keeps are the same with one thr
             for (int column = 2; column < n; column += 9) texels.push_back(TexelAddress{face, column, row});
     // Two frames of the same stores; returns the valid texels' linear indices after them.
     auto run = [&](int threads, std::uint32_t seed) {
-        auto budget = std::make_shared<MemoryBudget>(std::size_t{6} * 16 * sizeof(void*) + 20 * cct_tile);
+        auto budget = std::make_shared<MemoryBudget>(CctCube::fixed_bytes(n) + 20 * cct_tile);
         CctCube cube(n, budget);
         std::vector<TexelAddress> mine = texels;
         for (std::size_t i = mine.size(); i > 1; --i) { // a shuffle of its own per run

@@ -103,8 +103,9 @@ public:
     static_assert(tile_edge % record_edge == 0, "record blocks tile a tile");
 
     // A cube of six face_size x face_size faces, every texel invalid and no tile allocated yet.
-    // budget: optional, shared with other cubes; its limit bounds the tiles this cube allocates (the
-    // tile table, 8 bytes per tile, is charged whatever the limit). May be null: no limit.
+    // budget: optional, shared with other cubes; its limit bounds the tiles this cube allocates (the cube's
+    // fixed part, fixed_bytes(): tile table, tile bitmaps and counters, is charged whatever the limit; a
+    // SceneCache makes no cube whose fixed part the budget has no room for). May be null: no limit.
     // path_records: whether its tiles keep what their stores' paths saw (raycache/invalidation.hpp), a
     // record per 2 x 2 block (tile_bytes()); without, stores with a record count as stores without one,
     // so exact invalidation empties their texels at any change: for static scenes, in 76% (CCT) or 64%
@@ -117,7 +118,7 @@ public:
           state_(new State(tile_count())),
           budget_(std::move(budget)) {
         if (budget_) {
-            budget_->reserve_always(table_bytes());
+            budget_->reserve_always(fixed_bytes(face_size_));
             state_->refusals_seen = budget_->refusals();
         }
     }
@@ -144,11 +145,19 @@ public:
     // Bytes that 6 * N * N texels take, 6 * N * N * sizeof(Word): the thesis's memory per cube, and what this
     // cube would hold with every tile allocated (see allocated_bytes() for what it holds).
     std::size_t texel_bytes() const noexcept { return texel_count() * sizeof(Word); }
-    // Every byte the cube holds now: its allocated tiles, its tile table and two bits a tile (settle_budget()),
-    // counters. (The budget is charged the tiles and the table.)
-    std::size_t bytes() const noexcept {
-        return sizeof(*this) + sizeof(State) + table_bytes() + state_->fresh.bytes() + state_->wanted.bytes() + allocated_bytes();
+    // Every byte the cube holds now, all charged to its budget: its fixed part and its allocated tiles.
+    std::size_t bytes() const noexcept { return fixed_bytes(face_size_) + allocated_bytes(); }
+    // The bytes a cube of `face_size` holds whatever it stores: its tile table (an 8-byte pointer a tile), two
+    // bitmaps of a bit a tile (settle_budget()), its counters and the cube object itself.
+    static std::size_t fixed_bytes(int face_size) noexcept {
+        const std::size_t tiles = tile_count(face_size);
+        return sizeof(CacheCube) + sizeof(State) + tiles * sizeof(std::atomic<Tile*>) + 2 * TileBitmap::bytes_for(tiles);
     }
+    // Bounds of fixed_bytes() for budget planning (raycache/adaptive_resolution.hpp): a cube of face size N
+    // holds at most fixed_bytes_per_cube() + fixed_bytes_per_tile x 6 ceil(N / 16)^2 bytes whatever it
+    // stores (a table entry and its two bitmap bits, rounded up to a byte, a tile; the bitmaps' last words).
+    static constexpr std::size_t fixed_bytes_per_tile = sizeof(void*) + 1;
+    static constexpr std::size_t fixed_bytes_per_cube() noexcept { return sizeof(CacheCube) + sizeof(State) + 2 * sizeof(std::uint64_t); }
     // Bytes of the tiles allocated so far (each bytes_per_tile()).
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * bytes_per_tile(); }
     std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
@@ -952,6 +961,7 @@ private:
                     f(w * 64 + static_cast<std::size_t>(count_trailing_zeros(bits)));
         }
         std::size_t bytes() const noexcept { return size_ * sizeof(std::uint64_t); }
+        static std::size_t bytes_for(std::size_t tiles) noexcept { return (tiles + 63) / 64 * sizeof(std::uint64_t); }
 
     private:
         std::size_t size_;
@@ -987,9 +997,8 @@ private:
         return face_size;
     }
 
-    std::size_t tile_count() const noexcept {
-        return std::size_t{RAYCACHE_FACE_COUNT} * static_cast<std::size_t>(tiles_per_edge_) * static_cast<std::size_t>(tiles_per_edge_);
-    }
+    std::size_t tile_count() const noexcept { return tile_count(face_size_); }
+    static std::size_t tile_count(int face_size) noexcept { return shared::raycache_origin_tile_count(face_size); }
     std::size_t table_bytes() const noexcept { return tile_count() * sizeof(std::atomic<Tile*>); }
 
     std::size_t tile_index(const TexelAddress& t) const noexcept {
@@ -1066,11 +1075,11 @@ private:
         if (budget_) budget_->release(bytes_per_tile());
     }
 
-    // Frees every tile and returns the table's bytes to the budget (destruction, move-assignment).
+    // Frees every tile and returns the fixed part's bytes to the budget (destruction, move-assignment).
     void give_back() noexcept {
         if (!state_) return;
         free_tiles();
-        if (budget_) budget_->release(table_bytes());
+        if (budget_) budget_->release(fixed_bytes(face_size_));
         state_.reset();
     }
 

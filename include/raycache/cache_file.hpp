@@ -566,11 +566,18 @@ bool holds_path_records(const CubeRecord& c) {
 }
 
 // A fresh cube holding the record's texels as this frame's stores (with path records or without: CacheCube's
-// path_records). Throws CacheFileError when the budget refuses a tile.
+// path_records). Throws CacheFileError when the budget has no room for the cube's fixed part or refuses a tile.
 template <class Texel>
 std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::shared_ptr<MemoryBudget>& budget,
                                              const ByteReader& messages, bool path_records) {
     using Word = typename Texel::Word;
+    const auto no_room = [&] {
+        messages.fail("the memory budget (" + std::to_string(budget ? budget->limit() : 0) + " bytes, " +
+                      std::to_string(budget ? budget->used() : 0) +
+                      " in use) cannot hold the file's cubes as well as the cubes they replace");
+    };
+    const std::size_t fixed = CacheCube<Texel>::fixed_bytes(c.face_size);
+    if (budget && (fixed > budget->limit() || budget->used() > budget->limit() - fixed)) no_room();
     auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget, path_records);
     ByteReader tiles = tiles_of<Texel>(c);
     for (std::uint32_t i = 0; i < c.tiles; ++i) {
@@ -580,10 +587,7 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
             tiles.skip(sizeof(Word), "a texel");
             if (w == Texel::invalid) continue;
             const TexelAddress t = tile_texel(h.index, slot, c.face_size);
-            if (!cube->store_word_at(t, w))
-                messages.fail("the memory budget (" + std::to_string(budget ? budget->limit() : 0) + " bytes, " +
-                              std::to_string(budget ? budget->used() : 0) +
-                              " in use) cannot hold the file's tiles as well as the cubes they replace");
+            if (!cube->store_word_at(t, w)) no_room();
             if (h.is_doubtful(slot)) cube->set_doubtful(t);
         }
         if (h.has_box) cube->set_origin_box(tile_texel(h.index, 0, c.face_size), h.lo, h.hi, h.nearest); // slot 0 is on the face
