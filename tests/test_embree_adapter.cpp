@@ -381,15 +381,18 @@ TEST_CASE("a cube attached with an explicit face size keeps it whatever the rays
 
 TEST_CASE("adaptive cubes start small enough that every cube sharing the budget could fill all its tiles") {
     // By hand, with t = tile + table entry bytes: a full cube of N has 6 ceil(N/16)^2 tiles, so 181 takes
-    // 864 t, 128 384 t, 91 216 t, 64 96 t, 45 54 t. A budget of 960 t: one cube's share fits 181 (not
-    // 256: 1536 t); two cubes 128; three and four 91; five to ten 64; eleven 45.
+    // 864 t, 128 384 t, 91 216 t, 64 96 t, 45 54 t, plus a byte a tile for its bitmap bits (rounded up) and
+    // a cube's fixed part F (under 13,000 bytes). A budget of 960 t: one cube's share fits 181 (not 256:
+    // 1536 t); two cubes 128; three and four 91; five to nine 64; ten (a share of exactly 96 t, which the
+    // 64-cube's bitmap bytes and F overrun) and eleven 45.
     // (Tiles without path records: a cache keeps none before its first move.)
     const std::size_t t = raycache::CctCube::tile_bytes(false) + sizeof(void*);
+    REQUIRE(raycache::CctCube::fixed_bytes_per_cube() < 13000u); // so the shares above hold F
     raycache::embree::SceneCacheSettings settings;
     settings.budget_bytes = 960 * t;
     SceneCache caches(Technique::cct, settings);
     const raycache::CubeBounds bounds{glm::vec3(0.0f), 1.0f};
-    const std::vector<std::pair<unsigned, int>> expected{{1, 181}, {2, 128}, {3, 91}, {4, 91}, {5, 64}, {10, 64}, {11, 45}};
+    const std::vector<std::pair<unsigned, int>> expected{{1, 181}, {2, 128}, {3, 91}, {4, 91}, {5, 64}, {9, 64}, {10, 45}, {11, 45}};
     unsigned attached = 0;
     for (const auto& [cubes, size] : expected) {
         while (attached < cubes) caches.attach({attached++}, raycache::embree::adaptive_face_size, bounds);
@@ -420,6 +423,64 @@ TEST_CASE("adaptive cubes start small enough that every cube sharing the budget 
     for (unsigned id = 200; id < 240; ++id) caches.attach({id}, raycache::embree::adaptive_face_size, bounds);
     for (unsigned id = 0; id < attached; ++id) CHECK(caches.face_size({id}) == sized[id]);
     CHECK(caches.face_size({200}) < 45);
+}
+
+TEST_CASE("a budget with no room for another cube's fixed part refuses the attach, and attaches nothing") {
+    // Each cube takes its fixed part (tile table, bitmaps, counters: CacheCube::fixed_bytes) from the budget
+    // before any texel. Adaptive cubes on a budget too small for any tile start at the smallest size, 8.
+    const std::size_t small = raycache::CctCube::fixed_bytes(8);
+    raycache::embree::SceneCacheSettings settings;
+    settings.budget_bytes = 3 * small + small / 2;
+    SceneCache caches(Technique::cct, settings);
+    const raycache::CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    for (unsigned id = 0; id < 3; ++id) caches.attach({id}, raycache::embree::adaptive_face_size, bounds);
+    for (unsigned id = 0; id < 3; ++id) CHECK(caches.face_size({id}) == 8);
+    CHECK(caches.budget().used() == 3 * small);
+    CHECK_THROWS_AS(caches.attach({3}, raycache::embree::adaptive_face_size, bounds), std::invalid_argument);
+    CHECK_THROWS_WITH(caches.attach({3}, 8, bounds), doctest::Contains("no room for another cube"));
+    CHECK(caches.object_count() == 3u);
+    CHECK_FALSE(caches.has_cache({3}));
+    CHECK(caches.statistics().allocated_bytes == 3 * small);
+    CHECK(caches.statistics().allocated_bytes <= settings.budget_bytes);
+    // The cube that was refused traces its rays, uncached.
+    int traced = 0;
+    caches.leaving_ray({3}, glm::vec3(0.0f), glm::vec3(1, 0, 0), [&] { return ++traced, TracedRay{glm::vec3(1.0f), 1.0f}; });
+    CHECK(traced == 1);
+}
+
+TEST_CASE("adaptive cubes grow only as far as the budget holds their larger tile tables") {
+    // By hand: a cube of 8 texels a face has 6 tiles (one a face), one of 16 too, one of 23 or 32 has 24.
+    // The planner reserves for a cube of N its bound, P + 9 bytes a tile (CacheCube::fixed_bytes_per_cube()
+    // = P, which counts the two bitmap words; an 8-byte table entry and a byte for its two bitmap bits a
+    // tile), and lets a cube's own bytes go with it: the 8-cube's fixed part is P + 48 (6 entries; its two
+    // bitmap words are in P). Four cubes of 8 on a budget with 300 bytes to spare (no tile fits: 1280
+    // bytes); each frame sends every cube a ray through each texel centre of a 32-cube, which calls for 32.
+    // The first cube grows to 32 (P + 216 within the 300 + P + 48 it has), leaving 132 bytes reserved;
+    // the others cannot (132 + P + 48 < P + 216) and take 16, whose bound P + 54 they have room for.
+    // Their memory is then 32's fixed part (18 entries more than 8's) and three of 8's: within the budget,
+    // where four 32-cubes would pass it.
+    const std::size_t small = raycache::CctCube::fixed_bytes(8);
+    REQUIRE(small - raycache::CctCube::fixed_bytes_per_cube() == 48u);
+    REQUIRE(raycache::CctCube::fixed_bytes(16) == small);
+    REQUIRE(raycache::CctCube::fixed_bytes(32) - small == 144u);
+    raycache::embree::SceneCacheSettings settings;
+    settings.budget_bytes = 4 * small + 300;
+    REQUIRE(4 * raycache::CctCube::fixed_bytes(32) > settings.budget_bytes);
+    SceneCache caches(Technique::cct, settings);
+    const raycache::CubeBounds bounds{glm::vec3(0.0f), 1.0f};
+    for (unsigned id = 0; id < 4; ++id) caches.attach({id}, raycache::embree::adaptive_face_size, bounds);
+    const std::vector<glm::vec3> directions = texel_centres(32);
+    for (int frame = 0; frame < 3; ++frame) {
+        CAPTURE(frame);
+        for (unsigned id = 0; id < 4; ++id)
+            for (const glm::vec3& d : directions)
+                caches.leaving_ray({id}, glm::vec3(0.0f), d, [&] { return TracedRay{0.5f + 0.5f * d, 1.0f}; });
+        const auto stats = caches.begin_frame();
+        CHECK(stats.allocated_bytes == small * 3 + raycache::CctCube::fixed_bytes(32));
+        CHECK(caches.budget().used() <= settings.budget_bytes);
+        CHECK(caches.face_size({0}) == 32);
+        for (unsigned id = 1; id < 4; ++id) CHECK(caches.face_size({id}) == 16);
+    }
 }
 
 TEST_CASE("an instance attached by its own id caches every geometry reached through it") {

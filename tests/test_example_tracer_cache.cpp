@@ -453,8 +453,9 @@ TEST_CASE("under a budget the frames outgrow, one and two threads still give bit
         const std::string variant = v.name;
         CAPTURE(variant);
         raycache::embree::SceneCacheSettings s;
-        // 9 tables of 24 tiles, and 12 tiles of a static scene's CDCT cubes (no path records; 21 CCT tiles)
-        s.budget_bytes = std::size_t{9} * 24 * 8 + 12 * raycache::CdctCube::tile_bytes(false);
+        // 9 cubes' fixed parts (tables of 24 tiles), and 12 tiles of a static scene's CDCT cubes (no path
+        // records; 21 CCT tiles)
+        s.budget_bytes = std::size_t{9} * raycache::CdctCube::fixed_bytes(32) + 12 * raycache::CdctCube::tile_bytes(false);
         const Technique technique = v.mode == rcx::CacheMode::cct ? Technique::cct : Technique::cdct;
         SceneCache one(technique, s), two(technique, s);
         tracer.attach_caches(one, 32);

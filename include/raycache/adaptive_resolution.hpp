@@ -33,6 +33,7 @@
 #include "raycache/cache_cube.hpp"
 #include "raycache/cube_face.hpp"
 #include "raycache/shared/coverage.h"
+#include "raycache/shared/origin_rule.h"
 #include "raycache/statistics.hpp"
 
 namespace raycache {
@@ -243,25 +244,24 @@ inline int face_size_with_still_rule(int current, int next, bool sized, const Cu
 }
 
 // The tiles (16 x 16 texels) of a cube of `face_size`: 6 ceil(N / 16)^2.
-inline std::size_t cube_tile_count(int face_size) noexcept {
-    const std::size_t per_edge = (static_cast<std::size_t>(face_size) + 15) / 16;
-    return std::size_t{RAYCACHE_FACE_COUNT} * per_edge * per_edge;
-}
+inline std::size_t cube_tile_count(int face_size) noexcept { return shared::raycache_origin_tile_count(face_size); }
 
 // The bytes a cube of `face_size` takes from its budget once every one of its tiles is allocated: its tile
-// table (`entry_bytes` a tile) and its tiles (`tile_bytes` each).
-inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
-    return cube_tile_count(face_size) * (tile_bytes + entry_bytes);
+// table (`entry_bytes` a tile), its tiles (`tile_bytes` each) and what every cube holds whatever its size
+// (`cube_bytes`; CacheCube::fixed_bytes_per_tile and fixed_bytes_per_cube() bound a CacheCube's).
+inline std::size_t full_cube_bytes(int face_size, std::size_t tile_bytes, std::size_t entry_bytes, std::size_t cube_bytes = 0) noexcept {
+    return cube_tile_count(face_size) * (tile_bytes + entry_bytes) + cube_bytes;
 }
 
 // The bytes a cube of `face_size` takes once its rays, covering `covered_fraction` of the directions (the
 // share of DirectionCoverage's cells they marked), have reached every tile of those directions: its whole
-// tile table and that share of its tiles. An estimate from above when they cover the cells they mark
-// densely, as a still camera's rays at still_rays_per_texel do.
-inline std::size_t rays_cube_bytes(int face_size, double covered_fraction, std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+// tile table, that share of its tiles and `cube_bytes` (as in full_cube_bytes()). An estimate from above
+// when they cover the cells they mark densely, as a still camera's rays at still_rays_per_texel do.
+inline std::size_t rays_cube_bytes(int face_size, double covered_fraction, std::size_t tile_bytes, std::size_t entry_bytes,
+                                   std::size_t cube_bytes = 0) noexcept {
     const std::size_t tiles = cube_tile_count(face_size);
     const double covered = std::min(std::max(covered_fraction, 0.0), 1.0);
-    return tiles * entry_bytes + static_cast<std::size_t>(std::ceil(covered * static_cast<double>(tiles * tile_bytes)));
+    return tiles * entry_bytes + static_cast<std::size_t>(std::ceil(covered * static_cast<double>(tiles * tile_bytes))) + cube_bytes;
 }
 
 // The largest ladder step in (floor, wanted] whose cube fits `room` bytes by rays_cube_bytes(); `floor`
@@ -269,12 +269,12 @@ inline std::size_t rays_cube_bytes(int face_size, double covered_fraction, std::
 // hold its rays' tiles keeps missing on empty texels, which reads as rays that moved on, so it would
 // shrink and refine again every few frames, each time with a cold frame.
 inline int largest_face_size_within(int floor, int wanted, double covered_fraction, std::size_t room, std::size_t tile_bytes,
-                                    std::size_t entry_bytes) noexcept {
+                                    std::size_t entry_bytes, std::size_t cube_bytes = 0) noexcept {
     int best = floor;
     for (int i = 0;; ++i) {
         const int size = face_size_step(i);
         if (size > wanted || size > RAYCACHE_MAX_FACE_SIZE) break;
-        if (size > floor && rays_cube_bytes(size, covered_fraction, tile_bytes, entry_bytes) <= room) best = size;
+        if (size > floor && rays_cube_bytes(size, covered_fraction, tile_bytes, entry_bytes, cube_bytes) <= room) best = size;
     }
     return best;
 }
@@ -284,15 +284,16 @@ inline int largest_face_size_within(int floor, int wanted, double covered_fracti
 // cube could fill every tile within an equal share of the budget. So a cold frame's stores fit however the
 // rays spread (a frame that outgrows the budget keeps none of its new tiles: raycache/memory_budget.hpp);
 // after it, each cube takes the size its rays call for. a.min_face_size when even that does not fit.
+// (`cube_bytes` as in full_cube_bytes().)
 inline int first_face_size_within(const AdaptiveResolution& a, std::size_t cubes, std::size_t budget_bytes,
-                                  std::size_t tile_bytes, std::size_t entry_bytes) noexcept {
+                                  std::size_t tile_bytes, std::size_t entry_bytes, std::size_t cube_bytes = 0) noexcept {
     const std::size_t share = budget_bytes / std::max<std::size_t>(cubes, 1);
-    if (full_cube_bytes(a.first_face_size, tile_bytes, entry_bytes) <= share) return a.first_face_size;
+    if (full_cube_bytes(a.first_face_size, tile_bytes, entry_bytes, cube_bytes) <= share) return a.first_face_size;
     int best = a.min_face_size;
     for (int i = 0;; ++i) {
         const int size = face_size_step(i);
         if (size >= a.first_face_size) break;
-        if (size >= a.min_face_size && full_cube_bytes(size, tile_bytes, entry_bytes) <= share) best = size;
+        if (size >= a.min_face_size && full_cube_bytes(size, tile_bytes, entry_bytes, cube_bytes) <= share) best = size;
     }
     return best;
 }

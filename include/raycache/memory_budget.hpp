@@ -4,7 +4,10 @@
 // each allocation; when the tile would take the budget past its limit, the allocation is refused, the
 // store is refused (counted in CubeStatistics::refused_stores) and the ray is simply traced, as without
 // a cache. Nothing already stored is dropped to make room: what a budget protects is the user's memory,
-// not the hit rate. A cube's fixed part (its tile table) is charged too, and is always granted.
+// not the hit rate. A cube's fixed part (CacheCube::fixed_bytes(): its tile table, bitmaps and counters)
+// is charged too, and always granted to the cube; SceneCache makes no cube whose fixed part does not fit
+// (attach() throws, a cube keeps its size rather than grow past the budget), so its cubes' bytes never
+// pass the limit.
 //
 // Which tiles of a frame get the last bytes depends on which thread asked first, so a frame in which the
 // budget refused anything keeps none of the tiles it allocated (CacheCube::begin_frame(): they are given

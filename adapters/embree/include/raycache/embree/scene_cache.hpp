@@ -19,8 +19,11 @@
 //
 // Memory and resolution. By default (attach() without a face size) each cube's face size follows the
 // leaving rays its object received in the last frame (raycache/adaptive_resolution.hpp), and all cubes
-// draw their texel tiles from one MemoryBudget (SceneCacheSettings::budget_bytes); a tile that does not fit
-// is not cached, its rays are traced. An explicit face size keeps a cube at that size.
+// draw on one MemoryBudget (SceneCacheSettings::budget_bytes): each cube's fixed part (tile table,
+// bitmaps, counters) and its texel tiles. A tile that does not fit is not cached, its rays are traced; a
+// cube grows only as far as the budget holds its larger fixed part; attach() throws std::invalid_argument
+// when the budget has no room for another cube. So the cubes' bytes (allocated_bytes()) stay within the
+// budget, all but the CDCT relief walk's depth pyramids. An explicit face size keeps a cube at that size.
 //
 // Warm starts. save() writes every cube to one file and load() reads it back into a SceneCache with the
 // same objects attached (raycache/cache_file.hpp: format, checks, atomic writes).
@@ -475,7 +478,9 @@ public:
     // or (adaptive_face_size, the default) one whose face size follows the rays its object receives.
     // `id` may be a plain geometry, an (instance, geometry) pair, or an instance alone ({instance id}): then
     // every geometry reached through that instance shares the instance's cube.
-    // Throws std::invalid_argument for a bad face size, an unknown geometry, or an id attached twice.
+    // Throws std::invalid_argument for a bad face size, an unknown geometry, an id attached twice, or a budget
+    // with no room for another cube's fixed part (CacheCube::fixed_bytes() of the size it would start at);
+    // nothing is attached then.
     void attach(RTCScene scene, ObjectId id, int face_size = adaptive_face_size) {
         attach(id, face_size, bounds_of(scene, id));
     }
@@ -981,12 +986,21 @@ private:
             throw std::invalid_argument("RayCache: cube bounds need a finite centre and a half-size > 0");
     }
 
-    // A new entry for object `id` with a cube around `bounds` (face_size as in attach()); its index.
+    // A new entry for object `id` with a cube around `bounds` (face_size as in attach()); its index. Throws
+    // std::invalid_argument, attaching nothing, when the budget has no room for the cube's fixed part.
     int add_entry(ObjectId id, int face_size, const CubeBounds& bounds) {
         const bool adaptive = face_size == adaptive_face_size;
         if (adaptive) shrink_first_face_size(entries_.size() + 1);
+        const int size = adaptive ? first_face_size_ : face_size;
+        const std::size_t fixed = is_valid_face_size(size) ? cube_fixed_bytes(size) : 0; // else make_cube throws
+        if (fixed > budget_->limit() || budget_->used() > budget_->limit() - fixed)
+            throw std::invalid_argument("RayCache: the memory budget (" + std::to_string(budget_->limit()) + " bytes, " +
+                                        std::to_string(budget_->used()) + " taken by " + std::to_string(entries_.size()) +
+                                        " cubes) has no room for another cube of face size " + std::to_string(size) + " (" +
+                                        std::to_string(fixed) + " bytes before any texel); raise SceneCacheSettings::budget_bytes" +
+                                        (adaptive ? "" : " or give it fewer texels"));
         Entry entry{id, bounds, nullptr, nullptr, nullptr, false, std::make_unique<OriginReach>()};
-        make_cube(entry, adaptive ? first_face_size_ : face_size);
+        make_cube(entry, size);
         if (adaptive) entry.coverage = std::make_unique<DirectionCoverage>();
         entries_.push_back(std::move(entry));
         return static_cast<int>(entries_.size() - 1);
@@ -1005,12 +1019,21 @@ private:
     std::size_t tile_bytes() const noexcept {
         return technique_ == Technique::cct ? CctCube::tile_bytes(path_records_) : CdctCube::tile_bytes(path_records_);
     }
+    // What a cube of `face_size` takes from the budget before any tile (CacheCube::fixed_bytes()), and the
+    // bounds the planners use for it (adaptive_resolution.hpp): a tile's share and a cube's.
+    std::size_t cube_fixed_bytes(int face_size) const noexcept {
+        return technique_ == Technique::cct ? CctCube::fixed_bytes(face_size) : CdctCube::fixed_bytes(face_size);
+    }
+    static constexpr std::size_t entry_bytes() noexcept { return std::max(CctCube::fixed_bytes_per_tile, CdctCube::fixed_bytes_per_tile); }
+    static constexpr std::size_t cube_bytes() noexcept {
+        return std::max(CctCube::fixed_bytes_per_cube(), CdctCube::fixed_bytes_per_cube());
+    }
 
     // With `cubes` cubes on the budget, adaptive cubes start at the largest step at which each could fill
     // all its tiles within its share (first_face_size_within), so a cold frame fits however its rays spread.
     // Adaptive cubes that are larger and still empty, never sized by a frame, start over at that size.
     void shrink_first_face_size(std::size_t cubes) {
-        const int size = first_face_size_within(adaptive_, cubes, budget_->limit(), tile_bytes(), sizeof(void*));
+        const int size = first_face_size_within(adaptive_, cubes, budget_->limit(), tile_bytes(), entry_bytes(), cube_bytes());
         if (size >= first_face_size_) return;
         first_face_size_ = size;
         for (Entry& e : entries_) {
@@ -1123,12 +1146,14 @@ private:
             const double covered = e.coverage->fraction();
             const int adapted = adapted_face_size(current, e.sized, rays, covered, adaptive_);
             int next = face_size_with_still_rule(current, adapted, e.sized, frame, covered, e.still, adaptive_);
-            if (next > std::max(current, adapted)) { // finer faces for still rays: within the room, its own bytes freed
+            if (next > current) { // within the room, its own bytes freed: a larger cube's fixed part, and finer faces
+                                  // for still rays the tiles those rays reach too
                 const std::size_t held = with_cube(e, [](const auto& cube) { return cube.bytes(); });
                 const std::size_t available = room > SIZE_MAX - held ? SIZE_MAX : room + held; // no limit: SIZE_MAX
-                next = largest_face_size_within(std::max(current, adapted), next, covered, available, tile_bytes(), sizeof(void*));
-                if (next > current && available != SIZE_MAX) { // what the finer cube takes is no room for the next
-                    const std::size_t taken = rays_cube_bytes(next, covered, tile_bytes(), sizeof(void*));
+                const double filled = next > adapted ? covered : 0.0;
+                next = largest_face_size_within(current, next, filled, available, tile_bytes(), entry_bytes(), cube_bytes());
+                if (next > current && available != SIZE_MAX) { // what the larger cube takes is no room for the next
+                    const std::size_t taken = rays_cube_bytes(next, filled, tile_bytes(), entry_bytes(), cube_bytes());
                     room = available > taken ? available - taken : 0;
                 }
             }
@@ -1157,7 +1182,7 @@ private:
         std::size_t worst = 0; // bytes, if every smaller new cube filled all its tiles (a larger one starts empty)
         for (const Resize& r : resizes) {
             const int current = with_cube(entries_[r.entry], [](const auto& cube) { return cube.face_size(); });
-            worst += full_cube_bytes(r.face_size, r.face_size < current ? tile : 0, sizeof(void*));
+            worst += full_cube_bytes(r.face_size, r.face_size < current ? tile : 0, entry_bytes(), cube_bytes());
         }
         const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
         const std::size_t used = budget_->used(), limit = budget_->limit();
