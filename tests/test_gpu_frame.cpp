@@ -55,6 +55,22 @@ TEST_CASE("the start words empty the list, state capacity and cube count, dispat
     CHECK(gpu_bindings.frame == 4u);
 }
 
+TEST_CASE("a frame layout filled in by hand with sizes other than gpu_frame_layout's is refused before anything indexes the buffer") {
+    raycache::GpuFrameLayout f; // all sizes 0
+    f.cube_count = 3;
+    f.list_capacity = 100;
+    CHECK_THROWS_AS(raycache::gpu_frame_start_words(f, true, {1, 0, 2}), std::invalid_argument);
+    const std::vector<std::uint32_t> words(4096, 0u);
+    CHECK_THROWS_AS(raycache::read_gpu_statistics(words.data(), f), std::invalid_argument);
+    CHECK_THROWS_AS(raycache::gpu_listed_tiles(words.data(), f), std::invalid_argument);
+    // By hand: 3 cubes' counters and cells after the header, then 100 list words.
+    raycache::GpuFrameLayout g = raycache::gpu_frame_layout(3, 100);
+    CHECK(g.start_bytes == 4u * (RAYCACHE_FRAME_HEADER_WORDS + 3u * RAYCACHE_FRAME_CUBE_WORDS));
+    CHECK_NOTHROW(raycache::gpu_frame_start_words(g, true, {1, 0, 2}));
+    g.start_bytes += 4; // one word off
+    CHECK_THROWS_WITH(raycache::gpu_frame_start_words(g), doctest::Contains("sizes gpu_frame_layout() gives"));
+}
+
 TEST_CASE("the end-of-frame pass gets one group per 256 listed texels, at most 65535") {
     CHECK(gpu_end_frame_groups(0) == 0u);
     CHECK(gpu_end_frame_groups(1) == 1u);
@@ -119,6 +135,12 @@ TEST_CASE("a GPU byte budget caps a texel buffer so that texels, pending twin an
     CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(1u << 20) == 516220u);
     CHECK(raycache::gpu_texel_bytes_within<raycache::CdctTexel>(1u << 20) == 520216u);
     CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>(3) == 0u);
+    // Budgets past 2^61 bytes do not overflow (8 b did): b = 2^61 (a budget of 2^61 + 4), d = 65 (a CCT
+    // texel's 64 bits and its doubtful bit): 8 x 2^61 = 18,446,744,073,709,551,616 = 65 x
+    // 283,796,062,672,454,640 + 16, so t = 283,796,062,672,454,640 texels of 4 bytes. The largest budget, CDCT
+    // (d = 129): 8 (2^64 - 5) = 129 x 1,143,984,128,602,142,735 + 73, texels of 8 bytes.
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CctTexel>((std::uint64_t{1} << 61) + 4) == 283796062672454640ull * 4u);
+    CHECK(raycache::gpu_texel_bytes_within<raycache::CdctTexel>(~std::uint64_t{0}) == 1143984128602142735ull * 8u);
     // With origin records, one byte a texel more: t (64 + 9) / 8 <= 1,048,572 gives t = 114,912 (73 x 114,912 =
     // 8,388,576 exactly): 459,648 bytes. behind-8's 9 cubes then take N = 46 (9 x 6 x 46^2 = 114,264 texels;
     // 47 would take 119,286), laid out as 2 x 457,056 + 4 x 3,571 + 9 x 54 tiles x 64 = 959,500 bytes.

@@ -84,9 +84,13 @@ template <class Texel>
 constexpr std::uint64_t gpu_texel_bytes_within(std::uint64_t budget_bytes, bool origin_records = false, int smallest_face = 8) noexcept {
     // t texels take 8w t bytes, 4 ceil(t / 32) <= t / 8 + 4 bytes of bits and, with origin records, at most
     // c t bytes of those (c = gpu_origin_bytes_per_texel): at most budget when t (64w + 1 + 8c) / 8 <= budget - 4.
+    // floor(8 b / d) as 8 floor(b / d) + floor(8 (b mod d) / d), so that no budget overflows it, and the
+    // bytes saturate where t texels' would pass 2^64.
     constexpr std::uint64_t w = gpu_words_per_texel<Texel>;
     if (budget_bytes < 4) return 0;
-    return (budget_bytes - 4) * 8 / (64 * w + 1 + (origin_records ? 8 * gpu_origin_bytes_per_texel(smallest_face) : 0)) * 4 * w;
+    const std::uint64_t b = budget_bytes - 4, d = 64 * w + 1 + (origin_records ? 8 * gpu_origin_bytes_per_texel(smallest_face) : 0);
+    const std::uint64_t t = b / d * 8 + b % d * 8 / d;
+    return t > ~std::uint64_t{0} / (4 * w) ? ~std::uint64_t{0} / (4 * w) * (4 * w) : t * 4 * w;
 }
 
 // The bytes a layout's buffers take: texels, their pending twin and doubtful bits, and with origin_records

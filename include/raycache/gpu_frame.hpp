@@ -79,6 +79,18 @@ inline GpuFrameLayout gpu_frame_layout(std::uint32_t cube_count, std::uint32_t l
     return f;
 }
 
+// Throws std::invalid_argument unless `f`'s sizes are the ones gpu_frame_layout() gives its cube count and list
+// capacity: the functions below index the frame buffer by those, so a layout filled in by hand with other
+// sizes would make them read or write past it.
+inline void check_gpu_frame_layout(const GpuFrameLayout& f) {
+    const std::uint64_t start = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{f.cube_count} * RAYCACHE_FRAME_CUBE_WORDS;
+    if (f.start_bytes != start * 4 || f.words != start + f.list_capacity || f.bytes != f.words * 4)
+        throw std::invalid_argument("RayCache: a GpuFrameLayout for " + std::to_string(f.cube_count) + " cubes and " +
+                                    std::to_string(f.list_capacity) + " list entries must have the sizes gpu_frame_layout() gives (" +
+                                    std::to_string(start * 4) + " start bytes, " + std::to_string(start + f.list_capacity) +
+                                    " words), got " + std::to_string(f.start_bytes) + " and " + std::to_string(f.words));
+}
+
 // The largest list capacity that keeps the frame buffer within `max_bytes` for `cube_count` cubes, no larger
 // than `texels` (more could never be used) nor RAYCACHE_END_FRAME_MAX_ENTRIES. 0 when not even the counters fit.
 inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint64_t texels, std::uint64_t max_bytes) {
@@ -95,9 +107,10 @@ inline std::uint32_t gpu_frame_list_capacity(std::uint32_t cube_count, std::uint
 // descriptor index (GpuResting::resting_words(), raycache/gpu_resting.hpp: 0 works, else the cube rests and
 // probes one direction in 2^word, clamped to RAYCACHE_PROBE_BITS..RAYCACHE_MAX_PROBE_BITS, 4..8 unless
 // defined otherwise, so 1 rests with a first rest's probes); throws
-// std::invalid_argument for another count.
+// std::invalid_argument for another count, or a layout check_gpu_frame_layout() refuses.
 inline std::vector<std::uint32_t> gpu_frame_start_words(const GpuFrameLayout& f, bool mark_coverage = true,
                                                         const std::vector<std::uint32_t>& resting = {}) {
+    check_gpu_frame_layout(f);
     if (!resting.empty() && resting.size() != f.cube_count)
         throw std::invalid_argument("RayCache: gpu_frame_start_words needs one resting word per cube (" +
                                     std::to_string(f.cube_count) + "), got " + std::to_string(resting.size()));
@@ -159,8 +172,10 @@ inline double gpu_coverage_fraction(const std::uint32_t* words) noexcept {
 }
 
 // Reads the counters and the list's state from the frame buffer's first start_bytes (`words`, read back
-// after the frame). valid_texels and texel_count are left 0 (the GPU does not count them).
+// after the frame). valid_texels and texel_count are left 0 (the GPU does not count them). Throws
+// std::invalid_argument for a layout check_gpu_frame_layout() refuses.
 inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const GpuFrameLayout& f) {
+    check_gpu_frame_layout(f);
     GpuFrameStatistics s;
     s.cubes.resize(f.cube_count);
     s.coverage.resize(f.cube_count);
@@ -190,8 +205,10 @@ inline GpuFrameStatistics read_gpu_statistics(const std::uint32_t* words, const 
 
 // Of a frame's listed entries, the tiles (the CCT's origin test lists tiles beside texels): scans the store
 // list of the whole frame buffer read back (`words`, f.words of them). The texels stored are
-// GpuFrameStatistics::listed less these.
-inline std::uint64_t gpu_listed_tiles(const std::uint32_t* words, const GpuFrameLayout& f) noexcept {
+// GpuFrameStatistics::listed less these. Throws std::invalid_argument for a layout check_gpu_frame_layout()
+// refuses.
+inline std::uint64_t gpu_listed_tiles(const std::uint32_t* words, const GpuFrameLayout& f) {
+    check_gpu_frame_layout(f);
     const std::uint32_t listed = std::min(words[RAYCACHE_FRAME_LIST_COUNT], f.list_capacity);
     const std::uint32_t* list = words + shared::raycache_frame_list_word(f.cube_count, 0);
     std::uint64_t tiles = 0;

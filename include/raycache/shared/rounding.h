@@ -12,7 +12,10 @@
  *   3. its size, against the exact half gap to the neighbour on its side, says which of the two is
  *      nearer. A quotient or a root of floats is never exactly halfway, so there is no tie to break.
  * Outside [2^-90, 2^90] (operands and results) a residual could underflow; there the device's result is
- * returned unchanged. Nothing in the cache divides such numbers.
+ * returned unchanged, and may differ from C++'s by the device's error. The texel choice never meets such
+ * numbers (its scale 0.5 / |major axis| stays refinable for every unit direction); distances do only past
+ * about 3.5e13 (a squared length over 2^90) and direction components under 2^-90 of the major one, where
+ * C++ and GLSL agree only on devices that round correctly (lavapipe does).
  * The refinements are shared code, so C++ tests them from deliberately perturbed starts.
  */
 #ifndef RAYCACHE_SHARED_ROUNDING_H
