@@ -9,11 +9,12 @@
  * How to use it, from a compute, fragment or ray-generation shader:
  *   #version 450
  *   #extension GL_GOOGLE_include_directive : require
- *   #define RAYCACHE_SET 1                      // options: set, bindings, RAYCACHE_READ_ONLY (cube.glsl)
+ *   #define RAYCACHE_SET 0                      // options: set (0 by default), bindings, RAYCACHE_READ_ONLY (cube.glsl)
  *   #define RAYCACHE_CDCT                       // only for the CDCT (see below); the CCT needs nothing
  *   #include "raycache/raycache.glsl"           // or only raycache/cct.glsl or raycache/cdct.glsl
- *   layout(std430, binding = 5) readonly buffer MyCubes { raycache_gpu_cube my_cubes[]; }; // yours: upload
- *                              // raycache::gpu_buffer_layout(...).cubes there, at a binding RayCache leaves free
+ *   layout(std430, binding = 10) readonly buffer MyCubes { raycache_gpu_cube my_cubes[]; }; // yours: upload
+ *                              // raycache::gpu_buffer_layout(...).cubes there, at a binding RayCache leaves
+ *                              // free (it takes 0 to 9 in its set: raycache/shared/gpu_layout.h)
  *   raycache_gpu_cube cube = my_cubes[object];  // descriptor: raycache/shared/gpu_layout.h, C++ too
  *   raycache_cct_result c = raycache_cct_lookup(cube, reflected);
  *   if (!c.hit) { c.color = trace(hit, reflected); raycache_cct_store(cube, reflected, c.color); }
