@@ -110,3 +110,21 @@ TEST_CASE("CdctCache takes over a filled cube and builds its pyramid from it") {
     CHECK(cache.pyramid()->min_distance(0, cache.pyramid()->levels(), 0, 0) == doctest::Approx(radius).epsilon(1e-5));
     CHECK(cache.lookup(centre, glm::vec3(0.0f, 0.0f, 1.0f)).hit);
 }
+
+TEST_CASE("CdctCache::move_to re-centres the searches: the sphere, moved with the cube, is met around the new centre") {
+    // The cube filled with the sphere of radius 5 around `centre`, then moved by (10, 0, 0): a ray from the
+    // moved origin meets the stored surface 5 from the new centre (as if the sphere had moved along), and
+    // nowhere near the old one.
+    CdctCache cache(32, bounds, relief());
+    prefill(cache.cube(), bounds, relief(), trace_sphere);
+    cache.begin_frame();
+    const glm::vec3 shift(10.0f, 0.0f, 0.0f), origin = centre + glm::vec3(0.3f, -0.2f, 0.1f), direction(1.0f, 0.4f, -0.3f);
+    cache.move_to(CubeBounds{centre + shift, 1.0f});
+    CHECK(cache.bounds().centre == centre + shift);
+    const ReliefResult found = cache.lookup(origin + shift, direction);
+    REQUIRE(found.hit);
+    CHECK(std::abs(glm::length(found.point - (centre + shift)) - radius) <= 0.02f);
+    CHECK(found.color == glm::vec3(0.5f));
+    CHECK_THROWS_AS(cache.move_to(CubeBounds{centre, 0.0f}), std::invalid_argument);
+    CHECK(cache.bounds().centre == centre + shift); // refused: unchanged
+}

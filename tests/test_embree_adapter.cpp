@@ -590,6 +590,43 @@ TEST_CASE("primitives are counted and triangle ranges measured from the Embree g
                          std::invalid_argument);
 }
 
+TEST_CASE("a move naming one primitive moves only the cube of its range, one naming the geometry every range's") {
+    // Soup: A (triangles 0-1) around (0.5, 0.5, 5), half-size 0.5; B (triangles 2-5) around (4, 1, 5.5), half-size 1.
+    for (const Technique technique : {Technique::cct, Technique::cdct}) {
+        CAPTURE(static_cast<int>(technique));
+        Soup s;
+        SceneCache caches(technique);
+        caches.attach_primitives(s.scene, {s.soup}, 0, 2, 16);
+        caches.attach_primitives(s.scene, {s.soup}, 2, 4, 16);
+        const ObjectId a{s.soup, RTC_INVALID_GEOMETRY_ID, 0}, b{s.soup, RTC_INVALID_GEOMETRY_ID, 2};
+        // B moves by (10, 0, 0), named by its triangle 3.
+        SceneChange change;
+        change.moved.push_back({ObjectId{s.soup, RTC_INVALID_GEOMETRY_ID, 3}, BoundingSphere{{4, 1, 5.5f}, 1.5f},
+                                BoundingSphere{{14, 1, 5.5f}, 1.5f}, std::nullopt});
+        CHECK(caches.scene_changed(change, Invalidation::none).cubes_moved == 1u);
+        check_bounds(caches.object_bounds(a), {0.5f, 0.5f, 5.0f}, 0.5f);
+        check_bounds(caches.object_bounds(b), {14.0f, 1.0f, 5.5f}, 1.0f);
+        // Where its cube sits now, given: B's alone.
+        change.moved[0].cube = raycache::CubeBounds{{20, 1, 5.5f}, 2.0f};
+        CHECK(caches.scene_changed(change, Invalidation::all).cubes_moved == 1u);
+        check_bounds(caches.object_bounds(a), {0.5f, 0.5f, 5.0f}, 0.5f);
+        check_bounds(caches.object_bounds(b), {20.0f, 1.0f, 5.5f}, 2.0f);
+        // A primitive outside every range (the backdrop's 6) moves no cube; the whole geometry moves both.
+        change.moved[0] = {ObjectId{s.soup, RTC_INVALID_GEOMETRY_ID, 6}, BoundingSphere{{0, 0, 10}, 15.0f}, BoundingSphere{{0, 1, 10}, 15.0f}, std::nullopt};
+        CHECK(caches.scene_changed(change, Invalidation::exact).cubes_moved == 0u);
+        change.moved[0].id = ObjectId{s.soup};
+        CHECK(caches.scene_changed(change, Invalidation::exact).cubes_moved == 2u);
+        check_bounds(caches.object_bounds(a), {0.5f, 1.5f, 5.0f}, 0.5f);
+        check_bounds(caches.object_bounds(b), {20.0f, 2.0f, 5.5f}, 2.0f);
+        // A CDCT cache's own bounds (what its searches measure from) follow: the same centres.
+        caches.for_each_cdct_cache([&](ObjectId id, const raycache::CdctCache* cache) {
+            if (!cache) return;
+            check_bounds(cache->bounds(), id.prim_id == 0 ? glm::vec3(0.5f, 1.5f, 5.0f) : glm::vec3(20.0f, 2.0f, 5.5f),
+                         id.prim_id == 0 ? 0.5f : 2.0f);
+        });
+    }
+}
+
 TEST_CASE("two objects in one triangle geometry get a cube each, and a hit's primID finds its object's cube") {
     Soup s;
     SceneCache caches(Technique::cct);

@@ -88,6 +88,17 @@ public:
         if (pyramid_) pyramid_->rebuild(*cube_);
     }
 
+    // Re-centres the cube on `bounds` (its object moved): its texels keep their directions and distances from
+    // the centre, so they now describe surroundings that moved with the object (empty the cube, or invalidate
+    // what the move changed, unless that is what you want). Between frames. Throws std::invalid_argument
+    // for bounds without a finite centre and a half-size > 0.
+    void move_to(const CubeBounds& bounds) {
+        if (!detail::is_usable(bounds))
+            throw std::invalid_argument("RayCache: CdctCache bounds need a finite centre and a half-size > 0");
+        cube_->assert_between_frames();
+        bounds_ = bounds;
+    }
+
     // Recomputes the pyramid from the cube, after the cube was changed other than by stores (invalidate(),
     // store_word_at() of a load). Between frames.
     void rebuild_pyramid() {

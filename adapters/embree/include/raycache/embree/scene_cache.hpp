@@ -217,6 +217,8 @@ enum class Invalidation {
 
 // One object that moved between two frames: bounding spheres before and after; for an object with a cube,
 // optionally where its cube sits now (default: moved by the spheres' centres' offset, same half-size).
+// `id` names a geometry or instance (every primitive range of it moves), or with a prim_id the one
+// primitive range (attach_primitives()) that holds that primitive.
 struct ObjectMove {
     ObjectId id;
     BoundingSphere before, after;
@@ -667,10 +669,14 @@ public:
         for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         std::vector<char> changed(entries_.size(), 0);
         for (const ObjectMove& m : change.moved) {
+            // A primitive names its range's cube alone (none when no range holds it); a whole geometry all its cubes.
+            const int range = m.id.prim_id == RTC_INVALID_GEOMETRY_ID ? -1 : find(m.id);
             for (std::size_t i = 0; i < entries_.size(); ++i) {
                 Entry& e = entries_[i];
                 if (path_key(e.id) != path_key(m.id)) continue;
+                if (m.id.prim_id != RTC_INVALID_GEOMETRY_ID && static_cast<int>(i) != range) continue;
                 e.bounds = m.cube ? *m.cube : CubeBounds{e.bounds.centre + (m.after.centre - m.before.centre), e.bounds.half_size};
+                if (e.cdct) e.cdct->move_to(e.bounds); // its searches and stores measure from the centre
                 ++stats.cubes_moved;
                 if (policy == Invalidation::none) continue;
                 const std::size_t emptied = empty_cube(e);
