@@ -140,6 +140,14 @@ TEST_CASE("adaptive settings are validated with a message naming the field") {
     a = AdaptiveResolution{};
     a.still_frames = 0;
     CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("still_frames"), std::invalid_argument);
+    // Cubes never leave [min_face_size, max_face_size]: they cannot start outside it either.
+    a = AdaptiveResolution{};
+    a.min_face_size = 64;
+    a.first_face_size = 8;
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("first_face_size (8) must lie within min_face_size (64)"), std::invalid_argument);
+    a = AdaptiveResolution{};
+    a.first_face_size = 2048; // max_face_size 1024
+    CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("max_face_size (1024)"), std::invalid_argument);
 }
 
 TEST_CASE("a cube's rays hold still after still_frames frames of at most 5% empty texels, and move on at more than 20% empty") {

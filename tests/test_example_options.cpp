@@ -228,7 +228,18 @@ TEST_CASE("values: negative numbers, short flags, inf and auto keep their meanin
     CHECK(parse({"--still-rays-per-texel", "0.5"}).still_rays_per_texel == 0.5f);
     CHECK(usage_error({"--still-rays-per-texel", "0"}) == "--still-rays-per-texel: must be > 0, got 0");
     CHECK(parse({"--first-face-size", "64"}).first_face_size == 64);
-    CHECK(usage_error({"--first-face-size", "0"}) == "--first-face-size: 0 is out of range 1..4096");
+    CHECK(usage_error({"--first-face-size", "0"}) == "--first-face-size: 0 is out of range 8..1024");
+    CHECK(usage_error({"--first-face-size", "2048"}) == "--first-face-size: 2048 is out of range 8..1024");
+    // The range is AdaptiveResolution's own: its ends pass validate(), one step outside does not.
+    raycache::AdaptiveResolution a;
+    for (const char* first : {"8", "1024"}) {
+        a.first_face_size = parse({"--first-face-size", first}).first_face_size;
+        CHECK_NOTHROW(raycache::validate(a));
+    }
+    for (const int first : {7, 1025}) {
+        a.first_face_size = first;
+        CHECK_THROWS_WITH_AS(raycache::validate(a), doctest::Contains("first_face_size"), std::invalid_argument);
+    }
     CHECK(usage_error({"--size", "8"}) == "--size: '8' is not WIDTHxHEIGHT (for example 512x512)");
     CHECK(usage_error({"--cdct-search", "walk"}) == "--cdct-search: 'walk' is not secant or relief");
     CHECK_FALSE(parse({"--cdct-search", "relief"}).secant);

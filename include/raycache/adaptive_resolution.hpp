@@ -26,6 +26,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -72,6 +74,10 @@ inline void validate(const AdaptiveResolution& a) {
         throw std::invalid_argument("RayCache: AdaptiveResolution needs 1 <= min_face_size <= max_face_size <= 4096");
     if (!is_valid_face_size(a.first_face_size))
         throw std::invalid_argument("RayCache: AdaptiveResolution::first_face_size must be 1 to 4096");
+    if (a.first_face_size < a.min_face_size || a.first_face_size > a.max_face_size)
+        throw std::invalid_argument("RayCache: AdaptiveResolution::first_face_size (" + std::to_string(a.first_face_size) +
+                                    ") must lie within min_face_size (" + std::to_string(a.min_face_size) + ") and max_face_size (" +
+                                    std::to_string(a.max_face_size) + ")");
     if (a.hysteresis_steps < 1)
         throw std::invalid_argument("RayCache: AdaptiveResolution::hysteresis_steps must be at least 1");
     if (!(a.still_rays_per_texel > 0.0f) || !std::isfinite(a.still_rays_per_texel))

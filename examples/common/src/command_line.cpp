@@ -159,10 +159,11 @@ CommandLine::CommandLine(const std::string& program)
                "rays come back to its texels); >= --rays-per-texel: off " + shown_default(d.still_rays_per_texel),
                number("--still-rays-per-texel", o.still_rays_per_texel, true));
     add_option("--first-face-size", "N",
-               "auto: the face size cubes start at, 1..4096; smaller makes a first\n"
-               "frame cheaper and its cubes coarser [" + std::to_string(d.first_face_size) + "]",
+               "auto: the face size cubes start at, 8..1024 (the sizes adaptive cubes\n"
+               "take); smaller makes a first frame cheaper and its cubes coarser [" + std::to_string(d.first_face_size) + "]",
                [&o](const std::string& text) {
-                   o.first_face_size = static_cast<int>(parse_int_value("--first-face-size", text, 1, 4096));
+                   // raycache::AdaptiveResolution's min_face_size and max_face_size, which it must lie within.
+                   o.first_face_size = static_cast<int>(parse_int_value("--first-face-size", text, 8, 1024));
                });
     add_option("--budget-mib", "N",
                "memory all cubes may take, 1..1048576 MiB; when they reach it, the\n"
