@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -129,6 +130,19 @@ TEST_CASE("--load-cache and --save-cache take a file name and need a caching mod
     CHECK_THROWS_WITH_AS(parse({"--cache", "ceiling", "--load-cache", "x.rcc"}),
                          doctest::Contains("--load-cache needs --cache cct or cdct, not ceiling"), rcx::UsageError);
     CHECK(rcx::help_text("tracer").find("--save-cache FILE") != std::string::npos);
+    // A dynamic scene's cubes end where its objects moved to: refused before a frame is rendered.
+    CHECK_THROWS_WITH_AS(parse({"--scene", "dynamic-4", "--save-cache", "x.rcc"}),
+                         doctest::Contains("--save-cache does not work with the moving objects of dynamic-4"), rcx::UsageError);
+    CHECK_THROWS_WITH_AS(parse({"--scene", "dynamic-4", "--load-cache", "x.rcc"}), doctest::Contains("--load-cache"), rcx::UsageError);
+    // Saving renames a new file over the target: a folder or a device there is refused, a regular file taken.
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "raycache-test-options-save";
+    std::filesystem::create_directories(dir);
+    CHECK_THROWS_WITH_AS(parse({"--save-cache", dir.c_str()}), doctest::Contains("exists and is not a regular file"), rcx::UsageError);
+    CHECK_THROWS_WITH_AS(parse({"--save-cache", "/dev/null"}), doctest::Contains("exists and is not a regular file"), rcx::UsageError);
+    const std::string file = (dir / "old.rcc").string();
+    std::ofstream(file) << "an earlier save";
+    CHECK(parse({"--save-cache", file.c_str()}).save_cache == file);
+    std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("numbers too small or too large for a float are called that, not 'not a finite number'") {
@@ -296,4 +310,11 @@ TEST_CASE("a tracer's own options parse and show beside the shared ones") {
     const std::vector<const char*> bad{"tracer", "--capacity", "10"};
     CHECK_THROWS_WITH_AS(refusing.parse(static_cast<int>(bad.size()), bad.data()),
                          "--capacity: 10 is out of range 64..128", rcx::UsageError);
+}
+
+TEST_CASE("--step takes -360..360 degrees, so a frame's angle stays finite") {
+    CHECK(*parse({"--step", "-360"}).step_degrees == -360.0f);
+    CHECK(*parse({"--step", "360"}).step_degrees == 360.0f);
+    CHECK(usage_error({"--step", "360.5"}) == "--step: 360.5 is out of range -360..360");
+    CHECK(usage_error({"--step", "6e37"}) == "--step: 6e37 is out of range -360..360");
 }

@@ -61,6 +61,9 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     // What the GPU side does not do yet: refused rather than ignored.
     const rcx::Options defaults;
     if (o.filtered) throw InputError("--filtered is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (o.trace_hits) throw InputError("--trace-hits is not supported by the Vulkan tracer (only by raycache_embree_whitted)");
+    if (v.secondary == rcx::gpu::Secondary::rsh && o.depth && *o.depth > 30)
+        throw InputError("--depth: the Vulkan tracer's --secondary rsh traces at most 30 bounces, got " + std::to_string(*o.depth));
     if (o.lookup_work)
         throw InputError("--lookup-work is not supported by the Vulkan tracer: its cubes rest at a fixed --min-hit-rate");
     if (o.light_samples > 1)

@@ -2,8 +2,11 @@
 // CLI11's errors in the words of UsageError.
 #include "rcx/command_line.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
+#include <system_error>
 #include <utility>
 
 #include <CLI/CLI.hpp>
@@ -120,8 +123,12 @@ CommandLine::CommandLine(const std::string& program)
     add_option("--frames", "N", "frames to render [the scene's path: 10]", [&o](const std::string& text) {
         o.frames = static_cast<int>(parse_int_value("--frames", text, 1, 1000000));
     });
-    add_option("--step", "DEGREES", "camera rotation per frame [the scene's path: 1]",
-               [&o](const std::string& text) { o.step_degrees = parse_float_value("--step", text, false); });
+    add_option("--step", "DEGREES", "camera rotation per frame, -360..360 [the scene's path: 1]", [&o](const std::string& text) {
+        const float step = parse_float_value("--step", text, false);
+        // Larger steps repeat these; and a frame's angle, step x frame, must stay finite.
+        if (!(std::abs(step) <= 360.0f)) throw UsageError("--step: " + text + " is out of range -360..360");
+        o.step_degrees = step;
+    });
     add_option("--path", "KIND", "orbit (eye around the target), pan (view around the eye), fixed",
                [&o](const std::string& text) {
                    try {
@@ -302,9 +309,17 @@ Options CommandLine::parse(int argc, const char* const argv[]) {
     if (!app_->remaining().empty()) throw unexpected(app_->remaining().front());
     Options& o = options_;
     o.pyramid = !no_pyramid_;
+    const std::string cache_file = o.load_cache.empty() ? "--save-cache" : "--load-cache";
     if ((!o.load_cache.empty() || !o.save_cache.empty()) && !uses_caches(o.cache))
-        throw UsageError(std::string(o.load_cache.empty() ? "--save-cache" : "--load-cache") + " needs --cache cct or cdct, not " +
-                         to_string(o.cache));
+        throw UsageError(cache_file + " needs --cache cct or cdct, not " + to_string(o.cache));
+    // A dynamic scene's cubes are saved where its objects are after the last frame, and a run starts them
+    // where its first frame puts them: no file would load back.
+    if ((!o.load_cache.empty() || !o.save_cache.empty()) && o.scene.rfind("dynamic-", 0) == 0)
+        throw UsageError(cache_file + " does not work with the moving objects of " + o.scene);
+    // Saving renames a new file over the old one: a folder, a device or a pipe there must not be replaced.
+    std::error_code error;
+    if (!o.save_cache.empty() && std::filesystem::exists(o.save_cache, error) && !std::filesystem::is_regular_file(o.save_cache, error))
+        throw UsageError("--save-cache: '" + o.save_cache + "' exists and is not a regular file");
     return o;
 }
 
