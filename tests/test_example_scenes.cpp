@@ -496,6 +496,20 @@ TEST_CASE("load_mesh reads the Wuson smooth and names the path when it cannot re
     for (const glm::vec3& n : m.normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
 }
 
+TEST_CASE("a mesh that cannot be fitted is called degenerate or too large, by its name") {
+    rcx::Mesh point;
+    point.name = "--mesh point.obj";
+    point.positions = {glm::vec3(1.0f), glm::vec3(1.0f), glm::vec3(1.0f)};
+    point.triangles = {glm::uvec3(0, 1, 2)};
+    CHECK_THROWS_WITH_AS(rcx::fit_mesh(point, glm::vec3(0.0f), 2.0f), doctest::Contains("mesh '--mesh point.obj' is empty or degenerate"),
+                         std::invalid_argument);
+    rcx::Mesh huge = point;
+    huge.name = "--mesh huge.obj";
+    huge.positions = {glm::vec3(-3e38f), glm::vec3(3e38f, -3e38f, 0.0f), glm::vec3(3e38f)}; // extent 6e38: past a float
+    CHECK_THROWS_WITH_AS(rcx::fit_mesh(huge, glm::vec3(0.0f), 2.0f), doctest::Contains("mesh '--mesh huge.obj' is too large"),
+                         std::invalid_argument);
+}
+
 namespace {
 
 // The first `fraction` of `source`'s bytes, written to a file in the temporary folder; its path.

@@ -429,8 +429,10 @@ void fit_mesh(Mesh& mesh, const glm::vec3& centre, float size) {
     const Bounds b = mesh_bounds(mesh);
     const glm::vec3 extent = b.max - b.min;
     const float largest = std::max(extent.x, std::max(extent.y, extent.z));
-    if (mesh.positions.empty() || !(largest > 0.0f) || !std::isfinite(largest))
-        throw std::invalid_argument("fit_mesh: mesh '" + mesh.name + "' is empty or degenerate");
+    if (mesh.positions.empty() || !(largest > 0.0f))
+        throw std::invalid_argument("fit_mesh: mesh '" + mesh.name + "' is empty or degenerate (all its vertices in one point)");
+    if (!std::isfinite(largest))
+        throw std::invalid_argument("fit_mesh: mesh '" + mesh.name + "' is too large: its extent overflows a float");
     const glm::vec3 middle = 0.5f * (b.min + b.max);
     const float scale = size / largest;
     for (glm::vec3& p : mesh.positions) p = centre + (p - middle) * scale;

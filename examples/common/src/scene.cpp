@@ -180,7 +180,7 @@ Mesh wuson_on_floor(const std::string& scene_name, const SceneParams& params, fl
         throw std::runtime_error(std::string(e.what()) + " (scene '" + scene_name +
                                  "' needs the Wuson model; on Debian/Ubuntu: apt-get install assimp-testmodels)");
     }
-    wuson.name = "wuson";
+    wuson.name = params.mesh_path == SceneParams{}.mesh_path ? "wuson" : "--mesh " + params.mesh_path;
     rotate_mesh(wuson, {0.0f, 1.0f, 0.0f}, -55.0f); // Y-up, body along Z: turn it three-quarters to the camera
     fit_mesh(wuson, {0.0f, 0.0f, 0.0f}, size);
     const Bounds b = mesh_bounds(wuson);
