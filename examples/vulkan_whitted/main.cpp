@@ -27,6 +27,7 @@
 #include <rcx/vulkan.hpp>
 
 #include "gpu_tracer.hpp"
+#include "rsh_frame.hpp"
 #include "rcx/command_line.hpp"
 #include "rcx/image.hpp"
 #include "rcx/memory.hpp"
@@ -92,6 +93,15 @@ int run(const rcx::Options& o, const VulkanOptions& v) {
     } catch (const rcx::vk::NoDeviceError& e) {
         throw InputError(std::string("no usable Vulkan device: ") + e.what() +
                          ". On Debian/Ubuntu install mesa-vulkan-drivers (lavapipe, Vulkan on the CPU) and libvulkan1.");
+    }
+
+    if (v.secondary == rcx::gpu::Secondary::rsh) {
+        const auto& limits = context->properties().limits;
+        try {
+            rcx::gpu::RshFrame::check_image_size(o.width, o.height, limits.maxStorageBufferRange, limits.maxComputeWorkGroupCount[0]);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(e.what());
+        }
     }
 
     // The cubes live in two host-visible buffers (texels and pending) of at most maxStorageBufferRange

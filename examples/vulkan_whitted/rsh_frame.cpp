@@ -59,6 +59,20 @@ RshFrame::RshFrame(vk::Context& context, const std::string& spirv_dir, const Rsh
 RshFrame::~RshFrame() = default;
 const RshEngine& RshFrame::engine() const noexcept { return impl_->engine; }
 
+void RshFrame::check_image_size(int width, int height, std::uint64_t max_buffer_bytes, std::uint32_t max_groups) {
+    std::uint64_t side = 1;
+    while (side < static_cast<std::uint64_t>(std::max(width, height))) side *= 2;
+    const std::uint64_t slots = side * side, bytes = slots * 3 * 64; // the candidates, the largest buffer
+    if (bytes <= max_buffer_bytes && groups(3 * slots) <= max_groups) return;
+    std::uint64_t fits = side;
+    while (fits > 1 && (fits * fits * 3 * 64 > max_buffer_bytes || groups(3 * fits * fits) > max_groups)) fits /= 2;
+    throw std::invalid_argument("--size " + std::to_string(width) + "x" + std::to_string(height) + ": the Vulkan tracer's --secondary rsh lays the rays out in a " +
+                                std::to_string(side) + " x " + std::to_string(side) + " square, whose " + std::to_string(bytes) +
+                                "-byte buffer or " + std::to_string(groups(3 * slots)) + " groups pass this device's limits (" +
+                                std::to_string(max_buffer_bytes) + " bytes, " + std::to_string(max_groups) +
+                                " groups); image sides up to " + std::to_string(fits) + " fit");
+}
+
 void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffers& scene, const vk::Buffer& image,
                       RshFrameStats* stats) {
     Impl& f = *impl_;

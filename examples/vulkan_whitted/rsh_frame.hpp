@@ -66,6 +66,12 @@ public:
 
     const RshEngine& engine() const noexcept;
 
+    // The rays of a width x height image lie in a square of Morton slots whose side is the next power of two
+    // of the larger side; this throws std::invalid_argument, naming the size, when that square's largest
+    // buffer (3 candidate pairs of 64 bytes a slot) passes `max_buffer_bytes` (maxStorageBufferRange) or its
+    // largest dispatch `max_groups` (maxComputeWorkGroupCount[0]).
+    static void check_image_size(int width, int height, std::uint64_t max_buffer_bytes, std::uint32_t max_groups);
+
     struct Impl;
 
 private:
