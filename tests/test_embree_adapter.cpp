@@ -627,6 +627,44 @@ TEST_CASE("a move naming one primitive moves only the cube of its range, one nam
     }
 }
 
+TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube it reads has changed") {
+    // Mirrors A (id 10, at the origin) and B (id 11, at (4, 0, 0)) and an uncached ball X (id 12) at
+    // (3.3, 5, 0), radius 0.5, which moves straight up to (3.3, 30, 0). B holds one texel whose path hit X;
+    // A one whose path hit X (toward +y) and one whose path hit only B (toward +x: the ray that B's cube
+    // answered, as the tracer records it). X's move empties A's first texel and B's by their paths, so both
+    // cubes change; A's second texel read B, which changed, so it must go too, though A itself lost texels
+    // in the same pass. (A review found it kept: transitive passes tested only cubes that had not changed.)
+    raycache::embree::SceneCacheSettings settings;
+    settings.path_records = raycache::embree::PathRecords::always;
+    settings.origin_drift = -1.0f;
+    settings.edge_threshold = -1.0f;
+    settings.min_hit_rate = 0.0f;
+    SceneCache caches(Technique::cct, settings);
+    caches.attach({10}, 8, raycache::CubeBounds{glm::vec3(0.0f), 1.0f});
+    caches.attach({11}, 8, raycache::CubeBounds{glm::vec3(4, 0, 0), 1.0f});
+    const std::uint64_t a = raycache::embree::path_key({10}), b = raycache::embree::path_key({11}), x = raycache::embree::path_key({12});
+    REQUIRE((raycache::object_bits(b) & raycache::object_bits(x)) == 0u); // B's hits never read as X's
+    REQUIRE((raycache::object_bits(a) & raycache::object_bits(x)) == 0u);
+    auto store = [&](unsigned id, glm::vec3 o, glm::vec3 d, std::uint64_t hit, glm::vec3 point) {
+        caches.leaving_ray({id}, o, glm::normalize(d), [&](raycache::PathRecord& path) {
+            path.hit(hit, point);
+            return TracedRay{glm::vec3(0.5f), glm::length(point - o)};
+        });
+    };
+    store(11, {4, 1, 0}, {-0.7f, 3.5f, 0}, x, {3.3f, 4.5f, 0});              // B sees X
+    store(10, {0, 1, 0}, {3.3f, 3.5f, 0}, x, {3.0f, 4.6f, 0});               // A sees X
+    store(10, {1, 0, 0}, {1, 0.05f, 0.05f}, b, {3.0f, 0.1f, 0.1f});          // A sees B (B's cube answered)
+    caches.begin_frame();
+    REQUIRE(caches.statistics().valid_texels == 3u);
+    SceneChange change;
+    change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
+    const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+    CHECK(s.dropped_by_path == 2u);
+    CHECK(s.dropped_transitively == 1u);
+    CHECK(s.dropped == 3u);
+    CHECK(caches.statistics().valid_texels == 0u);
+}
+
 TEST_CASE("two objects in one triangle geometry get a cube each, and a hit's primID finds its object's cube") {
     Soup s;
     SceneCache caches(Technique::cct);

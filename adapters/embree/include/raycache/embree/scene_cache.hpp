@@ -667,7 +667,7 @@ public:
         check_scene_changes(changes); // bad input is refused before anything moves
         InvalidationStatistics stats;
         for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
-        std::vector<char> changed(entries_.size(), 0);
+        std::vector<char> changed(entries_.size(), 0), moved(entries_.size(), 0); // moved: emptied with its object
         for (const ObjectMove& m : change.moved) {
             // A primitive names its range's cube alone (none when no range holds it); a whole geometry all its cubes.
             const int range = m.id.prim_id == RTC_INVALID_GEOMETRY_ID ? -1 : find(m.id);
@@ -682,7 +682,7 @@ public:
                 const std::size_t emptied = empty_cube(e);
                 stats.dropped += emptied;
                 stats.dropped_with_moved_cubes += emptied;
-                changed[i] = 1;
+                changed[i] = moved[i] = 1;
             }
         }
         if (policy == Invalidation::all)
@@ -691,13 +691,15 @@ public:
             std::vector<std::size_t> next; // entries that changed in the last pass
             for (std::size_t i = 0; i < entries_.size(); ++i)
                 if (changed[i]) next.push_back(i);
-            // One pass over the cubes that have not changed yet, in parallel; then, in entry order, what it did.
+            // One pass, in parallel, over the cubes that have not changed yet (the first) or that did not move
+            // with their objects (the transitive ones: a cube that lost texels to the move may still hold texels
+            // whose paths read a cube that changed since); then, in entry order, what it did.
             std::vector<std::size_t> todo;
             std::vector<InvalidationCounts> counts;
             auto pass = [&](const SceneChanges& c, bool transitive) {
                 todo.clear();
                 for (std::size_t i = 0; i < entries_.size(); ++i)
-                    if (!changed[i]) todo.push_back(i);
+                    if (transitive ? !moved[i] : !changed[i]) todo.push_back(i);
                 // Every cube's runs of tiles in one parallel_for: a cube of many tiles (a mirror that fills
                 // the view) shares its tiles among the threads while the small cubes' runs fill the gaps,
                 // with no wait between cubes. The passes are made here, in entry order (each settles its
