@@ -577,7 +577,7 @@ std::unique_ptr<CacheCube<Texel>> build_cube(const CubeRecord& c, const std::sha
                       " in use) cannot hold the file's cubes as well as the cubes they replace");
     };
     const std::size_t fixed = CacheCube<Texel>::fixed_bytes(c.face_size);
-    if (budget && (fixed > budget->limit() || budget->used() > budget->limit() - fixed)) no_room();
+    if (budget && fixed > budget->room()) no_room();
     auto cube = std::make_unique<CacheCube<Texel>>(c.face_size, budget, path_records);
     ByteReader tiles = tiles_of<Texel>(c);
     for (std::uint32_t i = 0; i < c.tiles; ++i) {

@@ -51,6 +51,11 @@ public:
 
     std::size_t limit() const noexcept { return limit_; }
     std::size_t used() const noexcept { return used_.load(std::memory_order_relaxed); }
+    // The bytes left under the limit now (0 once reserve_always() has passed it).
+    std::size_t room() const noexcept {
+        const std::size_t u = used();
+        return limit_ > u ? limit_ - u : 0;
+    }
     // Counted refusals since the budget was made.
     std::uint64_t refusals() const noexcept { return refusals_.load(std::memory_order_relaxed); }
 

@@ -1001,7 +1001,7 @@ private:
         if (adaptive) shrink_first_face_size(entries_.size() + 1);
         const int size = adaptive ? first_face_size_ : face_size;
         const std::size_t fixed = is_valid_face_size(size) ? cube_fixed_bytes(size) : 0; // else make_cube throws
-        if (fixed > budget_->limit() || budget_->used() > budget_->limit() - fixed)
+        if (fixed > budget_->room())
             throw std::invalid_argument("RayCache: the memory budget (" + std::to_string(budget_->limit()) + " bytes, " +
                                         std::to_string(budget_->used()) + " taken by " + std::to_string(entries_.size()) +
                                         " cubes) has no room for another cube of face size " + std::to_string(size) + " (" +
@@ -1139,7 +1139,7 @@ private:
     std::vector<Resize> plan_resizes() {
         std::vector<Resize> resizes;
         // What the budget has room for: the still rule's finer faces take no more (largest_face_size_within).
-        std::size_t room = budget_->limit() > budget_->used() ? budget_->limit() - budget_->used() : 0;
+        std::size_t room = budget_->room();
         for (std::size_t i = 0; i < entries_.size(); ++i) {
             Entry& e = entries_[i];
             if (!e.coverage) continue;
@@ -1193,8 +1193,7 @@ private:
             worst += full_cube_bytes(r.face_size, r.face_size < current ? tile : 0, entry_bytes(), cube_bytes());
         }
         const std::function<void(std::size_t)> resize = [&](std::size_t k) { resize_entry(entries_[resizes[k].entry], resizes[k].face_size); };
-        const std::size_t used = budget_->used(), limit = budget_->limit();
-        if (used <= limit && worst <= limit - used) {
+        if (worst <= budget_->room()) { // (every resize's worst case is more than 0 bytes: its fixed part)
             parallel_for(resizes.size(), resize);
         } else {
             for (std::size_t k = 0; k < resizes.size(); ++k) resize(k);
