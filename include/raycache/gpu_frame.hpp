@@ -83,11 +83,11 @@ inline GpuFrameLayout gpu_frame_layout(std::uint32_t cube_count, std::uint32_t l
 // capacity: the functions below index the frame buffer by those, so a layout filled in by hand with other
 // sizes would make them read or write past it.
 inline void check_gpu_frame_layout(const GpuFrameLayout& f) {
-    const std::uint64_t start = std::uint64_t{RAYCACHE_FRAME_HEADER_WORDS} + std::uint64_t{f.cube_count} * RAYCACHE_FRAME_CUBE_WORDS;
-    if (f.start_bytes != start * 4 || f.words != start + f.list_capacity || f.bytes != f.words * 4)
+    const GpuFrameLayout expected = gpu_frame_layout(f.cube_count, f.list_capacity);
+    if (f.start_bytes != expected.start_bytes || f.words != expected.words || f.bytes != expected.bytes)
         throw std::invalid_argument("RayCache: a GpuFrameLayout for " + std::to_string(f.cube_count) + " cubes and " +
                                     std::to_string(f.list_capacity) + " list entries must have the sizes gpu_frame_layout() gives (" +
-                                    std::to_string(start * 4) + " start bytes, " + std::to_string(start + f.list_capacity) +
+                                    std::to_string(expected.start_bytes) + " start bytes, " + std::to_string(expected.words) +
                                     " words), got " + std::to_string(f.start_bytes) + " and " + std::to_string(f.words));
 }
 
