@@ -39,6 +39,17 @@ void grow(vk::Context& context, std::unique_ptr<vk::Buffer>& buffer, std::uint64
 
 std::uint32_t groups(std::uint64_t n) { return static_cast<std::uint32_t>((n + 63) / 64); }
 
+// The side of the square of Morton slots a width x height image's rays lie in: the next power of two of
+// the larger side.
+std::uint32_t square_side(int width, int height) {
+    std::uint32_t side = 1;
+    while (side < static_cast<std::uint32_t>(std::max(width, height))) side *= 2;
+    return side;
+}
+
+// Bytes a ray slot takes in the candidates buffer, the largest: three candidate pairs of 64 bytes.
+constexpr std::uint64_t candidate_bytes = 3 * 64;
+
 } // namespace
 
 struct RshFrame::Impl {
@@ -60,12 +71,10 @@ RshFrame::~RshFrame() = default;
 const RshEngine& RshFrame::engine() const noexcept { return impl_->engine; }
 
 void RshFrame::check_image_size(int width, int height, std::uint64_t max_buffer_bytes, std::uint32_t max_groups) {
-    std::uint64_t side = 1;
-    while (side < static_cast<std::uint64_t>(std::max(width, height))) side *= 2;
-    const std::uint64_t slots = side * side, bytes = slots * 3 * 64; // the candidates, the largest buffer
+    const std::uint64_t side = square_side(width, height), slots = side * side, bytes = slots * candidate_bytes;
     if (bytes <= max_buffer_bytes && groups(3 * slots) <= max_groups) return;
     std::uint64_t fits = side;
-    while (fits > 1 && (fits * fits * 3 * 64 > max_buffer_bytes || groups(3 * fits * fits) > max_groups)) fits /= 2;
+    while (fits > 1 && (fits * fits * candidate_bytes > max_buffer_bytes || groups(3 * fits * fits) > max_groups)) fits /= 2;
     throw std::invalid_argument("--size " + std::to_string(width) + "x" + std::to_string(height) + ": the Vulkan tracer's --secondary rsh lays the rays out in a " +
                                 std::to_string(side) + " x " + std::to_string(side) + " square, whose " + std::to_string(bytes) +
                                 "-byte buffer or " + std::to_string(groups(3 * slots)) + " groups pass this device's limits (" +
@@ -84,8 +93,7 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
     RshFrameStats& s = stats ? *stats : local_stats;
     s = RshFrameStats{};
     const auto start = std::chrono::steady_clock::now();
-    std::uint32_t side = 1;
-    while (side < static_cast<std::uint32_t>(std::max(width, height))) side *= 2;
+    const std::uint32_t side = square_side(width, height);
     const std::uint32_t slots = side * side;
     grow(f.context, f.dummy, 64);
     grow(f.context, f.control, std::uint64_t{fc_words} * 4);
@@ -106,7 +114,7 @@ void RshFrame::render(int width, int height, int max_depth, const RshSceneBuffer
         grow(f.context, f.shadow_rays, n * 32);
         grow(f.context, f.shadow_hits, n * 8);
         grow(f.context, f.local, n * 32);
-        grow(f.context, f.candidates, n * 3 * 64);
+        grow(f.context, f.candidates, n * candidate_bytes);
         grow(f.context, f.flags, n * 3 * 4);
         grow(f.context, f.sums, RshEngine::prefix_sum_bytes(3 * capacity));
         const std::uint32_t total_word = RshEngine::prefix_sum_total_word(3 * capacity);
