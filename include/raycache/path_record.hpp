@@ -6,7 +6,8 @@
 // bounces. The tracer fills one PathRecord per traced leaving ray (SceneCache::leaving_ray with a callback
 // that takes a PathRecord&, or cct_cached_trace() with a trace taking a PathRecord&); each 2 x 2 block of a
 // cube's 16 x 16 tiles keeps the union of the records of the stores into it (CacheCube::store with a path:
-// 8 + 24 + 24 + 4 bytes a block, padded to 64, and a bit per texel saying its store brought a record).
+// 8 + 24 + 24 + 4 bytes a block, padded to 64, then 8 for the direction cells of its cached reads, and a
+// bit per texel saying its store brought a record).
 #pragma once
 
 #include "raycache/requires_cpp17.hpp"
@@ -16,6 +17,8 @@
 #include <limits>
 
 #include <glm/glm.hpp>
+
+#include "raycache/direction_cells.hpp"
 
 namespace raycache {
 
@@ -49,6 +52,19 @@ struct PathRecord {
     // A bounce escaped with no bound known on its segment (not from a hit point, or no direction given):
     // any move may change the path.
     bool unbounded = false;
+    // The direction cells (raycache/direction_cells.hpp) in which cubes answered rays nested in the path (a
+    // bounce that left a cached object and was answered by its cube): when such a cube loses texels only in
+    // other cells, the path still holds. A fresh record knows nothing of them: every cell, so a path that hit
+    // a cached object counts as having read all of its cube. A tracer that passes the record of each path to
+    // the leaving rays nested in it (SceneCache::leaving_ray's `enclosing`) calls track_cached_reads() first.
+    std::uint64_t cached_reads = every_direction_cell;
+
+    // A union of no paths: nothing hit, nothing read (what merge() starts from).
+    static PathRecord empty() noexcept {
+        PathRecord r;
+        r.cached_reads = 0;
+        return r;
+    }
 
     // The path hit object `key` at `point`.
     void hit(std::uint64_t key, const glm::vec3& point) noexcept {
@@ -69,6 +85,11 @@ struct PathRecord {
         escape_lo = glm::min(escape_lo, d);
         escape_hi = glm::max(escape_hi, d);
     }
+    // From here on every cached answer nested in the path is noted with read_cached(): none so far.
+    void track_cached_reads() noexcept { cached_reads = 0; }
+    // A cube answered a ray nested in the path from its texels in the directions of the box [lo, hi] (any
+    // lengths; for a CCT, the ray's direction; for a CDCT search, the points it read, seen from the centre).
+    void read_cached(const glm::vec3& lo, const glm::vec3& hi) noexcept { cached_reads |= direction_cells_of_box(lo, hi); }
     bool has_vertices() const noexcept { return vertex_lo.x <= vertex_hi.x; }
     bool has_escapes() const noexcept { return escape_lo.x <= escape_hi.x; }
     // Escapes with no hit point before them: no bound on where they started. Merged with another path's hit
@@ -86,6 +107,7 @@ struct PathRecord {
         lit = lit || other.lit;
         chained = chained || other.chained;
         unbounded = unbounded || other.unbounded || loose;
+        cached_reads |= other.cached_reads;
     }
 };
 

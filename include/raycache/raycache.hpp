@@ -10,6 +10,7 @@
 #include "raycache/texel.hpp"
 #include "raycache/statistics.hpp"
 #include "raycache/memory_budget.hpp"
+#include "raycache/direction_cells.hpp"
 #include "raycache/path_record.hpp"
 #include "raycache/traced_ray.hpp"
 #include "raycache/cache_cube.hpp"
