@@ -60,6 +60,8 @@ std::vector<std::uint8_t> cache_seed(std::uint8_t mode, const std::vector<int>& 
         path.hit(9, glm::vec3(3.0f, 4.0f, 0.5f));
         path.lit = path.chained = true;
         path.escaped(glm::vec3(0.0f, 1.0f, 1.0f));
+        path.track_cached_reads();
+        path.read_cached(glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(1.0f, 0.0f, 0.0f)); // a cube answered a bounce toward +x
         if constexpr (std::is_same_v<Texel, raycache::CctTexel>) {
             cubes.back()->store(glm::vec3(1.0f, 0.2f, 0.1f), glm::vec3(0.5f), glm::vec3(0.3f, 1.0f, 2.0f));
             cubes.back()->store(glm::vec3(-0.3f, 1.0f, 0.2f), glm::vec3(0.25f), path);

@@ -227,9 +227,10 @@ TEST_CASE("a file saved for another scene, object, placement or technique is ref
 
 TEST_CASE("a file of a newer or unknown format version is refused, saying which") {
     const std::vector<std::uint8_t> bytes = small_file();
-    CHECK(decode<CdctTexel>(with_version(bytes, 4)).size() == 1u);
-    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 5)); }), "format version 5 is newer than this RayCache reads (4)"));
-    // A format-4 file relabelled as format 3, 2 or 1 does not parse as one (format 3's tiles always carry
+    CHECK(decode<CdctTexel>(with_version(bytes, 5)).size() == 1u);
+    CHECK(decode<CdctTexel>(with_version(bytes, 4)).size() == 1u); // no path record: formats 4 and 5 agree
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 6)); }), "format version 6 is newer than this RayCache reads (5)"));
+    // A format-5 file relabelled as format 3, 2 or 1 does not parse as one (format 3's tiles always carry
     // sixteen records, where this one's say none; formats 1 and 2 lack the cubes' 8 bytes of reach, so they
     // read them as the tile count and a tile).
     CHECK_FALSE(cache_file_error([&] { decode<CdctTexel>(with_version(bytes, 3)); }).empty());
@@ -269,12 +270,13 @@ std::vector<std::uint8_t> with_cube_float(const std::vector<std::uint8_t>& bytes
     std::memcpy(&bits, &value, 4);
     return with_cube_bits(bytes, offset, bits);
 }
-// Payload offsets of a CUBE chunk (format 4): its first tile's count of record blocks (after object,
+// Payload offsets of a CUBE chunk (format 5): its first tile's count of record blocks (after object,
 // part, face size, placement, reach, tile count; the tile's index, origin flag and box, nearest distance
-// and doubtful marks), then its first record block's flag, path flags and boxes, and the second's flag and
-// path flags (records are 64 bytes).
+// and doubtful marks), then its first record block's flag, path flags, boxes and cached reads, and the
+// second's flag and path flags (records are 72 bytes).
 constexpr std::size_t record_count = 116, first_block_flag = 120, first_block_path_flags = 124, first_block_boxes = 136;
-constexpr std::size_t second_block_flag = first_block_flag + 64, second_block_path_flags = first_block_path_flags + 64;
+constexpr std::size_t first_block_reads = first_block_boxes + 48;
+constexpr std::size_t second_block_flag = first_block_flag + 72, second_block_path_flags = first_block_path_flags + 72;
 } // namespace
 
 TEST_CASE("a format-1 file (saved before tiles kept their nearest hit distance) still loads, with no distances") {
@@ -361,6 +363,8 @@ TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded
     b.hit(six, glm::vec3(0.0f, 3.0f, 4.0f));
     b.chained = true;
     b.escaped(glm::vec3(0.0f, 0.0f, 1.0f));
+    b.track_cached_reads();
+    b.read_cached(glm::vec3(0.0f, 0.0f, 1.0f), glm::vec3(0.0f, 0.0f, 1.0f)); // a cube answered its bounce toward +z
     REQUIRE(cube.store(glm::vec3(1, 0, 0), glm::vec3(0.5f), a));
     REQUIRE(cube.store(glm::vec3(0, 1, 0), glm::vec3(0.25f), b));
     REQUIRE(cube.store(glm::vec3(0, 0, -1), glm::vec3(0.75f)));
@@ -380,6 +384,7 @@ TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded
         CAPTURE(i);
         CHECK(saved[i].objects == read[i].objects);
         CHECK(saved[i].path_flags == read[i].path_flags);
+        CHECK(saved[i].cached_reads == read[i].cached_reads);
         CHECK(saved[i].unrecorded_texels == read[i].unrecorded_texels);
         if (saved[i].objects) {
             ++recorded;
@@ -390,6 +395,9 @@ TEST_CASE("a loaded cube keeps its blocks' path records: a move that no recorded
         }
     }
     CHECK(recorded == 2);
+    // a tracked no cached read; b's read +Z's centre cell
+    CHECK(std::count_if(read.begin(), read.end(), [](const auto& s) { return s.cached_reads == raycache::every_direction_cell; }) >= 1);
+    CHECK(std::count_if(read.begin(), read.end(), [](const auto& s) { return s.cached_reads == raycache::direction_cell_bit(4, 1, 1); }) == 1);
     raycache::SceneChanges changes;
     changes.moved.push_back({six, {glm::vec3(40.0f, -40.0f, 40.0f), 0.5f}, {glm::vec3(40.0f, -40.0f, 41.0f), 0.5f}});
     changes.lights = {glm::vec3(0.0f, 100.0f, 0.0f)};
@@ -479,6 +487,12 @@ TEST_CASE("a block record that is not one is refused by name") {
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, first_block_path_flags, 8u)); }), "has path flags 8"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, std::nanf(""))); }),
                    "boxes are neither empty"));
+    // Cached reads name only the 54 direction cells; a block holding no record reads none.
+    REQUIRE(decode<CdctTexel>(with_cube_bits(one, first_block_reads + 4, 0x003FFFFFu)).size() == 1u); // bits 32 to 53
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, first_block_reads + 4, 0x00400000u)); }),
+                   "cached reads beyond the 54 direction cells"));
+    CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_bits(one, second_block_flag + 64, 1u)); }),
+                   "holds no record but is not all zero"));
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(with_cube_float(one, first_block_boxes, 5.0f)); }), // low > high
                    "boxes are neither empty"));
     // Hit points beyond 1e18 (invalidation's distances would overflow) and an escape box of no unit
@@ -488,6 +502,27 @@ TEST_CASE("a block record that is not one is refused by name") {
     std::vector<std::uint8_t> zero_escapes = one;
     for (std::size_t k = 0; k < 6; ++k) zero_escapes = with_cube_float(zero_escapes, first_block_boxes + 24 + 4 * k, 0.0f);
     CHECK(contains(cache_file_error([&] { decode<CdctTexel>(zero_escapes); }), "reaching the unit sphere"));
+}
+
+TEST_CASE("records of a format-4 file load as having read every direction cell, a format-5 file's as saved") {
+    // The fuzz seeds of both formats store one texel of each cube with a record (raycache_fuzz_make_seeds);
+    // the format-5 ones tracked its cached reads: one, toward +x (+X's centre cell). Blocks where random
+    // texels stored without a record sit beside it are written as holding none.
+    for (const int format : {4, 5}) {
+        CAPTURE(format);
+        const std::vector<std::uint8_t> bytes = seed_file("cdct-edge-tiles-format" + std::to_string(format));
+        const auto cubes = raycache::decode_cache<CdctTexel>(bytes.data(), bytes.size(), SceneIdentity{0x5eed5eed5eed5eedull, "fuzz"},
+                                                             nullptr, "cache data", true); // into cubes that keep records
+        REQUIRE_FALSE(cubes.empty());
+        int recorded = 0;
+        for (const auto& c : cubes)
+            c.cube->for_each_block_state([&](const CdctCube::BlockState& b) {
+                if (b.valid_texels == 0 || b.unrecorded_texels != 0) return;
+                ++recorded;
+                CHECK(b.cached_reads == (format == 4 ? raycache::every_direction_cell : raycache::direction_cell_bit(0, 1, 1)));
+            });
+        CHECK(recorded >= 1);
+    }
 }
 
 TEST_CASE("a record a file cannot hold (hit points not finite) is saved as none, so its texels count as having seen anything") {

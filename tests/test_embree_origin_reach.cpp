@@ -246,7 +246,7 @@ TEST_CASE("a scene cache without path records charges smaller tiles, and its exa
         CHECK(moved.dropped_unrecorded == (records ? 0u : 1u));
     }
     CHECK(bytes[true] - bytes[false] == raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false));
-    CHECK(raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false) == 4160u); // 64 records of 64 bytes and their union
+    CHECK(raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false) == 4680u); // 64 records of 72 bytes and their union
 }
 
 TEST_CASE("by default a scene cache keeps path records from its first exact move on, which empties its cubes once") {
@@ -315,13 +315,14 @@ TEST_CASE("by default a cache loads a file's path records when it holds any, and
 }
 
 TEST_CASE("a moved light is a first move too, afterwards unsized adaptive cubes start where tiles with records fit the budget") {
-    // As the adapter's budget test derives by hand, with t = tile + table entry: a budget of 960 t lets one
-    // cube start at 181 texels (864 t). With 1288-byte t (no records) that is 181; once records are kept
-    // (5448-byte t), the same bytes hold 226 of them: 91 (6 x 6^2 = 216 t) and not 128 (384 t).
+    // As the adapter's budget test derives by hand, with t = tile + table entry: a budget of 1100 t lets one
+    // cube start at 181 texels (6 x 12^2 = 864 t), not 256 (1536 t). With 1288-byte t (no records) that is
+    // 181; once records are kept (5968-byte t), the same bytes hold 237 of them: 91 (6 x 6^2 = 216 t) and
+    // not 128 (384 t).
     World w;
     const std::size_t alone = raycache::CctCube::tile_bytes(false) + sizeof(void*);
     SceneCacheSettings s;
-    s.budget_bytes = 960 * alone;
+    s.budget_bytes = 1100 * alone;
     SceneCache caches(Technique::cct, s);
     caches.attach(w.scene, {w.mirror}); // adaptive
     CHECK(caches.face_size({w.mirror}) == 181);

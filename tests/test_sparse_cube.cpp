@@ -30,24 +30,25 @@ const glm::vec3 grey(0.5f);
 // recorded masks (raycache/invalidation.hpp), four 64-bit masks of the texels holding a value from earlier
 // frames, and the path records: for each of the sixty-four 2 x 2 record
 // blocks a 64-bit Bloom mask of objects, the hit-point box and the escape-direction box (6 + 6 four-byte
-// values) and the path flags (4 bytes), padded to 64, then one more such record for the tile's union of
-// them; the whole padded to a multiple of 64.
+// values) and the path flags (4 bytes), padded to 64, and the 64-bit mask of the direction cells its
+// nested cached answers read: 72 bytes; then one more such record for the tile's union of them; the whole
+// padded to a multiple of 64.
 constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
 constexpr std::size_t written_line = round_up(4 * 8 + 4 * 8, 64);
 constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
 // The records live after the tile, in its allocation; the tile itself ends with the pointer to them.
-constexpr std::size_t records = (64 + 1) * round_up(8 + 6 * 4 + 6 * 4 + 4, 8); // and the tile's union
+constexpr std::size_t records = (64 + 1) * (round_up(8 + 6 * 4 + 6 * 4 + 4, 8) + 8); // and the tile's union
 constexpr std::size_t store_part_alone = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 4 * 8 + sizeof(void*);
 constexpr std::size_t cct_tile_alone = round_up(16 * 16 * 4 + written_line + lookup_line + store_part_alone, 64);
 constexpr std::size_t cdct_tile_alone = round_up(16 * 16 * 8 + written_line + lookup_line + store_part_alone, 64);
 constexpr std::size_t cct_tile = cct_tile_alone + records;
 constexpr std::size_t cdct_tile = cdct_tile_alone + records;
-static_assert(cct_tile == 5440 && cdct_tile == 6464, "the sizes the test's name gives");
+static_assert(cct_tile == 5960 && cdct_tile == 6984, "the sizes the test's name gives");
 static_assert(cct_tile_alone == 1280 && cdct_tile_alone == 2304, "the sizes without records the test's name gives");
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 2 x 2 block and their union, on cache lines by writer: 5440 bytes for the CCT, 6464 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 2 x 2 block and their union, on cache lines by writer: 5960 bytes for the CCT, 6984 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }
@@ -184,10 +185,10 @@ TEST_CASE("a budget that holds one tile refuses the second tile's stores, the fr
 
 TEST_CASE("cubes sharing a budget draw on it together") {
     const std::size_t fixed = CdctCube::fixed_bytes(16); // one tile a face: a table of 6 x 8 bytes, bitmaps, counters
-    auto budget = std::make_shared<MemoryBudget>(2 * fixed + 25904);
+    auto budget = std::make_shared<MemoryBudget>(2 * fixed + 28000);
     CdctCube a(16, budget), b(16, budget);
     CHECK(budget->used() == 2u * fixed);
-    // 25904 bytes left: four CDCT tiles (25856), not five (32320).
+    // 28000 bytes left: four CDCT tiles (27936), not five (34920).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});
@@ -336,4 +337,34 @@ TEST_CASE("under a full budget the texels a cube keeps are the same with one thr
         CHECK(run(4, seed) == reference);
         CHECK(run(1, seed) == reference);
     }
+}
+
+TEST_CASE("a texel's answer record is the union of its record block's paths, or unbounded when its store brought none") {
+    // Texels (0, 0) and (1, 1) of face +X share a 2 x 2 block; (0, 0) was stored with a path that hit object
+    // 3 at (2, 0, 0), (1, 1) with one that hit object 4 at (0, 5, 0) and cast a shadow ray; (4, 4) without a
+    // record. Both recorded texels answer with the block's union; (4, 4) with an unbounded record.
+    CctCube cube(16);
+    raycache::PathRecord three, four;
+    three.hit(3, glm::vec3(2, 0, 0));
+    four.hit(4, glm::vec3(0, 5, 0));
+    four.lit = true;
+    REQUIRE(cube.store_at(TexelAddress{0, 0, 0}, grey, three));
+    REQUIRE(cube.store_at(TexelAddress{0, 1, 1}, grey, four));
+    REQUIRE(cube.store_at(TexelAddress{0, 4, 4}, grey));
+    cube.begin_frame();
+    for (const TexelAddress t : {TexelAddress{0, 0, 0}, TexelAddress{0, 1, 1}}) {
+        const raycache::PathRecord r = cube.answer_record(t);
+        CHECK(r.objects == (raycache::object_bits(3) | raycache::object_bits(4)));
+        CHECK(r.vertex_lo == glm::vec3(0, 0, 0));
+        CHECK(r.vertex_hi == glm::vec3(2, 5, 0));
+        CHECK(r.lit);
+        CHECK_FALSE(r.unbounded);
+        CHECK(r.cached_reads == raycache::every_direction_cell); // neither path tracked its cached reads
+    }
+    CHECK(cube.answer_record(TexelAddress{0, 4, 4}).unbounded);
+    CHECK(cube.answer_record(TexelAddress{1, 4, 4}).unbounded); // no tile there
+    CctCube none(16, nullptr, false);
+    REQUIRE(none.store_at(TexelAddress{0, 0, 0}, grey, three));
+    none.begin_frame();
+    CHECK(none.answer_record(TexelAddress{0, 0, 0}).unbounded); // a cube without records knows nothing
 }

@@ -418,6 +418,7 @@ public:
         glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
         glm::vec3 escape_lo, escape_hi;  // box of their escaped bounces' unit directions; empty while lo.x > hi.x
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
+        std::uint64_t cached_reads;      // direction cells their nested cached answers read (PathRecord::cached_reads)
         int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
         int valid_texels;                // texels of the block holding a value (recorded or not)
 
@@ -426,8 +427,9 @@ public:
         bool unbounded() const noexcept { return (path_flags & path_unbounded) != 0; } // escaped with no bound
         // The block's union as one PathRecord (empty boxes as PathRecord keeps them), for merging.
         PathRecord record() const noexcept {
-            PathRecord r;
+            PathRecord r = PathRecord::empty();
             r.objects = objects;
+            r.cached_reads = cached_reads;
             if (vertex_lo.x <= vertex_hi.x) r.vertex_lo = vertex_lo, r.vertex_hi = vertex_hi;
             if (escape_lo.x <= escape_hi.x) r.escape_lo = escape_lo, r.escape_hi = escape_hi;
             set_path_flags(r, path_flags);
@@ -493,6 +495,7 @@ public:
             const PathUnion& r = tile->records ? tile->records[b] : none;
             t.objects = r.objects.load(std::memory_order_relaxed);
             t.path_flags = r.flags.load(std::memory_order_relaxed);
+            t.cached_reads = r.cached_reads.load(std::memory_order_relaxed);
             read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
             read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
             f(static_cast<const BlockState&>(t));
@@ -514,11 +517,27 @@ public:
         const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
         if (!tile) return std::nullopt;
         const TexelAddress first = first_texel_of_tile(i);
-        TileSummary s{first.face, first.column, first.row, false, glm::vec3(0.0f), glm::vec3(0.0f), has_unrecorded(*tile), PathRecord{}};
+        TileSummary s{first.face, first.column, first.row, false, glm::vec3(0.0f), glm::vec3(0.0f), has_unrecorded(*tile), PathRecord::empty()};
         s.has_origins = origins_of(*tile, s.origin_lo, s.origin_hi);
         if (tile->records) s.paths = record_of(tile->records[tile_union_slot]);
         return s;
     }
+    // What the value texel `t` answers with saw, as far as the cube knows, for a cached answer nested in
+    // another traced path (SceneCache::leaving_ray's `enclosing`): the union of the paths stored into its
+    // record block so far (a superset of its own store's: a union only grows until a move empties the
+    // block), so the enclosing path depends on it even after the texel itself is replaced; unbounded (any
+    // move may change it) when its store brought no record. During a frame, on any thread: it reads the
+    // block's atomics as they stand. `t` must lie on the cube (asserted).
+    PathRecord answer_record(const TexelAddress& t) const noexcept {
+        RAYCACHE_ASSERT(contains(t));
+        PathRecord unknown = PathRecord::empty();
+        unknown.unbounded = true;
+        if (!contains(t)) return unknown;
+        const Tile* tile = tile_of(t);
+        if (!tile || !tile->records || !recorded(*tile, slot_of(t))) return unknown;
+        return record_of(tile->records[block_of(t)]);
+    }
+
     // Makes tile `i`'s union `kept` after invalidation emptied some of its texels: the caller, which has
     // just read the tile's blocks, passes the union of those still holding a recorded texel (a union
     // missing any of their paths would let invalidation keep texels a move changed). Between frames only.
@@ -844,6 +863,7 @@ private:
         void clear() noexcept {
             objects.store(0, std::memory_order_relaxed);
             flags.store(0, std::memory_order_relaxed);
+            cached_reads.store(0, std::memory_order_relaxed);
             for (int k = 0; k < 3; ++k) {
                 vertex_min[k].store(0xFFFFFFFFu, std::memory_order_relaxed);
                 vertex_max[k].store(0u, std::memory_order_relaxed);
@@ -855,6 +875,7 @@ private:
         std::atomic<std::uint32_t> vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
         std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
         std::atomic<std::uint32_t> flags{0};                     // path_lit | path_chained | path_unbounded
+        std::atomic<std::uint64_t> cached_reads{0};              // direction cells of nested cached answers
     };
 
     struct Tile {
@@ -1310,13 +1331,16 @@ private:
         // A path that escaped from nowhere makes the union unbounded (PathRecord::merge's rule).
         const std::uint32_t flags = path_flags_of(path) | (path.escapes_from_nowhere() ? path_unbounded : 0u);
         if ((r.flags.load(std::memory_order_relaxed) & flags) != flags) r.flags.fetch_or(flags, std::memory_order_relaxed);
+        if ((r.cached_reads.load(std::memory_order_relaxed) & path.cached_reads) != path.cached_reads)
+            r.cached_reads.fetch_or(path.cached_reads, std::memory_order_relaxed);
         if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
         if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);
     }
     // A union as one PathRecord (empty boxes as PathRecord keeps them).
     static PathRecord record_of(const PathUnion& u) noexcept {
-        PathRecord r;
+        PathRecord r = PathRecord::empty();
         r.objects = u.objects.load(std::memory_order_relaxed);
+        r.cached_reads = u.cached_reads.load(std::memory_order_relaxed);
         set_path_flags(r, u.flags.load(std::memory_order_relaxed));
         glm::vec3 lo, hi;
         read_box(u.vertex_min, u.vertex_max, lo, hi);

@@ -1,7 +1,7 @@
 // raycache/cache_file.hpp: saving warm caching cubes to a file and loading them back, so that a walkthrough
 // starts warm (as engines bake their light probes) instead of losing its caches at exit.
 //
-// The file, format version 4 (versions 1 to 3 are read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
+// The file, format version 5 (versions 1 to 4 are read too). Little-endian throughout; every part carries an FNV-1a 64 checksum (fnv1a64
 // below, no library needed), so a truncated or corrupted file is refused, never half loaded.
 //
 //   prelude  "RAYCACHE" (8 bytes), u32 format version, u32 low half of fnv1a64 of those 12 bytes
@@ -19,7 +19,7 @@
 //            f32 the nearest hit distance of its stores (CacheCube::nearest_hit; infinity: none; not in
 //            format 1, whose tiles load without one and answer within the drift alone of an
 //            OriginTolerance until a store gives them a distance); u64 x 4, one bit a texel (slot = row * 16 + column, bit slot % 64 of word slot / 64): marked
-//            doubtful (CacheCube::is_doubtful; only texels holding a value); in format 4, u32 0 (no path
+//            doubtful (CacheCube::is_doubtful; only texels holding a value); in formats 4 and 5, u32 0 (no path
 //            record: every texel counts as stored without one) or 64, and then the path records of its
 //            sixty-four 2 x 2 record blocks (block = (row / 2) * 8 + column / 2); in format 3, always the
 //            records of sixteen 4 x 4 blocks (block = (row / 4) * 4 + column / 4), which a loaded cube's
@@ -28,7 +28,9 @@
 //            rest zero: such texels count as having seen everything), u32 flags (1 lit, 2 chained, 4
 //            unbounded), u64 the objects' Bloom mask, f32 x 6 the box of the paths' hit points and f32 x 6
 //            the box of their escaped directions (low and high corners; empty: +infinity x 3 then
-//            -infinity x 3; else finite, low <= high); and its 16 x 16 words row by
+//            -infinity x 3; else finite, low <= high), and in format 5 (a record of 72 bytes) u64 the
+//            direction cells their nested cached answers read (PathRecord::cached_reads: bits 0 to 53;
+//            records of formats 3 and 4 load with all 54, as having read everywhere); and its 16 x 16 words row by
 //            row (texels past the face's edge, and empty texels, hold the technique's empty word; any other
 //            word must be valid)
 //   "END "   u32 cube count; nothing may follow
@@ -94,7 +96,7 @@ struct SceneIdentity {
     std::string name;
 };
 
-inline constexpr std::uint32_t cache_file_version = 4;
+inline constexpr std::uint32_t cache_file_version = 5;
 
 inline constexpr std::uint64_t fnv1a64_basis = 14695981039346656037ull;
 
@@ -337,7 +339,7 @@ struct CubeRecord {
 inline constexpr int file_record_blocks = 64;       // 8 x 8 blocks of 2 x 2 texels a tile (format 4)
 inline constexpr int format3_record_edge = 4;        // format 3: 4 x 4 blocks of 4 x 4 texels
 inline constexpr int format3_record_blocks = 16;
-inline constexpr std::size_t file_record_bytes = 64; // one block's path record
+inline constexpr std::size_t file_record_bytes = 64; // one block's path record (formats 3 and 4; format 5: 72)
 static_assert(CacheCube<CctTexel>::tile_edge == file_tile_edge && CacheCube<CctTexel>::record_blocks == file_record_blocks &&
                   CacheCube<CctTexel>::path_lit == 1u && CacheCube<CctTexel>::path_chained == 2u &&
                   CacheCube<CctTexel>::path_unbounded == 4u,
@@ -396,8 +398,8 @@ inline bool is_file_record(const PathRecord& r) noexcept {
     return is_file_box(r.vertex_lo, r.vertex_hi, false) && is_file_box(r.escape_lo, r.escape_hi, true);
 }
 
-// Reads one block's record (format 3).
-inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int block) {
+// Reads one block's record (format 3 on; cached reads from format 5 on).
+inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int block, std::uint32_t version) {
     BlockRecord b;
     const std::uint32_t recorded = r.u32("a block's record flag");
     const std::uint32_t flags = r.u32("a block's path flags");
@@ -405,16 +407,18 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
     glm::vec3 box[4] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
     for (glm::vec3& corner : box)
         for (int k = 0; k < 3; ++k) corner[k] = r.f32("a block's boxes");
+    const std::uint64_t reads = version >= 5 ? r.u64("a block's cached reads") : every_direction_cell;
     const std::string where = "block " + std::to_string(block) + " of tile " + std::to_string(tile);
     if (recorded > 1) r.fail(where + " has record flag " + std::to_string(recorded) + " (0 or 1)");
     if (recorded == 0) {
-        bool zero = flags == 0 && objects == 0;
+        bool zero = flags == 0 && objects == 0 && (version < 5 || reads == 0);
         for (const glm::vec3& corner : box) zero = zero && glm::floatBitsToUint(corner) == glm::uvec3(0u);
         if (!zero) r.fail(where + " holds no record but is not all zero");
         return b;
     }
     if (flags & ~CacheCube<CctTexel>::all_path_flags)
         r.fail(where + " has path flags " + std::to_string(flags) + " (1 lit, 2 chained, 4 unbounded)");
+    if (reads & ~every_direction_cell) r.fail(where + " has cached reads beyond the 54 direction cells");
     if (!is_file_box(box[0], box[1], false) || !is_file_box(box[2], box[3], true))
         r.fail(where + "'s boxes are neither empty (+inf, -inf) nor low <= high within bounds (hit points within 1e18, "
                        "escape directions within [-1, 1] and reaching the unit sphere)");
@@ -422,6 +426,7 @@ inline BlockRecord read_block_record(ByteReader& r, std::uint32_t tile, int bloc
     b.record.objects = objects;
     b.record.vertex_lo = box[0], b.record.vertex_hi = box[1];
     b.record.escape_lo = box[2], b.record.escape_hi = box[3];
+    b.record.cached_reads = reads;
     CacheCube<CctTexel>::set_path_flags(b.record, flags);
     return b;
 }
@@ -446,13 +451,13 @@ inline TileHeader read_tile_header(ByteReader& r, std::uint32_t version) {
     for (std::uint64_t& bits : h.doubtful) bits = r.u64("a tile's doubtful marks");
     if (version == 3) {
         h.record_edge = format3_record_edge;
-        for (int b = 0; b < format3_record_blocks; ++b) h.blocks[b] = read_block_record(r, h.index, b);
+        for (int b = 0; b < format3_record_blocks; ++b) h.blocks[b] = read_block_record(r, h.index, b, version);
     } else if (version >= 4) {
         const std::uint32_t count = r.u32("a tile's count of record blocks");
         if (count != 0 && count != file_record_blocks)
             r.fail("tile " + std::to_string(h.index) + " has " + std::to_string(count) + " record blocks (0 or " +
                    std::to_string(file_record_blocks) + ")");
-        for (std::uint32_t b = 0; b < count; ++b) h.blocks[b] = read_block_record(r, h.index, static_cast<int>(b));
+        for (std::uint32_t b = 0; b < count; ++b) h.blocks[b] = read_block_record(r, h.index, static_cast<int>(b), version);
     }
     return h;
 }
@@ -685,6 +690,7 @@ std::vector<std::uint8_t> encode_cache(const SceneIdentity& scene, const std::ve
                 w.u64(b.recorded ? b.record.objects : 0);
                 for (const glm::vec3& corner : {b.record.vertex_lo, b.record.vertex_hi, b.record.escape_lo, b.record.escape_hi})
                     for (int k = 0; k < 3; ++k) w.f32(b.recorded ? corner[k] + 0.0f : 0.0f);
+                w.u64(b.recorded ? b.record.cached_reads : 0);
             }
             for (int slot = 0; slot < static_cast<int>(detail::file_tile_texels); ++slot) {
                 const TexelAddress t = detail::tile_texel(index, slot, n);
