@@ -627,6 +627,25 @@ TEST_CASE("a move naming one primitive moves only the cube of its range, one nam
     }
 }
 
+namespace {
+// Caches that keep path records from the start, with no origin test, no confidence test and no resting,
+// so that each store and move does only what the transitive tests below derive; with cubes of 8-texel faces
+// for mirrors A (id 10, at the origin) and B (id 11, at (4, 0, 0)), half-size 1 (attach_a_and_b).
+raycache::embree::SceneCacheSettings transitive_test_settings(bool transitive_by_direction = true) {
+    raycache::embree::SceneCacheSettings settings;
+    settings.path_records = raycache::embree::PathRecords::always;
+    settings.origin_drift = -1.0f;
+    settings.edge_threshold = -1.0f;
+    settings.min_hit_rate = 0.0f;
+    settings.transitive_by_direction = transitive_by_direction;
+    return settings;
+}
+void attach_a_and_b(SceneCache& caches) {
+    caches.attach({10}, 8, raycache::CubeBounds{glm::vec3(0.0f), 1.0f});
+    caches.attach({11}, 8, raycache::CubeBounds{glm::vec3(4, 0, 0), 1.0f});
+}
+} // namespace
+
 TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube it reads has changed") {
     // Mirrors A (id 10, at the origin) and B (id 11, at (4, 0, 0)) and an uncached ball X (id 12) at
     // (3.3, 5, 0), radius 0.5, which moves straight up to (3.3, 30, 0). B holds one texel whose path hit X;
@@ -634,14 +653,8 @@ TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube
     // answered, as the tracer records it). X's move empties A's first texel and B's by their paths, so both
     // cubes change; A's second texel read B, which changed, so it must go too, though A itself lost texels
     // in the same pass. (A review found it kept: transitive passes tested only cubes that had not changed.)
-    raycache::embree::SceneCacheSettings settings;
-    settings.path_records = raycache::embree::PathRecords::always;
-    settings.origin_drift = -1.0f;
-    settings.edge_threshold = -1.0f;
-    settings.min_hit_rate = 0.0f;
-    SceneCache caches(Technique::cct, settings);
-    caches.attach({10}, 8, raycache::CubeBounds{glm::vec3(0.0f), 1.0f});
-    caches.attach({11}, 8, raycache::CubeBounds{glm::vec3(4, 0, 0), 1.0f});
+    SceneCache caches(Technique::cct, transitive_test_settings());
+    attach_a_and_b(caches);
     const std::uint64_t a = raycache::embree::path_key({10}), b = raycache::embree::path_key({11}), x = raycache::embree::path_key({12});
     REQUIRE((raycache::object_bits(b) & raycache::object_bits(x)) == 0u); // B's hits never read as X's
     REQUIRE((raycache::object_bits(a) & raycache::object_bits(x)) == 0u);
@@ -663,6 +676,126 @@ TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube
     CHECK(s.dropped_transitively == 1u);
     CHECK(s.dropped == 3u);
     CHECK(caches.statistics().valid_texels == 0u);
+}
+
+TEST_CASE("exact invalidation keeps a path that read a changed cube only where that cube kept its texels") {
+    // Mirrors A (id 10, at the origin) and B (id 11, at (4, 0, 0)) and an uncached ball X (id 12) at
+    // (3.3, 5, 0), radius 0.5, which moves straight up to (3.3, 30, 0). B holds two texels, whose paths hit
+    // only a far uncached wall W (id 13): toward (-0.2, 1, 0) (face +Y, sc = x / y = -0.2, the centre cell;
+    // X, at sc = -0.7 / 5 from B's centre, lies in its cone) and toward +z. A then stores two texels toward
+    // +x, each traced by a path that hit B and whose bounce off B was answered by B's cube, one from each of
+    // B's texels: the tracer passes A's record to that nested leaving ray (`enclosing`), so A's records hold
+    // the cells B's cube was read in, and what the answering texels' paths saw (W). X's move empties B's
+    // first texel by its cone, and A's first texel, which read it, transitively; A's second read B only
+    // toward +z, where B kept its texel, so it stays. (Records that did not track their cached reads would
+    // lose both: the test before this one; so do they with SceneCacheSettings::transitive_by_direction off.)
+    for (const bool by_direction : {true, false}) {
+        CAPTURE(by_direction);
+        SceneCache caches(Technique::cct, transitive_test_settings(by_direction));
+        attach_a_and_b(caches);
+        const std::uint64_t b = raycache::embree::path_key({11}), x = raycache::embree::path_key({12}), w = raycache::embree::path_key({13});
+        REQUIRE((raycache::object_bits(b) & raycache::object_bits(x)) == 0u);
+        REQUIRE((raycache::object_bits(w) & raycache::object_bits(x)) == 0u);
+        const glm::vec3 to_x = glm::normalize(glm::vec3(-0.2f, 1, 0)), to_wall = glm::normalize(glm::vec3(0.05f, 0.05f, 1));
+        auto traced_b = [&](std::uint64_t hit, glm::vec3 point) {
+            return [=](raycache::PathRecord& path) {
+                path.track_cached_reads(); // (they read no cube)
+                path.hit(hit, point);
+                return TracedRay{glm::vec3(0.5f), 5.0f};
+            };
+        };
+        caches.leaving_ray({11}, {4, 1, 0}, to_x, traced_b(w, {3.5f, 40.0f, 0}));
+        caches.leaving_ray({11}, {4, 0, 1}, to_wall, traced_b(w, {4.2f, 0.2f, 40}));
+        caches.begin_frame();
+        REQUIRE(caches.statistics().valid_texels == 2u);
+        int b_traced = 0;
+        auto store_a = [&](glm::vec3 d, glm::vec3 b_point, glm::vec3 b_direction) {
+            caches.leaving_ray({10}, {1, 0, 0}, glm::normalize(d), [&](raycache::PathRecord& path) {
+                path.track_cached_reads();
+                path.hit(b, b_point);
+                // The bounce off B: B's cube answers it (the trace below must not run), noted in A's record.
+                caches.leaving_ray({11}, b_point, b_direction, [&](raycache::PathRecord&) {
+                    ++b_traced;
+                    return TracedRay{glm::vec3(0.0f), 1.0f};
+                }, &path);
+                return TracedRay{glm::vec3(0.5f), glm::length(b_point - glm::vec3(1, 0, 0))};
+            });
+        };
+        store_a({1, 0.05f, 0.05f}, {3.0f, 0.1f, 0.1f}, to_x);
+        store_a({1, -0.05f, -0.2f}, {3.0f, -0.1f, -0.3f}, to_wall);
+        CHECK(b_traced == 0);
+        caches.begin_frame();
+        REQUIRE(caches.statistics().valid_texels == 4u);
+        SceneChange change;
+        change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
+        const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+        CHECK(s.dropped_by_cone == 1u);      // B's texel toward X
+        CHECK(s.dropped_by_path == 0u);
+        CHECK(s.dropped_transitively == (by_direction ? 1u : 2u)); // A's texel that read it (and the other)
+        CHECK(s.dropped == (by_direction ? 2u : 3u));
+        CHECK(caches.statistics().valid_texels == (by_direction ? 2u : 1u));
+        auto answered = [&](unsigned id, glm::vec3 o, glm::vec3 d) {
+            bool traced = false;
+            caches.leaving_ray({id}, o, glm::normalize(d), [&] {
+                traced = true;
+                return TracedRay{glm::vec3(0.0f), 1.0f};
+            });
+            return !traced;
+        };
+        CHECK(answered(11, {4, 0, 1}, to_wall));
+        CHECK_FALSE(answered(11, {4, 1, 0}, to_x));
+        CHECK(answered(10, {1, 0, 0}, {1, -0.05f, -0.2f}) == by_direction);
+        CHECK_FALSE(answered(10, {1, 0, 0}, {1, 0.05f, 0.05f}));
+    }
+}
+
+TEST_CASE("a cached answer nested in a traced path brings what the answering texel's path saw into that path's record") {
+    // Mirror B (id 11, at (4, 0, 0)) holds a texel toward +z whose path hit the uncached ball X (id 12) at
+    // (4, 3, 6) and cast a shadow ray (its ray, from (4, 0, 1), hit 5 further on: the CDCT stores the point
+    // (4, 0, 6)); mirror A's (id 10) traced path hits B, whose cube answers the bounce: for the CCT a ray
+    // toward +z from (3, 0, 0), for the CDCT one from (4, 0, 0.9), whose search meets the stored point. A's
+    // record then holds B's texel's hits and shadow ray, as if A's trace had followed the bounce itself,
+    // and the cell B's cube was read in (+Z's centre: for the CDCT, the cone from the centre through the
+    // box exit (4, 0, 1) and on along +z). When X moves, A's texel goes with B's by their paths (and would
+    // even if B's texel had since been replaced, which a test of B's cube alone at the move could not know).
+    for (const Technique technique : {Technique::cct, Technique::cdct}) {
+        CAPTURE(static_cast<int>(technique));
+        const bool cdct = technique == Technique::cdct;
+        SceneCache caches(technique, transitive_test_settings());
+        attach_a_and_b(caches);
+        const std::uint64_t b = raycache::embree::path_key({11}), x = raycache::embree::path_key({12});
+        const glm::vec3 up_z(0, 0, 1);
+        caches.leaving_ray({11}, {4, 0, 1}, up_z, [&](raycache::PathRecord& path) {
+            path.track_cached_reads(); // (it read no cube)
+            path.hit(x, {4, 3, 6});
+            path.lit = true;
+            return TracedRay{glm::vec3(0.5f), 5.0f};
+        });
+        caches.begin_frame();
+        raycache::PathRecord seen;
+        int b_traced = 0;
+        const glm::vec3 b_point = cdct ? glm::vec3(4, 0, 0.9f) : glm::vec3(3, 0, 0);
+        caches.leaving_ray({10}, {1, 0, 0}, glm::vec3(1, 0, 0), [&](raycache::PathRecord& path) {
+            path.track_cached_reads();
+            path.hit(b, b_point);
+            caches.leaving_ray({11}, b_point, up_z, [&] { return ++b_traced, TracedRay{glm::vec3(0.0f), 1.0f}; }, &path);
+            seen = path;
+            return TracedRay{glm::vec3(0.5f), 2.0f};
+        });
+        REQUIRE(b_traced == 0); // B's cube answered
+        CHECK(seen.objects == (raycache::object_bits(b) | raycache::object_bits(x)));
+        CHECK(seen.lit);
+        CHECK(seen.vertex_lo == glm::min(b_point, glm::vec3(4, 3, 6)));
+        CHECK(seen.vertex_hi == glm::max(b_point, glm::vec3(4, 3, 6)));
+        CHECK(seen.cached_reads == raycache::direction_cell_bit(RAYCACHE_FACE_POSITIVE_Z, 1, 1));
+        caches.begin_frame();
+        SceneChange change;
+        change.lights = {glm::vec3(4, 20, 20)};
+        change.moved.push_back({ObjectId{12}, BoundingSphere{{4, 3, 6}, 0.5f}, BoundingSphere{{4, 3.5f, 6}, 0.5f}, std::nullopt});
+        const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+        CHECK(s.dropped_by_path == 2u);
+        CHECK(s.dropped == 2u);
+    }
 }
 
 TEST_CASE("two objects in one triangle geometry get a cube each, and a hit's primID finds its object's cube") {

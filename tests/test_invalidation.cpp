@@ -282,6 +282,52 @@ TEST_CASE("the path tests report every test that met, repeat only the tests aske
     CHECK(paths_meeting(path, changes, every_path_test, true) == path_test_moved); // the first in order
 }
 
+TEST_CASE("a changed cached object meets a path only where the path's cached answers read its cube") {
+    // A path hit cached object 4 at (5, 0, 0), whose cube answered its bounce toward +z (+Z's centre
+    // cell). Object 4's cube lost texels: in +Z's centre cell, it meets; only on +X, it does not; as a
+    // whole (every cell), it does. A path that did not track its cached reads meets wherever 4 changed.
+    using namespace raycache::detail;
+    PathRecord tracked = saw(4);
+    tracked.track_cached_reads();
+    tracked.read_cached(glm::vec3(0, 0, 1), glm::vec3(0, 0, 1));
+    const PathRecord untracked = saw(4);
+    auto changed = [](std::uint64_t cells) {
+        raycache::SceneChanges c;
+        c.changed.push_back({4, cells});
+        return c;
+    };
+    const std::uint64_t plus_x = raycache::direction_cells_of_box(glm::vec3(1, -1, -1), glm::vec3(1, 1, 1)); // all of +X
+    CHECK(paths_meeting(tracked, changed(raycache::direction_cell_bit(4, 1, 1))) == path_test_changed);
+    CHECK(paths_meeting(tracked, changed(plus_x)) == 0u);
+    CHECK(paths_meeting(tracked, changed(raycache::every_direction_cell)) == path_test_changed);
+    CHECK(paths_meeting(untracked, changed(plus_x)) == path_test_changed);
+    // Another object's change in the cell the path read: not this path's (its mask names 4 alone).
+    REQUIRE((raycache::object_bits(4) & raycache::object_bits(5)) != raycache::object_bits(5));
+    raycache::SceneChanges other;
+    other.changed.push_back({5, raycache::direction_cell_bit(4, 1, 1)});
+    CHECK(paths_meeting(tracked, other) == 0u);
+    // Both listed: the one the path read where it changed meets.
+    other.changed.push_back({4, raycache::direction_cell_bit(4, 1, 1)});
+    CHECK(paths_meeting(tracked, other) == path_test_changed);
+}
+
+TEST_CASE("a pass reports the direction cells of the texels it emptied, each grown by a texel") {
+    // Two texels of face +X of a 16-texel cube, each in a block of its own: (1, 1) (sc, tc near -1: its
+    // block's texels 0..1, grown to -1..2, span sc and tc in [-1.125, -0.625]: cell (0, 0) of +X, and over
+    // the face's edges the cells of +Y and +Z touching that corner) saw object 9, which moves far along -X;
+    // (8, 8) (the centre cell) saw object 7, which stays. Only the first goes, and only its cells are named.
+    CctCube cube(16);
+    REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 1, 1}, glm::vec3(0.25f), saw(9)));
+    REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, 8, 8}, glm::vec3(0.25f), saw(7)));
+    cube.begin_frame();
+    const raycache::InvalidationCounts counts = raycache::invalidate_changes(cube, {box, -1.0f}, far_along_minus_x(9));
+    CHECK(counts.dropped == 1);
+    // +X (face 0): sc = -z, tc = -y near -1, so the corner direction (1, 1, 1); its cells on +Y (2): sc = x,
+    // tc = z near +1: (2, 2); on +Z (4): sc = x near 1, tc = -y near -1: (2, 0).
+    const std::uint64_t corner = raycache::direction_cell_bit(0, 0, 0) | raycache::direction_cell_bit(2, 2, 2) | raycache::direction_cell_bit(4, 2, 0);
+    CHECK(counts.changed_cells == corner);
+}
+
 TEST_CASE("a block whose paths include escapes with no hit point to start from goes at any move") {
     // Two texels of one 2 x 2 block of face +X: one path hit object 7 at (5, 0, 0) and stopped, the other
     // escaped along +X with no hit recorded before it (no bound on where it started). Object 9 moves far out

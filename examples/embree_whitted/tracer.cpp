@@ -216,8 +216,10 @@ struct Shader {
         case CacheMode::cdct:
             // Cubes that keep no path records (a scene that has not moved yet) need none built.
             if (!records_kept) return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, trace_leaving);
-            // The recording form: the cache learns what the traced path saw (for exact invalidation).
+            // The recording form: the cache learns what the traced path saw (for exact invalidation), and
+            // an enclosing cached path (`record`) learns where this cube answered it, if it did.
             return caches->leaving_ray(raycache::embree::ObjectId{geom, inst}, origin, direction, [&](raycache::PathRecord& path) {
+                path.track_cached_reads(); // every leaving ray nested in it passes it as `enclosing`
                 raycache::PathRecord* const outer = record;
                 const int outer_depth = record_depth;
                 record = &path;
@@ -231,7 +233,7 @@ struct Shader {
                     else outer->chained = true;
                 }
                 return traced;
-            });
+            }, record);
         }
         return trace_leaving().color;
     }

@@ -172,16 +172,18 @@ inline bool store_traced(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, c
 // hit (raycache/path_record.hpp), stored with the texel so exact invalidation can keep it when nothing it
 // saw moved. `texels_read`, when given, receives the search's texel count.
 // `pyramid`, when given, speeds up the relief search (see relief_search); the secant search needs none.
+// `found`, when given, receives the search's outcome (on a hit, where it met the cached surface).
 template <class Trace>
 glm::vec3 cdct_cached_trace(CacheCube<CdctTexel>& cube, const CubeBounds& bounds, const glm::vec3& origin,
                             const glm::vec3& direction, const ReliefParameters& p, Trace&& trace,
-                            int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr) {
+                            int* texels_read = nullptr, const DepthPyramid* pyramid = nullptr, ReliefResult* found_out = nullptr) {
     constexpr bool records = std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>;
     static_assert(records || std::is_invocable_r_v<TracedRay, Trace&>,
                   "RayCache cdct_cached_trace: trace must be callable as `TracedRay trace()` or `TracedRay trace(raycache::PathRecord&)`");
     const auto use = cube.in_frame();
     const ReliefResult found = depth_search(cube, bounds, origin, direction, p, pyramid);
     if (texels_read) *texels_read = found.texels_read;
+    if (found_out) *found_out = found;
     if (found.hit) return found.color;
     PathRecord path;
     const TracedRay traced = [&] {

@@ -53,11 +53,12 @@ public:
     // Algorithm 1: the search the parameters name answers when it can; otherwise trace() (`TracedRay
     // trace()`, or `TracedRay trace(PathRecord&)` to record what the path saw for exact invalidation) runs,
     // what it brought back is stored (store()) and its colour returned. `texels_read`, when given, receives
-    // the search's texel count. Thread-safe.
+    // the search's texel count, `found` its outcome. Thread-safe.
     template <class Trace>
-    glm::vec3 cached_trace(const glm::vec3& origin, const glm::vec3& direction, Trace&& trace, int* texels_read = nullptr) {
+    glm::vec3 cached_trace(const glm::vec3& origin, const glm::vec3& direction, Trace&& trace, int* texels_read = nullptr,
+                           ReliefResult* found = nullptr) {
         return cdct_cached_trace(*cube_, bounds_, origin, direction, parameters_, std::forward<Trace>(trace), texels_read,
-                                 pyramid_.get());
+                                 pyramid_.get(), found);
     }
 
     // The search alone (depth_search over the pyramid): one lookup counted. Thread-safe.

@@ -44,6 +44,7 @@
 #include "raycache/cache_cube.hpp"
 #include "raycache/cdct.hpp"
 #include "raycache/cdct_cache.hpp"
+#include "raycache/direction_cells.hpp"
 #include "raycache/path_record.hpp"
 #include "raycache/shared/cone_sphere.h"
 
@@ -62,9 +63,16 @@ struct SceneChanges {
         BoundingSphere before, after;
     };
     std::vector<Move> moved;
-    // Objects whose appearance changed without their shape moving (a cached mirror whose cube changed):
-    // texels whose paths hit them are emptied; no geometric test.
-    std::vector<std::uint64_t> changed;
+    // An object whose appearance changed without its shape moving: a cached mirror whose cube lost texels,
+    // in the direction cells `cells` (raycache/direction_cells.hpp; every cell: it changed as a whole).
+    struct Changed {
+        Changed(std::uint64_t key, std::uint64_t cells = every_direction_cell) noexcept : key(key), cells(cells) {}
+        std::uint64_t key; // the object's key in the PathRecords
+        std::uint64_t cells;
+    };
+    // Texels whose paths hit such an object are emptied when their paths' cached answers read a cell of it
+    // that changed (PathRecord::cached_reads: every cell unless the tracer noted them); no geometric test.
+    std::vector<Changed> changed;
     // The point lights as they are now (as they were when the texels were stored, unless light_moved).
     std::vector<glm::vec3> lights;
     bool light_moved = false;
@@ -115,6 +123,8 @@ struct InvalidationCounts {
     std::size_t blocks_by_path = 0;  // blocks emptied whole by their path records
     std::size_t blocks_by_texel = 0; // blocks whose rays (their cone; a CDCT's, up to where its texels' rays
                                      // end) can meet a moved sphere, so each texel was tested
+    std::uint64_t changed_cells = 0; // the direction cells of the texels emptied, each grown by a texel
+                                     // (direction_cells_of_texels): where lookups may now read otherwise
 };
 
 namespace detail {
@@ -208,7 +218,7 @@ bool texel_rays_meet(const OriginBall& ball, ConeOf&& cone_of, const std::vector
 enum PathTest : unsigned {
     path_test_unbound = 1u << 0, // escapes with no bound on where they went (or started)
     path_test_light = 1u << 1,   // a moved light, and the paths hit something
-    path_test_changed = 1u << 2, // a changed object among the objects hit
+    path_test_changed = 1u << 2, // a changed object among the objects hit, read where it changed
     path_test_moved = 1u << 3,   // a moved object among them
     path_test_between = 1u << 4, // bounces between hit points: a moved sphere in their box
     path_test_shadow = 1u << 5,  // shadow rays: a moved sphere on the segments from the hit points to a light
@@ -235,8 +245,8 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         return (t.objects & bits) == bits;
     };
     if (tests & path_test_changed)
-        for (std::uint64_t key : changes.changed)
-            if (tagged(key)) {
+        for (const SceneChanges::Changed& c : changes.changed)
+            if ((t.cached_reads & c.cells) != 0 && tagged(c.key)) {
                 if (meets(path_test_changed)) return met;
                 break;
             }
@@ -380,6 +390,7 @@ public:
             counts.dropped_unrecorded += r.dropped_unrecorded;
             counts.blocks_by_path += r.blocks_by_path;
             counts.blocks_by_texel += r.blocks_by_texel;
+            counts.changed_cells |= r.changed_cells;
         }
         if (finished_) finished_(counts);
         return counts;
@@ -406,7 +417,7 @@ private:
         return static_cast<std::size_t>(b / per_side / group_edge * groups_per_side + b % per_side / group_edge);
     }
     struct Group {
-        PathRecord paths; // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
+        PathRecord paths = PathRecord::empty(); // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
         bool any = false;
     };
     struct Reached { // a recorded texel's reach, from its block's shell walk
@@ -420,6 +431,13 @@ private:
         std::array<PathRecord, CacheCube<Texel>::record_blocks> records; // blocks[i]'s, converted once
         std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
     };
+
+    // Adds the cells of block `t` to what the pass changed when it emptied `dropped` of its texels (the whole
+    // block's cells: a block is 2 x 2 texels, and the cells are far coarser).
+    void note_changed_cells(InvalidationCounts& c, const Block& t, std::size_t dropped) const noexcept {
+        if (dropped == 0 || c.changed_cells == every_direction_cell) return;
+        c.changed_cells |= direction_cells_of_texels(t.face, t.column0, t.row0, t.column1, t.row1, n_);
+    }
 
     // Tile `index`, its blocks read here (on the run's thread) into `scratch`, counted into `c`.
     void tile(std::size_t index, InvalidationCounts& c, Scratch& scratch) {
@@ -477,6 +495,7 @@ private:
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
                 c.dropped_by_path += d;
+                note_changed_cells(c, t, d);
                 continue;
             }
             const bool any_recorded = t.valid_texels > t.unrecorded_texels;
@@ -517,7 +536,7 @@ private:
                 keeps_recorded[i] = true;
                 continue;
             }
-            c.dropped += cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
+            const std::size_t d = cube.invalidate_in_block(t, [&](const TexelAddress& a, bool recorded) {
                 if (!recorded) return ++c.dropped_unrecorded, true; // nothing known about the rest of its path
                 const bool meets = cone_meets && texel_rays_meet(ball, [&] { return shared::raycache_texel_cone(a.face, a.column, a.row, n); },
                                                                  changes.moved, cube_ball_, reach_of(a));
@@ -525,9 +544,11 @@ private:
                 keeps_recorded[i] = keeps_recorded[i] || !meets;
                 return meets;
             });
+            c.dropped += d;
+            note_changed_cells(c, t, d);
         }
         if (c.dropped != dropped_before) { // emptied blocks' paths leave the tile's union
-            PathRecord kept;
+            PathRecord kept = PathRecord::empty();
             for (std::size_t i = 0; i < count; ++i)
                 if (keeps_recorded[i]) kept.merge(records[i]);
             cube.retighten_tile_union(index, kept);
@@ -666,7 +687,7 @@ void carry_path_records(const CacheCube<Texel>& from, CacheCube<Texel>& to) {
     // cube's block spans several old ones), then one over the new blocks: nothing of `from` is copied (an
     // adaptive cube after a cold frame holds ~1500 sparse tiles); the unions take ~72 bytes a new block.
     struct Union {
-        PathRecord record;
+        PathRecord record = PathRecord::empty();
         bool any = false, unknown = false; // unknown: an overlapping old block held unrecorded texels
     };
     const int to_per_edge = (to.face_size() + edge - 1) / edge;

@@ -158,6 +158,12 @@ struct SceneCacheSettings {
     std::size_t budget_bytes = std::size_t{256} << 20; // texel tiles of all cubes together
     // When the cubes keep what their stores' paths saw (PathRecords).
     PathRecords path_records = PathRecords::from_first_move;
+    // Exact invalidation's transitive step, for paths that hit a cached object whose cube lost texels: true,
+    // such a path goes only when the cube lost texels in a direction cell its cached answers read it in
+    // (raycache/direction_cells.hpp; paths that track them, PathRecord::track_cached_reads); false, it goes
+    // whenever the cube lost any texel, which also drops texels that other rays than the stored one answer
+    // through that object's reflections (Results: "Dynamic scenes" says what each keeps and leaves).
+    bool transitive_by_direction = true;
     // Diagnostics: a ray the cube answers is traced anyway and its traced colour returned, while the cubes
     // work as usual (looked up, counted, filled on misses, ended). Frames then equal uncached ones, and what
     // they take beyond an uncached frame is the cache's own work. (Rays leaving cached objects inside such a
@@ -455,7 +461,7 @@ public:
         : technique_(technique), relief_(settings.relief), use_pyramid_(settings.depth_pyramid),
           adaptive_(settings.adaptive), filtered_(settings.filtered), edge_threshold_(settings.edge_threshold),
           origin_drift_(settings.origin_drift), origin_parallax_(settings.origin_parallax), path_records_(settings.path_records == PathRecords::always),
-          record_policy_(settings.path_records), trace_hits_(settings.trace_hits), min_hit_rate_(settings.min_hit_rate.value_or(default_min_hit_rate(technique))),
+          record_policy_(settings.path_records), transitive_by_direction_(settings.transitive_by_direction), trace_hits_(settings.trace_hits), min_hit_rate_(settings.min_hit_rate.value_or(default_min_hit_rate(technique))),
           threshold_from_work_(!settings.min_hit_rate), lookup_work_(settings.lookup_work.value_or(default_lookup_work(technique))),
           budget_(std::make_shared<MemoryBudget>(settings.budget_bytes)), first_face_size_(settings.adaptive.first_face_size) {
         validate(relief_);
@@ -568,11 +574,24 @@ public:
     // scene_changed() can keep what a move cannot have changed. It runs on a miss; its colour is returned
     // unchanged (under SceneCacheSettings::trace_hits it runs on a hit too, and its colour is returned).
     // Objects without a cube: returns trace().color. Thread-safe.
+    // enclosing: for a ray nested in the trace of another cached ray (a bounce of its path), that path's
+    // record: when this cube answers the ray, the directions its texels were read in are noted there
+    // (PathRecord::read_cached), so exact invalidation keeps the enclosing path's texel when this cube loses
+    // texels only elsewhere. A tracer that passes it for every nested leaving ray calls
+    // PathRecord::track_cached_reads() at the start of its recording trace; null: nothing noted.
     template <class Trace>
-    glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
+    glm::vec3 leaving_ray(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace,
+                          PathRecord* enclosing = nullptr) {
         static_assert(std::is_invocable_r_v<TracedRay, Trace&> || std::is_invocable_r_v<TracedRay, Trace&, PathRecord&>,
                       "RayCache SceneCache::leaving_ray: trace must be callable as `raycache::TracedRay trace()` or "
                       "`raycache::TracedRay trace(raycache::PathRecord&)`");
+        return enclosing ? noting_reads(id, origin, direction, trace, *enclosing) : answered(id, origin, direction, trace);
+    }
+
+private:
+    // leaving_ray() without an enclosing path.
+    template <class Trace>
+    glm::vec3 answered(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace& trace) {
         if (!trace_hits_) return through_cube(id, origin, direction, trace);
         // SceneCacheSettings::trace_hits: whether the cube answered is known by whether trace() ran. The
         // wrapper takes whichever form `trace` has (its return type keeps the other form out of overloads).
@@ -585,7 +604,66 @@ public:
         return traced ? colour : trace_alone(trace);
     }
 
-private:
+    // leaving_ray() for a ray nested in the path `enclosing` records. When the cube answers it (trace() did
+    // not run), the enclosing path depends on what the answering texel saw and on the cube's texels where
+    // it was read: the texel's record block's union joins the enclosing record (so a move that its paths
+    // met drops the enclosing texel, even once the cube's texel has been replaced), and the directions
+    // read are noted (PathRecord::read_cached: a move that empties the cube's texels there drops the
+    // enclosing texel transitively): the ray's own for the CCT (a filtered lookup's other taps lie within
+    // the texel that invalidation grows a changed region by), and for the CDCT the cone from the centre
+    // through the points its search read, every one on the ray past the box exit
+    // (raycache/shared/depth_secant.h, relief_walk.h).
+    template <class Trace>
+    glm::vec3 noting_reads(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace& trace, PathRecord& enclosing) {
+        if (trace_hits_) return answered(id, origin, direction, trace); // every ray traced: nothing read
+        bool traced = false;
+        auto noting = [&](auto&... path) -> decltype(trace(path...)) {
+            traced = true;
+            return trace(path...);
+        };
+        ReliefResult found;
+        const glm::vec3 colour = through_cube(id, origin, direction, noting, &found);
+        if (traced) return colour;
+        const int index = find(id);
+        if (index < 0 || !shared::raycache_is_direction(direction)) return colour; // (answered by no cube: traced)
+        const Entry& e = entries_[static_cast<std::size_t>(index)];
+        if (technique_ == Technique::cct) {
+            const std::optional<TexelAddress> t = e.cct->texel_of(direction);
+            if (t) enclosing.merge(e.cct->answer_record(*t));
+            if (filtered_) {
+                const shared::raycache_filter_taps taps = shared::raycache_filter_taps_of(direction, e.cct->face_size());
+                for (int k = 0; k < taps.count; ++k) {
+                    const shared::raycache_texel_address& a = taps.texel[k];
+                    enclosing.merge(e.cct->answer_record(TexelAddress{a.face, a.column, a.row}));
+                }
+            }
+            enclosing.read_cached(direction, direction);
+            return colour;
+        }
+        if (relief_.search == DepthSearch::secant) {
+            // The texel whose colour answered is the one read at the answer's distance along the ray, at the
+            // point the search itself read it (raycache_secant_point: the same start and direction).
+            const shared::raycache_secant_search s = shared::raycache_secant_start(
+                origin, direction, e.bounds.centre, e.bounds.half_size, relief_.epsilon, relief_.max_gap, relief_.max_reads);
+            const std::optional<TexelAddress> t = e.cdct->cube().texel_of(shared::raycache_secant_point(s, found.distance));
+            if (t) enclosing.merge(e.cdct->cube().answer_record(*t));
+            else enclosing.unbounded = true;
+        } else {
+            enclosing.unbounded = true; // the relief walk's answering texel is not tracked: any move may change it
+        }
+        const glm::vec3 d = shared::raycache_unit(direction);
+        const glm::vec3 exit = shared::raycache_ray_from_centre(
+            origin, d, shared::raycache_box_exit_distance(origin, d, e.bounds.centre, e.bounds.half_size), e.bounds.centre);
+        const float length = glm::length(exit);
+        if (!(length > 0.0f) || !std::isfinite(length)) {
+            enclosing.cached_reads = every_direction_cell;
+            return colour;
+        }
+        const glm::vec3 from = exit / length;
+        enclosing.read_cached(glm::min(from, d), glm::max(from, d));
+        return colour;
+    }
+
     // trace() for a ray no cube looks at or stores into: the recording form with a record nobody keeps.
     template <class Trace>
     static glm::vec3 trace_alone(Trace& trace) {
@@ -598,8 +676,10 @@ private:
     }
 
     // leaving_ray() through the cube: looked up, and on a miss traced and stored.
+    // `found`, when given, receives a CDCT search's outcome (untouched when no search ran).
     template <class Trace>
-    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace) {
+    glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace,
+                           ReliefResult* found = nullptr) {
         const int index = find(id);
         if (index < 0) return trace_alone(trace);
         Entry& e = entries_[static_cast<std::size_t>(index)];
@@ -625,7 +705,7 @@ private:
             return trace_alone(trace);
         }
         int read = 0;
-        const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read);
+        const glm::vec3 color = e.cdct->cached_trace(origin, direction, trace, &read, found);
         texels_read_.add(0, static_cast<std::uint64_t>(read));
         // A rarely-taken CAS: only a search that reads more than every one before it writes.
         std::uint64_t most = max_texels_read_.load(std::memory_order_relaxed);
@@ -668,6 +748,8 @@ public:
         InvalidationStatistics stats;
         for (const Entry& e : entries_) stats.valid_before += with_cube(e, [](const auto& cube) { return cube.valid_texels(); });
         std::vector<char> changed(entries_.size(), 0), moved(entries_.size(), 0); // moved: emptied with its object
+        // The direction cells each cube lost texels in since the transitive pass that last read them.
+        std::vector<std::uint64_t> lost_cells(entries_.size(), 0);
         for (const ObjectMove& m : change.moved) {
             // A primitive names its range's cube alone (none when no range holds it); a whole geometry all its cubes.
             const int range = m.id.prim_id == RTC_INVALID_GEOMETRY_ID ? -1 : find(m.id);
@@ -683,6 +765,7 @@ public:
                 stats.dropped += emptied;
                 stats.dropped_with_moved_cubes += emptied;
                 changed[i] = moved[i] = 1;
+                lost_cells[i] = every_direction_cell;
             }
         }
         if (policy == Invalidation::all)
@@ -720,14 +803,21 @@ public:
                     (transitive ? stats.dropped_transitively : stats.dropped_by_path) += counts[k].dropped_by_path;
                     stats.dropped_by_cone += counts[k].dropped_by_cone;
                     stats.dropped_unrecorded += counts[k].dropped_unrecorded;
-                    if (counts[k].dropped) changed[todo[k]] = 1, next.push_back(todo[k]);
+                    if (!counts[k].dropped) continue;
+                    const std::size_t i = todo[k];
+                    changed[i] = 1;
+                    next.push_back(i);
+                    // A search over a depth pyramid reads coarse levels, which follow texels outside its cells.
+                    const bool coarse_reads = entries_[i].cdct && entries_[i].cdct->pyramid();
+                    lost_cells[i] |= coarse_reads || !transitive_by_direction_ ? every_direction_cell : counts[k].changed_cells;
                 }
             };
             pass(changes, false);
-            // A path that met a cached object read that object's cube: when the cube changed, so may the path.
+            // A path that met a cached object may have read that object's cube: when the cube changed where the
+            // path read it, so may the path.
             while (!next.empty()) {
                 SceneChanges seen;
-                for (std::size_t i : next) seen.changed.push_back(path_key(entries_[i].id));
+                for (std::size_t i : next) seen.changed.push_back({path_key(entries_[i].id), lost_cells[i]}), lost_cells[i] = 0;
                 next.clear();
                 pass(seen, true);
             }
@@ -1358,6 +1448,7 @@ private:
     float origin_parallax_;
     bool path_records_;          // the cubes keep path records now (SceneCacheSettings::path_records)
     PathRecords record_policy_;
+    bool transitive_by_direction_;
     bool trace_hits_;            // SceneCacheSettings::trace_hits
     float min_hit_rate_;         // SceneCacheSettings::min_hit_rate, or the technique's default
     bool threshold_from_work_;   // min_hit_rate unset: each cube's threshold from its rays' work where reported
