@@ -103,6 +103,19 @@ inline std::uint64_t direction_cells_of_texels(int face, int column0, int row0, 
     auto coordinate = [n](int texel) { return 2.0f * static_cast<float>(texel) / n - 1.0f; };
     const float s0 = coordinate(column0 - 1), s1 = coordinate(column1 + 1);
     const float t0 = coordinate(row0 - 1), t1 = coordinate(row1 + 1);
+    // Within the face, clear of its edges (most blocks): no other face's directions, and the face's own
+    // cells are those of the coordinates' spans, as direction_cells_of_box finds them at |m| = 1.
+    constexpr float inside = 1.0f - 1e-3f;
+    if (s0 > -inside && s1 < inside && t0 > -inside && t1 < inside) {
+        constexpr float margin = 1e-5f;
+        int c0, c1, r0, r1;
+        detail::direction_cell_span(s0 - margin, s1 + margin, c0, c1);
+        detail::direction_cell_span(t0 - margin, t1 + margin, r0, r1);
+        std::uint64_t cells = 0;
+        for (int row = r0; row <= r1; ++row)
+            for (int column = c0; column <= c1; ++column) cells |= direction_cell_bit(face, column, row);
+        return cells;
+    }
     // The rectangle lies in the plane |m| = 1 of the face's axis, so the box of its corners is the rectangle.
     const glm::vec3 a = shared::raycache_face_point(face, 1.0f, s0, t0), b = shared::raycache_face_point(face, 1.0f, s1, t1);
     return direction_cells_of_box(glm::min(a, b), glm::max(a, b));
