@@ -640,17 +640,19 @@ private:
             enclosing.read_cached(direction, direction);
             return colour;
         }
-        if (relief_.search == DepthSearch::secant) {
-            // The texel whose colour answered is the one read at the answer's distance along the ray, at the
-            // point the search itself read it (raycache_secant_point: the same start and direction).
-            const shared::raycache_secant_search s = shared::raycache_secant_start(
-                origin, direction, e.bounds.centre, e.bounds.half_size, relief_.epsilon, relief_.max_gap, relief_.max_reads);
-            const std::optional<TexelAddress> t = e.cdct->cube().texel_of(shared::raycache_secant_point(s, found.distance));
-            if (t) enclosing.merge(e.cdct->cube().answer_record(*t));
-            else enclosing.unbounded = true;
-        } else {
-            enclosing.unbounded = true; // the relief walk's answering texel is not tracked: any move may change it
+        // The texel whose colour answered is the one read at the answer's distance along the ray, at the
+        // point the secant search itself read it (raycache_secant_point: the same start and direction). A
+        // relief walk's is not tracked: its answer counts as read from anywhere in the cube, as a path that
+        // does not track its cached reads (the whole-cube rule).
+        const shared::raycache_secant_search s = shared::raycache_secant_start(
+            origin, direction, e.bounds.centre, e.bounds.half_size, relief_.epsilon, relief_.max_gap, relief_.max_reads);
+        const std::optional<TexelAddress> t =
+            relief_.search == DepthSearch::secant ? e.cdct->cube().texel_of(shared::raycache_secant_point(s, found.distance)) : std::nullopt;
+        if (!t) {
+            enclosing.cached_reads = every_direction_cell;
+            return colour;
         }
+        enclosing.merge(e.cdct->cube().answer_record(*t));
         const glm::vec3 d = shared::raycache_unit(direction);
         const glm::vec3 exit = shared::raycache_ray_from_centre(
             origin, d, shared::raycache_box_exit_distance(origin, d, e.bounds.centre, e.bounds.half_size), e.bounds.centre);
