@@ -46,6 +46,23 @@ inline void direction_cell_span(float lo, float hi, int& first, int& last) noexc
     last = cell(hi);
 }
 
+// The cells of `face` that the face coordinates [u_lo, u_hi] x [v_lo, v_hi] meet, each range widened by a
+// margin for rounding (the face table's own divisions round differently near cell edges); none when they
+// miss the face's [-1, 1] x [-1, 1].
+inline std::uint64_t face_cells(int face, float u_lo, float u_hi, float v_lo, float v_hi) noexcept {
+    constexpr float margin = 1e-5f;
+    u_lo -= margin * std::max(1.0f, std::abs(u_lo)), u_hi += margin * std::max(1.0f, std::abs(u_hi));
+    v_lo -= margin * std::max(1.0f, std::abs(v_lo)), v_hi += margin * std::max(1.0f, std::abs(v_hi));
+    if (u_lo > 1.0f || u_hi < -1.0f || v_lo > 1.0f || v_hi < -1.0f) return 0;
+    int c0, c1, r0, r1;
+    direction_cell_span(std::max(u_lo, -1.0f), std::min(u_hi, 1.0f), c0, c1);
+    direction_cell_span(std::max(v_lo, -1.0f), std::min(v_hi, 1.0f), r0, r1);
+    std::uint64_t cells = 0;
+    for (int row = r0; row <= r1; ++row)
+        for (int column = c0; column <= c1; ++column) cells |= direction_cell_bit(face, column, row);
+    return cells;
+}
+
 // [a, b] / [m_lo, m_hi] for 0 < m_lo <= m_hi: the range of x / m over the two intervals.
 inline void divide_interval(float a, float b, float m_lo, float m_hi, float& lo, float& hi) noexcept {
     lo = std::min(a / m_lo, a / m_hi);
@@ -81,16 +98,7 @@ inline std::uint64_t direction_cells_of_box(const glm::vec3& lo, const glm::vec3
             detail::divide_interval(s_lo.x, s_hi.x, m_lo, m_hi, u_lo, u_hi);
             detail::divide_interval(s_lo.y, s_hi.y, m_lo, m_hi, v_lo, v_hi);
         } // else the box holds directions arbitrarily near the face's axis at m -> 0: the whole face
-        // A margin for the divisions' rounding (the face table's own rounds differently near cell edges).
-        constexpr float margin = 1e-5f;
-        u_lo -= margin * std::max(1.0f, std::abs(u_lo)), u_hi += margin * std::max(1.0f, std::abs(u_hi));
-        v_lo -= margin * std::max(1.0f, std::abs(v_lo)), v_hi += margin * std::max(1.0f, std::abs(v_hi));
-        if (u_lo > 1.0f || u_hi < -1.0f || v_lo > 1.0f || v_hi < -1.0f) continue;
-        int c0, c1, r0, r1;
-        detail::direction_cell_span(std::max(u_lo, -1.0f), std::min(u_hi, 1.0f), c0, c1);
-        detail::direction_cell_span(std::max(v_lo, -1.0f), std::min(v_hi, 1.0f), r0, r1);
-        for (int row = r0; row <= r1; ++row)
-            for (int column = c0; column <= c1; ++column) cells |= direction_cell_bit(face, column, row);
+        cells |= detail::face_cells(face, u_lo, u_hi, v_lo, v_hi);
     }
     return cells;
 }
@@ -106,16 +114,7 @@ inline std::uint64_t direction_cells_of_texels(int face, int column0, int row0, 
     // Within the face, clear of its edges (most blocks): no other face's directions, and the face's own
     // cells are those of the coordinates' spans, as direction_cells_of_box finds them at |m| = 1.
     constexpr float inside = 1.0f - 1e-3f;
-    if (s0 > -inside && s1 < inside && t0 > -inside && t1 < inside) {
-        constexpr float margin = 1e-5f;
-        int c0, c1, r0, r1;
-        detail::direction_cell_span(s0 - margin, s1 + margin, c0, c1);
-        detail::direction_cell_span(t0 - margin, t1 + margin, r0, r1);
-        std::uint64_t cells = 0;
-        for (int row = r0; row <= r1; ++row)
-            for (int column = c0; column <= c1; ++column) cells |= direction_cell_bit(face, column, row);
-        return cells;
-    }
+    if (s0 > -inside && s1 < inside && t0 > -inside && t1 < inside) return detail::face_cells(face, s0, s1, t0, t1);
     // The rectangle lies in the plane |m| = 1 of the face's axis, so the box of its corners is the rectangle.
     const glm::vec3 a = shared::raycache_face_point(face, 1.0f, s0, t0), b = shared::raycache_face_point(face, 1.0f, s1, t1);
     return direction_cells_of_box(glm::min(a, b), glm::max(a, b));
