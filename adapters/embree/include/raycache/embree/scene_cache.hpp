@@ -640,29 +640,30 @@ private:
             enclosing.read_cached(direction, direction);
             return colour;
         }
-        // The texel whose colour answered is the one read at the answer's distance along the ray, at the
-        // point the secant search itself read it (raycache_secant_point: the same start and direction). A
-        // relief walk's is not tracked: its answer counts as read from anywhere in the cube, as a path that
-        // does not track its cached reads (the whole-cube rule).
+        // A relief walk's answering texel is not tracked: its answer counts as read from anywhere in the cube,
+        // as a path that does not track its cached reads (the whole-cube rule).
+        if (relief_.search != DepthSearch::secant) {
+            enclosing.cached_reads = every_direction_cell;
+            return colour;
+        }
+        // The search's own start: its first read, at the box exit (s.t), and the texel whose colour answered,
+        // read at the answer's distance along the ray, are the points it read them at.
         const shared::raycache_secant_search s = shared::raycache_secant_start(
             origin, direction, e.bounds.centre, e.bounds.half_size, relief_.epsilon, relief_.max_gap, relief_.max_reads);
-        const std::optional<TexelAddress> t =
-            relief_.search == DepthSearch::secant ? e.cdct->cube().texel_of(shared::raycache_secant_point(s, found.distance)) : std::nullopt;
+        const std::optional<TexelAddress> t = e.cdct->cube().texel_of(shared::raycache_secant_point(s, found.distance));
         if (!t) {
             enclosing.cached_reads = every_direction_cell;
             return colour;
         }
         enclosing.merge(e.cdct->cube().answer_record(*t));
-        const glm::vec3 d = shared::raycache_unit(direction);
-        const glm::vec3 exit = shared::raycache_ray_from_centre(
-            origin, d, shared::raycache_box_exit_distance(origin, d, e.bounds.centre, e.bounds.half_size), e.bounds.centre);
+        const glm::vec3 exit = shared::raycache_secant_point(s, s.t);
         const float length = glm::length(exit);
         if (!(length > 0.0f) || !std::isfinite(length)) {
             enclosing.cached_reads = every_direction_cell;
             return colour;
         }
         const glm::vec3 from = exit / length;
-        enclosing.read_cached(glm::min(from, d), glm::max(from, d));
+        enclosing.read_cached(glm::min(from, s.d), glm::max(from, s.d));
         return colour;
     }
 
