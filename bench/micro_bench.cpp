@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <random>
@@ -159,6 +160,9 @@ BENCHMARK_CAPTURE(cdct_search, secant, raycache::DepthSearch::secant, false, 0.2
 // walkthrough for `warm_frames` frames at 512 x 512 with exact invalidation of each move, then saved: every
 // iteration loads that state (untimed) and times the exact invalidation of the next move, so each one
 // starts from the same texels. A loaded cube's tiles are allocated in order, a warmed one's as rays came.
+// With RAYCACHE_MICRO_BENCH_STATE=DIR the saved caches are kept in DIR and, when they are there already,
+// loaded instead of warmed (the load checks they are this scene's): so that a profiler run, under
+// callgrind say, spends its time on the invalidation and not on 40 frames of warming.
 struct MovedSphere {
     static constexpr int warm_frames = 20;
     rcx::Scene scene = rcx::bench::behind_with_one_mover();
@@ -166,6 +170,7 @@ struct MovedSphere {
     raycache::SceneIdentity identity{rcx::scene_hash(scene), scene.name};
     rcx::bench::Variant variants[2]; // the CCT's and the CDCT's caches
     std::string files[2];
+    bool keep_files = false;
     raycache::embree::SceneChange next_move;
     raycache::embree::SceneChange move_back; // puts the moved sphere's cube back where the files expect it
 
@@ -177,6 +182,23 @@ struct MovedSphere {
             variants[k].caches = rcx::bench::dynamic_scene_cache(techniques[k]);
             tracer.attach_caches(*variants[k].caches, 0);
         }
+        const char* kept_in = std::getenv("RAYCACHE_MICRO_BENCH_STATE");
+        for (int k = 0; k < 2; ++k)
+            files[k] = kept_in ? (std::filesystem::path(kept_in) / ("exact_invalidation_" + std::to_string(k) + ".rcache")).string()
+                               // Named by the process, so that two benchmarks at once do not overwrite each other's.
+                               : (std::filesystem::temp_directory_path() /
+                                  ("raycache_micro_bench_" + std::to_string(::getpid()) + "_" + std::to_string(k) + ".rcache"))
+                                     .string();
+        keep_files = kept_in != nullptr;
+        if (keep_files && std::filesystem::exists(files[0]) && std::filesystem::exists(files[1])) {
+            for (int f = 1; f < warm_frames; ++f) { // the caches' cubes follow as when warmed (none is filled)
+                const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
+                for (auto& v : variants) v.caches->scene_changed(change, raycache::embree::Invalidation::none);
+            }
+            next_move = tracer.move_to(scene.at_frame(warm_frames));
+            move_back = tracer.move_to(scene.at_frame(warm_frames - 1));
+            return;
+        }
         for (int f = 0; f < warm_frames; ++f) {
             if (f > 0) {
                 const raycache::embree::SceneChange change = tracer.move_to(scene.at_frame(f));
@@ -186,16 +208,11 @@ struct MovedSphere {
         }
         next_move = tracer.move_to(scene.at_frame(warm_frames));
         move_back = tracer.move_to(scene.at_frame(warm_frames - 1));
-        for (int k = 0; k < 2; ++k) {
-            // Named by the process, so that two benchmarks at once do not overwrite each other's.
-            files[k] = (std::filesystem::temp_directory_path() /
-                        ("raycache_micro_bench_" + std::to_string(::getpid()) + "_" + std::to_string(k) + ".rcache"))
-                           .string();
-            variants[k].caches->save(files[k], identity);
-        }
+        for (int k = 0; k < 2; ++k) variants[k].caches->save(files[k], identity);
     }
     ~MovedSphere() {
-        for (const std::string& f : files) std::filesystem::remove(f);
+        if (!keep_files)
+            for (const std::string& f : files) std::filesystem::remove(f);
     }
 };
 
