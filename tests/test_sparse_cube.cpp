@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -367,4 +368,40 @@ TEST_CASE("a texel's answer record is the union of its record block's paths, or 
     REQUIRE(none.store_at(TexelAddress{0, 0, 0}, grey, three));
     none.begin_frame();
     CHECK(none.answer_record(TexelAddress{0, 0, 0}).unbounded); // a cube without records knows nothing
+}
+
+TEST_CASE("a tile's paths are the union of its blocks' records; none for a tile never allocated, empty without records") {
+    // Face +X of a 32-texel cube has 2 x 2 tiles of 16 x 16 texels, tile 1 to the right of tile 0. Tile 0
+    // holds (0, 0), whose path hit object 3 at (2, 0, 0), and (9, 9), another block's, whose path hit object
+    // 4 at (0, 5, 0) and escaped along +y; tile 1 holds (20, 3) alone, stored without a record.
+    CctCube cube(32);
+    raycache::PathRecord three, four;
+    three.hit(3, glm::vec3(2, 0, 0));
+    four.hit(4, glm::vec3(0, 5, 0));
+    four.escaped(glm::vec3(0, 2, 0));
+    REQUIRE(cube.store_at(TexelAddress{0, 0, 0}, grey, three));
+    REQUIRE(cube.store_at(TexelAddress{0, 9, 9}, grey, four));
+    REQUIRE(cube.store_at(TexelAddress{0, 20, 3}, grey));
+    cube.begin_frame();
+    const std::optional<raycache::PathRecord> first = cube.tile_paths(0);
+    REQUIRE(first);
+    CHECK(first->objects == (raycache::object_bits(3) | raycache::object_bits(4)));
+    CHECK(first->vertex_lo == glm::vec3(0, 0, 0));
+    CHECK(first->vertex_hi == glm::vec3(2, 5, 0));
+    CHECK(first->escape_lo == glm::vec3(0, 1, 0));
+    CHECK(first->escape_hi == glm::vec3(0, 1, 0));
+    CHECK_FALSE(first->lit);
+    CHECK_FALSE(first->unbounded);
+    const std::optional<raycache::PathRecord> second = cube.tile_paths(1);
+    REQUIRE(second); // allocated, but no store brought a record: nothing in its union
+    CHECK(second->objects == 0);
+    CHECK_FALSE(second->has_vertices());
+    CHECK(second->cached_reads == 0);
+    CHECK_FALSE(cube.tile_paths(2)); // never stored into
+    CctCube none(32, nullptr, false);
+    REQUIRE(none.store_at(TexelAddress{0, 0, 0}, grey, three));
+    none.begin_frame();
+    const std::optional<raycache::PathRecord> bare = none.tile_paths(0);
+    REQUIRE(bare);
+    CHECK(bare->objects == 0); // a cube without records keeps no union
 }

@@ -522,6 +522,13 @@ public:
         if (tile->records) s.paths = record_of(tile->records[tile_union_slot]);
         return s;
     }
+    // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
+    // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.
+    std::optional<PathRecord> tile_paths(std::size_t i) const {
+        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        if (!tile) return std::nullopt;
+        return tile->records ? record_of(tile->records[tile_union_slot]) : PathRecord::empty();
+    }
     // What the value texel `t` answers with saw, as far as the cube knows, for a cached answer nested in
     // another traced path (SceneCache::leaving_ray's `enclosing`): the union of the paths stored into its
     // record block so far (a superset of its own store's: a union only grows until a move empties the

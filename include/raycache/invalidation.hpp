@@ -444,6 +444,12 @@ private:
         CacheCube<Texel>& cube = cube_;
         const SceneChanges& changes = changes_;
         const int n = n_;
+        // Without moves, only the paths' tests can drop a texel (unrecorded ones stay): a tile whose union
+        // meets no change is left before the rest of its summary is read (most tiles of a transitive pass).
+        if (!geometric_) {
+            const std::optional<PathRecord> paths = cube.tile_paths(index);
+            if (!paths || paths_meeting(*paths, changes, every_path_test, true) == 0) return;
+        }
         const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
         if (!summary) return;
         // The tile's origin ball and cone, once for its blocks: a block's directions lie within its tile's.
