@@ -3,16 +3,22 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "rcx/command_line.hpp"
 #include "rcx/option_values.hpp"
 #include "rcx/options.hpp"
+#include "rcx/tracer_main.hpp"
 
 #include <raycache/adaptive_resolution.hpp>
+
+#include <unistd.h>
 
 namespace {
 
@@ -317,4 +323,68 @@ TEST_CASE("--step takes -360..360 degrees, so a frame's angle stays finite") {
     CHECK(*parse({"--step", "360"}).step_degrees == 360.0f);
     CHECK(usage_error({"--step", "360.5"}) == "--step: 360.5 is out of range -360..360");
     CHECK(usage_error({"--step", "6e37"}) == "--step: 6e37 is out of range -360..360");
+}
+
+TEST_CASE("a number with spaces around it is refused, whatever side they are on") {
+    // strtol and strtof pass over leading white space; the tracers refuse it as they refuse trailing.
+    CHECK(usage_error({"--frames", " 3"}) == "--frames: ' 3' is not an integer");
+    CHECK(usage_error({"--frames", "3 "}) == "--frames: '3 ' is not an integer");
+    CHECK(usage_error({"--size", " 32x32"}) == "--size (width): ' 32' is not an integer");
+    CHECK(usage_error({"--size", "32x 32"}) == "--size (height): ' 32' is not an integer");
+    CHECK(usage_error({"--width", "\t16"}) == "--width: '\t16' is not an integer");
+    CHECK(usage_error({"--step", " 1"}) == "--step: ' 1' is not a number");
+    CHECK(usage_error({"--delta", "0.2 "}) == "--delta: '0.2 ' is not a number");
+    CHECK(parse({"--frames", "3"}).frames == 3);
+}
+
+TEST_CASE("cache options given with a mode that keeps no cubes are named in a note, and change nothing") {
+    const rcx::Options cached = parse({"--cache", "cct", "--face-size", "64", "--filtered"});
+    CHECK(cached.notes.empty());
+    const rcx::Options off = parse({"--cache", "off", "--face-size", "64", "--filtered", "--frames", "2"});
+    REQUIRE(off.notes.size() == 2);
+    CHECK(off.notes[0] == "--face-size has no effect with --cache off");
+    CHECK(off.notes[1] == "--filtered has no effect with --cache off");
+    CHECK(parse({"--cache", "ceiling", "--invalidate", "all"}).notes ==
+          std::vector<std::string>{"--invalidate has no effect with --cache ceiling"});
+    CHECK(parse({"--cache", "off"}).notes.empty()); // --cache itself is no cache option to note
+    CHECK(parse({"--face-size", "64", "--cache", "off"}).notes.size() == 1); // in any order
+}
+
+TEST_CASE("--threads beyond the cores the machine has runs on those cores, with a note") {
+    const unsigned cores = std::thread::hardware_concurrency();
+    if (cores == 0 || cores >= 4096) return; // nothing to compare with
+    const rcx::Options o = parse({"--threads", "4096"});
+    CHECK(o.threads == static_cast<int>(cores));
+    REQUIRE(o.notes.size() == 1);
+    CHECK(o.notes[0] == "--threads 4096: this machine has " + std::to_string(cores) + " hardware threads; running " +
+                            std::to_string(cores));
+    CHECK(parse({"--threads", std::to_string(cores).c_str()}).notes.empty());
+    CHECK(parse({"--threads", "1"}).threads == 1);
+    CHECK(parse({"--threads", "0"}).threads == 0); // all cores, as before
+}
+
+TEST_CASE("tracer_main prints the command line's notes on stderr, then runs") {
+    const std::filesystem::path captured = std::filesystem::temp_directory_path() / "raycache_test_tracer_main_notes.txt";
+    std::fflush(stderr);
+    const int saved = ::dup(2);
+    REQUIRE(saved >= 0);
+    REQUIRE(std::freopen(captured.c_str(), "w", stderr) != nullptr);
+    bool ran = false;
+    const int status = rcx::tracer_main(
+        "tracer",
+        [] {
+            rcx::Options o;
+            o.notes = {"--face-size has no effect with --cache off", "second"};
+            return o;
+        },
+        [] { return std::string(); }, [&ran](const rcx::Options&) { return ran = true, 0; });
+    std::fflush(stderr);
+    ::dup2(saved, 2);
+    ::close(saved);
+    std::ifstream in(captured);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove(captured);
+    CHECK(status == 0);
+    CHECK(ran);
+    CHECK(text == "tracer: note: --face-size has no effect with --cache off\ntracer: note: second\n");
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <system_error>
+#include <thread>
 #include <utility>
 
 #include <CLI/CLI.hpp>
@@ -32,6 +33,9 @@ public:
         return text.substr(text.find_first_not_of('\n'));
     }
 };
+
+// The --help section of the options that tune the cubes.
+const char* const cache_section = "Cache";
 
 // A value from `names` for messages: its long name ("--quiet" for "-q,--quiet").
 std::string long_name(const CLI::Option& option) { return option.get_name(false, false); }
@@ -146,7 +150,7 @@ CommandLine::CommandLine(const std::string& program)
     add_option("--light-radius", "F", "the light's disc radius with --light-samples > 1 " + shown_default(d.light_radius),
                number("--light-radius", o.light_radius, true));
 
-    section("Cache");
+    section(cache_section);
     add_option("--cache", "MODE",
                "off, cct (colour), cdct (colour + depth), ceiling (constant colour,\n"
                "no tracing: the best any cache could do) " + shown_default(to_string(d.cache)),
@@ -309,6 +313,19 @@ Options CommandLine::parse(int argc, const char* const argv[]) {
     if (!app_->remaining().empty()) throw unexpected(app_->remaining().front());
     Options& o = options_;
     o.pyramid = !no_pyramid_;
+    // The cache section's options tune cubes: a mode that keeps none (off, ceiling) runs as if they were not given.
+    if (!uses_caches(o.cache))
+        for (const CLI::Option* option : app_->get_options())
+            if (option->get_group() == cache_section && option->count() > 0 && long_name(*option) != "--cache")
+                o.notes.push_back(long_name(*option) + " has no effect with --cache " + to_string(o.cache));
+    // A thread arena wider than the cores gets no more workers (TBB says so in a warning of its own): the
+    // run takes the cores, and its frames are the same with any number of threads.
+    const unsigned cores = std::thread::hardware_concurrency();
+    if (cores > 0 && o.threads > static_cast<int>(cores)) {
+        o.notes.push_back("--threads " + std::to_string(o.threads) + ": this machine has " + std::to_string(cores) +
+                          " hardware threads; running " + std::to_string(cores));
+        o.threads = static_cast<int>(cores);
+    }
     const std::string cache_file = o.load_cache.empty() ? "--save-cache" : "--load-cache";
     if ((!o.load_cache.empty() || !o.save_cache.empty()) && !uses_caches(o.cache))
         throw UsageError(cache_file + " needs --cache cct or cdct, not " + to_string(o.cache));

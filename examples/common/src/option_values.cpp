@@ -1,6 +1,7 @@
 // Checked conversions of option values (rcx/option_values.hpp).
 #include "rcx/option_values.hpp"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -11,11 +12,16 @@
 
 namespace rcx {
 
+namespace {
+// strtol and strtof pass over leading white space; a value with it is refused, as one with trailing space is.
+bool starts_with_space(const std::string& text) { return !text.empty() && std::isspace(static_cast<unsigned char>(text[0])); }
+} // namespace
+
 long parse_int_value(const std::string& option, const std::string& text, long min, long max) {
     errno = 0;
     char* end = nullptr;
     const long v = std::strtol(text.c_str(), &end, 10);
-    if (text.empty() || *end != '\0' || errno == ERANGE)
+    if (text.empty() || starts_with_space(text) || *end != '\0' || errno == ERANGE)
         throw UsageError(option + ": '" + text + "' is not an integer");
     if (v < min || v > max)
         throw UsageError(option + ": " + text + " is out of range " + std::to_string(min) + ".." + std::to_string(max));
@@ -27,7 +33,8 @@ float parse_float_value(const std::string& option, const std::string& text, bool
     char* end = nullptr;
     const float v = std::strtof(text.c_str(), &end);
     const bool out_of_range = errno == ERANGE;
-    if (text.empty() || end == text.c_str() || *end != '\0') throw UsageError(option + ": '" + text + "' is not a number");
+    if (text.empty() || starts_with_space(text) || end == text.c_str() || *end != '\0')
+        throw UsageError(option + ": '" + text + "' is not a number");
     if (std::isnan(v) || (std::isinf(v) && !out_of_range))
         throw UsageError(option + ": '" + text + "' is not a finite number");
     auto shortest = [](float limit) {

@@ -20,6 +20,7 @@ int tracer_main(const std::string& program, const std::function<Options()>& pars
         std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
         return 2;
     }
+    for (const std::string& note : options.notes) std::fprintf(stderr, "%s: note: %s\n", program.c_str(), note.c_str());
     if (options.help) {
         std::fputs(help().c_str(), stdout);
         return 0;

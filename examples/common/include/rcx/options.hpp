@@ -5,6 +5,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rcx/output_folder.hpp"
 #include "rcx/scene.hpp"
@@ -82,6 +83,9 @@ struct Options {
     bool quiet = false;               // no progress bar, no per-frame lines (summary only)
     bool progress = false;            // force the progress bar even when stderr is not a terminal
     bool help = false;
+    // What the command line asked for that the run does otherwise, in words for the user (tracer_main
+    // prints them): cache options with a mode that keeps no cubes, more threads than the machine has.
+    std::vector<std::string> notes;
 };
 
 // Parses argv[1..argc-1]; accepts "--name value" and "--name=value", in any order (a repeated option:

@@ -20,7 +20,8 @@ struct InputError : std::runtime_error {
 // argv[0]'s file name, or `fallback` when there is none.
 std::string program_name(int argc, char** argv, const char* fallback);
 
-// parse() (UsageError: "<program>: <message>" on stderr, 2); with --help, help() on stdout and 0;
+// parse() (UsageError: "<program>: <message>" on stderr, 2), then each of the options' notes as
+// "<program>: note: <note>" on stderr; with --help, help() on stdout and 0;
 // otherwise run(options), with InputError reported as "<program>: <message>" and 2, any other
 // std::exception as "<program>: error: <message>" and 1.
 int tracer_main(const std::string& program, const std::function<Options()>& parse,
