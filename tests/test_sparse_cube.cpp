@@ -370,7 +370,7 @@ TEST_CASE("a texel's answer record is the union of its record block's paths, or 
     CHECK(none.answer_record(TexelAddress{0, 0, 0}).unbounded); // a cube without records knows nothing
 }
 
-TEST_CASE("a tile's paths are the union of its blocks' records; none for a tile never allocated, empty without records") {
+TEST_CASE("a tile's paths are the union of its blocks' records, none for a tile never allocated, empty without records") {
     // Face +X of a 32-texel cube has 2 x 2 tiles of 16 x 16 texels, tile 1 to the right of tile 0. Tile 0
     // holds (0, 0), whose path hit object 3 at (2, 0, 0), and (9, 9), another block's, whose path hit object
     // 4 at (0, 5, 0) and escaped along +y; tile 1 holds (20, 3) alone, stored without a record.
