@@ -75,3 +75,21 @@ TEST_CASE("available memory comes from RCX_AVAILABLE_MEMORY when set, else from 
     CHECK(system->source != "RCX_AVAILABLE_MEMORY");
     if (saved) setenv("RCX_AVAILABLE_MEMORY", before.c_str(), 1);
 }
+
+TEST_CASE("an RCX_AVAILABLE_MEMORY that is not a number of bytes is an error naming it, not the system's memory") {
+    const char* saved = std::getenv("RCX_AVAILABLE_MEMORY");
+    const std::string before = saved ? saved : "";
+    for (const char* bad : {"lots", "", "12GiB", "-5", " -5", " 123", "1e9", "99999999999999999999999"}) {
+        CAPTURE(bad);
+        setenv("RCX_AVAILABLE_MEMORY", bad, 1);
+        CHECK_THROWS_WITH_AS(rcx::available_memory(),
+                             ("RCX_AVAILABLE_MEMORY: '" + std::string(bad) + "' is not a number of bytes (digits only)").c_str(),
+                             std::runtime_error);
+        // As the tracers check a run's memory: the same error, not a check against the machine's memory.
+        CHECK_THROWS_AS(rcx::check_memory({{"one image", 1}}), std::runtime_error);
+    }
+    setenv("RCX_AVAILABLE_MEMORY", "0", 1);
+    CHECK(rcx::available_memory()->bytes == 0);
+    if (saved) setenv("RCX_AVAILABLE_MEMORY", before.c_str(), 1);
+    else unsetenv("RCX_AVAILABLE_MEMORY");
+}

@@ -31,7 +31,8 @@ std::optional<std::uint64_t> parse_bytes(const std::string& text) {
     errno = 0;
     char* end = nullptr;
     const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
-    if (text.empty() || end == text.c_str() || *end != '\0' || errno == ERANGE || text[0] == '-') return std::nullopt;
+    // Digits only: strtoull passes over white space and takes "-5" as a huge number.
+    if (text.empty() || text[0] < '0' || text[0] > '9' || *end != '\0' || errno == ERANGE) return std::nullopt;
     return v;
 }
 
@@ -68,9 +69,12 @@ std::optional<std::uint64_t> cgroup_left() {
 } // namespace
 
 std::optional<AvailableMemory> available_memory() {
-    if (const char* forced = std::getenv("RCX_AVAILABLE_MEMORY"))
-        if (const std::optional<std::uint64_t> bytes = parse_bytes(forced))
-            return AvailableMemory{*bytes, "RCX_AVAILABLE_MEMORY"};
+    if (const char* forced = std::getenv("RCX_AVAILABLE_MEMORY")) {
+        // A value set to limit a run that is ignored would let it take the machine's memory instead.
+        const std::optional<std::uint64_t> bytes = parse_bytes(forced);
+        if (!bytes) throw std::runtime_error("RCX_AVAILABLE_MEMORY: '" + std::string(forced) + "' is not a number of bytes (digits only)");
+        return AvailableMemory{*bytes, "RCX_AVAILABLE_MEMORY"};
+    }
     std::optional<AvailableMemory> best;
     if (const std::optional<std::uint64_t> bytes = meminfo_available()) {
         best = AvailableMemory{*bytes, "MemAvailable in /proc/meminfo"};

@@ -26,7 +26,8 @@ struct AvailableMemory {
 
 // MemAvailable from /proc/meminfo (else the free physical pages, sysconf), lowered to what the cgroup v2
 // memory.max of this process leaves; std::nullopt when none can be read. The environment variable
-// RCX_AVAILABLE_MEMORY (a number of bytes) overrides it, for tests and to keep a run below a budget.
+// RCX_AVAILABLE_MEMORY (a number of bytes) overrides it, for tests and to keep a run below a budget;
+// set to anything but digits, it throws std::runtime_error naming it.
 std::optional<AvailableMemory> available_memory();
 
 // Host bytes of `count` RayCache cubes of face_size as the Embree tracer holds them: every CacheCube
