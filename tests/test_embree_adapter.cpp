@@ -749,6 +749,55 @@ TEST_CASE("exact invalidation keeps a path that read a changed cube only where t
     }
 }
 
+TEST_CASE("a path that read the cube of an instance attached alone goes transitively when that cube changes") {
+    // As the test before, with mirror B attached as an instance alone (attach({11}): instance 11, whose
+    // geometry 0 a hit reaches as {geom 0, inst 11}): A's path hit B through the instance (the tracer records
+    // path_key({0, 11})) and B's cube answered the bounce. X's move empties B's texel toward it by its cone;
+    // B's cube changed under its own key, path_key({11}), which none of A's hits carries: A's texel must go
+    // all the same, since its path read that cube there. (It was kept: the transitive step matched cubes to
+    // paths by their hits' keys alone.) For the CCT and the CDCT (whose secant search from the hit point
+    // (3, 0.1, 0.1) toward X meets B's stored point, 5 along B's texel's ray).
+    for (const Technique technique : {Technique::cct, Technique::cdct}) {
+        CAPTURE(static_cast<int>(technique));
+        SceneCache caches(technique, transitive_test_settings());
+        attach_a_and_b(caches);
+        const ObjectId b_hit{0, 11};
+        const std::uint64_t x = raycache::embree::path_key({12}), w = raycache::embree::path_key({13});
+        REQUIRE((raycache::object_bits(raycache::embree::path_key({11})) & raycache::object_bits(raycache::embree::path_key(b_hit))) !=
+                raycache::object_bits(raycache::embree::path_key({11})));
+        REQUIRE((raycache::object_bits(w) & raycache::object_bits(x)) == 0u);
+        const glm::vec3 b_origin(4, 1, 0), to_x = glm::normalize(glm::vec3(-0.2f, 1, 0));
+        caches.leaving_ray(b_hit, b_origin, to_x, [&](raycache::PathRecord& path) {
+            path.track_cached_reads();
+            path.hit(w, {3.5f, 40.0f, 0});
+            return TracedRay{glm::vec3(0.5f), 5.0f};
+        });
+        caches.begin_frame();
+        REQUIRE(caches.statistics().valid_texels == 1u);
+        // The bounce off B, from a point on the ray B's texel was stored from (so the CDCT's search meets it).
+        const glm::vec3 b_point = b_origin + 0.5f * to_x;
+        int b_traced = 0;
+        caches.leaving_ray({10}, {1, 0, 0}, glm::normalize(b_point - glm::vec3(1, 0, 0)), [&](raycache::PathRecord& path) {
+            path.track_cached_reads();
+            path.hit(raycache::embree::path_key(b_hit), b_point);
+            caches.leaving_ray(b_hit, b_point, to_x, [&](raycache::PathRecord&) {
+                ++b_traced;
+                return TracedRay{glm::vec3(0.0f), 1.0f};
+            }, &path);
+            return TracedRay{glm::vec3(0.5f), glm::length(b_point - glm::vec3(1, 0, 0))};
+        });
+        REQUIRE(b_traced == 0); // B's cube answered
+        caches.begin_frame();
+        REQUIRE(caches.statistics().valid_texels == 2u);
+        SceneChange change;
+        change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
+        const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+        CHECK(s.dropped_by_cone == 1u); // B's texel toward X
+        CHECK(s.dropped_transitively == 1u); // A's, which read it
+        CHECK(caches.statistics().valid_texels == 0u);
+    }
+}
+
 TEST_CASE("a cached answer nested in a traced path brings what the answering texel's path saw into that path's record") {
     // Mirror B (id 11, at (4, 0, 0)) holds a texel toward +z whose path hit the uncached ball X (id 12) at
     // (4, 3, 6) and cast a shadow ray (its ray, from (4, 0, 1), hit 5 further on: the CDCT stores the point

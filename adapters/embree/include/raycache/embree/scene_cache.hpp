@@ -608,8 +608,8 @@ private:
     // not run), the enclosing path depends on what the answering texel saw and on the cube's texels where
     // it was read: the texel's record block's union joins the enclosing record (so a move that its paths
     // met drops the enclosing texel, even once the cube's texel has been replaced), and the directions
-    // read are noted (PathRecord::read_cached: a move that empties the cube's texels there drops the
-    // enclosing texel transitively): the ray's own for the CCT (a filtered lookup's other taps lie within
+    // read are noted, with the cube's key among the objects hit (PathRecord::read_cached: a move that empties
+    // the cube's texels there drops the enclosing texel transitively): the ray's own for the CCT (a filtered lookup's other taps lie within
     // the texel that invalidation grows a changed region by), and for the CDCT the cone from the centre
     // through the points its search read, every one on the ray past the box exit
     // (raycache/shared/depth_secant.h, relief_walk.h).
@@ -627,6 +627,10 @@ private:
         const int index = find(id);
         if (index < 0 || !shared::raycache_is_direction(direction)) return colour; // (answered by no cube: traced)
         const Entry& e = entries_[static_cast<std::size_t>(index)];
+        // The enclosing path read this cube: it carries the cube's key, which the transitive step names the
+        // cube by when it changes. A hit's key can differ from it: a cube attached to an instance alone is
+        // named by the instance, hits through the instance by (instance, geometry).
+        enclosing.objects |= object_bits(path_key(e.id));
         if (technique_ == Technique::cct) {
             const std::optional<TexelAddress> t = e.cct->texel_of(direction);
             if (t) enclosing.merge(e.cct->answer_record(*t));
