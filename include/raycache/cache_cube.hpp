@@ -997,8 +997,8 @@ private:
     };
 
     struct State {
-        explicit State(std::size_t tiles) : tiles(new std::atomic<Tile*>[tiles]), fresh(tiles), wanted(tiles) {
-            for (std::size_t i = 0; i < tiles; ++i) this->tiles[i].store(nullptr, std::memory_order_relaxed);
+        explicit State(std::size_t count) : tiles(new std::atomic<Tile*>[count]), fresh(count), wanted(count) {
+            for (std::size_t i = 0; i < count; ++i) tiles[i].store(nullptr, std::memory_order_relaxed);
         }
         std::unique_ptr<std::atomic<Tile*>[]> tiles; // face by face, tile row by tile row; null until stored into
         // One bit per tile each (settle_budget()): allocated by a store since the last begin_frame(); a store

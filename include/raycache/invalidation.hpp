@@ -66,7 +66,7 @@ struct SceneChanges {
     // An object whose appearance changed without its shape moving: a cached mirror whose cube lost texels,
     // in the direction cells `cells` (raycache/direction_cells.hpp; every cell: it changed as a whole).
     struct Changed {
-        Changed(std::uint64_t key, std::uint64_t cells = every_direction_cell) noexcept : key(key), cells(cells) {}
+        Changed(std::uint64_t object, std::uint64_t in_cells = every_direction_cell) noexcept : key(object), cells(in_cells) {}
         std::uint64_t key; // the object's key in the PathRecords
         std::uint64_t cells;
     };
