@@ -644,6 +644,13 @@ void attach_a_and_b(SceneCache& caches) {
     caches.attach({10}, 8, raycache::CubeBounds{glm::vec3(0.0f), 1.0f});
     caches.attach({11}, 8, raycache::CubeBounds{glm::vec3(4, 0, 0), 1.0f});
 }
+// The move of the tests below: the uncached ball X (id 12, radius 0.5) straight up from (3.3, 5, 0) to
+// (3.3, 30, 0), under exact invalidation.
+raycache::embree::InvalidationStatistics move_x_up(SceneCache& caches) {
+    SceneChange change;
+    change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
+    return caches.scene_changed(change, Invalidation::exact);
+}
 } // namespace
 
 TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube it reads has changed") {
@@ -669,9 +676,7 @@ TEST_CASE("exact invalidation re-tests a cube that lost texels once another cube
     store(10, {1, 0, 0}, {1, 0.05f, 0.05f}, b, {3.0f, 0.1f, 0.1f});          // A sees B (B's cube answered)
     caches.begin_frame();
     REQUIRE(caches.statistics().valid_texels == 3u);
-    SceneChange change;
-    change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
-    const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+    const raycache::embree::InvalidationStatistics s = move_x_up(caches);
     CHECK(s.dropped_by_path == 2u);
     CHECK(s.dropped_transitively == 1u);
     CHECK(s.dropped == 3u);
@@ -726,9 +731,7 @@ TEST_CASE("exact invalidation keeps a path that read a changed cube only where t
         CHECK(b_traced == 0);
         caches.begin_frame();
         REQUIRE(caches.statistics().valid_texels == 4u);
-        SceneChange change;
-        change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
-        const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+        const raycache::embree::InvalidationStatistics s = move_x_up(caches);
         CHECK(s.dropped_by_cone == 1u);      // B's texel toward X
         CHECK(s.dropped_by_path == 0u);
         CHECK(s.dropped_transitively == (by_direction ? 1u : 2u)); // A's texel that read it (and the other)
@@ -789,9 +792,7 @@ TEST_CASE("a path that read the cube of an instance attached alone goes transiti
         REQUIRE(b_traced == 0); // B's cube answered
         caches.begin_frame();
         REQUIRE(caches.statistics().valid_texels == 2u);
-        SceneChange change;
-        change.moved.push_back({ObjectId{12}, BoundingSphere{{3.3f, 5, 0}, 0.5f}, BoundingSphere{{3.3f, 30, 0}, 0.5f}, std::nullopt});
-        const raycache::embree::InvalidationStatistics s = caches.scene_changed(change, Invalidation::exact);
+        const raycache::embree::InvalidationStatistics s = move_x_up(caches);
         CHECK(s.dropped_by_cone == 1u); // B's texel toward X
         CHECK(s.dropped_transitively == 1u); // A's, which read it
         CHECK(caches.statistics().valid_texels == 0u);
