@@ -458,7 +458,7 @@ public:
     // threads may read different tiles at once.
     template <class F>
     void for_each_block_state_of_tile(std::size_t i, F&& f) const {
-        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        const Tile* tile = allocated_tile(i);
         if (!tile) return;
         const TexelAddress first = first_texel_of_tile(i);
         const bool any_unrecorded = has_unrecorded(*tile);
@@ -514,20 +514,19 @@ public:
     };
     // tile_summary() of tile `i`; std::nullopt when it is not allocated. Between frames only.
     std::optional<TileSummary> tile_summary(std::size_t i) const {
-        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        const Tile* tile = allocated_tile(i);
         if (!tile) return std::nullopt;
         const TexelAddress first = first_texel_of_tile(i);
-        TileSummary s{first.face, first.column, first.row, false, glm::vec3(0.0f), glm::vec3(0.0f), has_unrecorded(*tile), PathRecord::empty()};
+        TileSummary s{first.face, first.column, first.row, false, glm::vec3(0.0f), glm::vec3(0.0f), has_unrecorded(*tile), paths_of(*tile)};
         s.has_origins = origins_of(*tile, s.origin_lo, s.origin_hi);
-        if (tile->records) s.paths = record_of(tile->records[tile_union_slot]);
         return s;
     }
     // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
     // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.
     std::optional<PathRecord> tile_paths(std::size_t i) const {
-        const Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        const Tile* tile = allocated_tile(i);
         if (!tile) return std::nullopt;
-        return tile->records ? record_of(tile->records[tile_union_slot]) : PathRecord::empty();
+        return paths_of(*tile);
     }
     // What the value texel `t` answers with saw, as far as the cube knows, for a cached answer nested in
     // another traced path (SceneCache::leaving_ray's `enclosing`): the union of the paths stored into its
@@ -561,7 +560,7 @@ public:
     // value; `recorded`: its store brought a path record. Between frames only.
     template <class F>
     void for_each_value_of_block(const BlockState& b, F&& f) const {
-        const Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
+        const Tile* tile = allocated_tile(b.tile);
         if (!tile) return;
         for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
             if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) f(t, recorded(*tile, slot));
@@ -1342,6 +1341,14 @@ private:
             r.cached_reads.fetch_or(path.cached_reads, std::memory_order_relaxed);
         if (path.has_vertices()) widen(r.vertex_min, r.vertex_max, path.vertex_lo, path.vertex_hi);
         if (path.has_escapes()) widen(r.escape_min, r.escape_max, path.escape_lo, path.escape_hi);
+    }
+    // Tile `i`, or null when it is not allocated (or past the cube's tiles).
+    const Tile* allocated_tile(std::size_t i) const noexcept {
+        return i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+    }
+    // The union of a tile's paths (empty in a cube without records).
+    static PathRecord paths_of(const Tile& tile) noexcept {
+        return tile.records ? record_of(tile.records[tile_union_slot]) : PathRecord::empty();
     }
     // A union as one PathRecord (empty boxes as PathRecord keeps them).
     static PathRecord record_of(const PathUnion& u) noexcept {

@@ -446,9 +446,12 @@ private:
         const int n = n_;
         // Without moves, only the paths' tests can drop a texel (unrecorded ones stay): a tile whose union
         // meets no change is left before the rest of its summary is read (most tiles of a transitive pass).
+        std::optional<unsigned> paths_met;
         if (!geometric_) {
             const std::optional<PathRecord> paths = cube.tile_paths(index);
-            if (!paths || paths_meeting(*paths, changes, every_path_test, true) == 0) return;
+            if (!paths) return;
+            paths_met = paths_meeting(*paths, changes);
+            if (*paths_met == 0) return;
         }
         const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
         if (!summary) return;
@@ -461,7 +464,7 @@ private:
                                changes.moved);
         // A tile whose cone misses, whose every value came with a record, and whose union of paths (a
         // superset of its blocks') misses too keeps everything: its blocks are not read (most tiles).
-        const unsigned tile_paths_meet = paths_meeting(summary->paths, changes);
+        const unsigned tile_paths_meet = paths_met ? *paths_met : paths_meeting(summary->paths, changes);
         if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
         auto& blocks = scratch.blocks;
