@@ -7,12 +7,16 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
+#include <tuple>
 #include <thread>
 #include <vector>
 
 #include "raycache/raycache.hpp"
+
+#include "test_random.hpp"
 
 namespace {
 
@@ -100,6 +104,127 @@ TEST_CASE("a new cube holds no tile, and a store allocates exactly the tile of i
             if (b.block == 0) corners.insert(corners.end(), {b.face, b.column0, b.row0});
         });
     CHECK(corners == std::vector<int>{0, 32, 32, 0, 48, 32, 5, 32, 32});
+}
+
+// Every record block holding a value, and none other, with its texels counted and its union of paths as
+// built by hand from the stores, on faces that a tile fits (16), that clip the last tiles to an odd number of
+// columns and rows (21, 37), or that are smaller than a tile (5).
+TEST_CASE("record blocks report their texels holding values and the union of their stores' paths, also where the face clips a tile") {
+    for (const int n : {5, 16, 21, 37}) {
+        CAPTURE(n);
+        CctCube cube(n);
+        Lcg random{static_cast<std::uint64_t>(n)};
+        // What the stores put in each 2 x 2 block, keyed (face, block row, block column).
+        struct Expected {
+            int valid = 0, unrecorded = 0;
+            raycache::PathRecord paths = raycache::PathRecord::empty();
+        };
+        std::map<std::tuple<int, int, int>, Expected> expected;
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column) {
+                    const std::uint32_t pick = random.next() % 10;
+                    if (pick >= 4) continue; // 60% stay empty
+                    const TexelAddress a{face, column, row};
+                    Expected& e = expected[{face, row / 2, column / 2}];
+                    ++e.valid;
+                    if (pick == 0) { // stored without a record
+                        REQUIRE(cube.store_at(a, grey));
+                        ++e.unrecorded;
+                        continue;
+                    }
+                    raycache::PathRecord saw;
+                    saw.track_cached_reads();
+                    saw.hit(static_cast<std::uint64_t>(face * 1000 + row * 40 + column),
+                            glm::vec3(static_cast<float>(column), -static_cast<float>(row), 0.25f * static_cast<float>(face)));
+                    saw.lit = (column % 3) == 0;
+                    if (row % 4 == 1) saw.escaped(glm::vec3(static_cast<float>(column) - 10.0f, 1.0f, static_cast<float>(row)));
+                    REQUIRE(cube.store_at(a, grey, saw));
+                    e.paths.merge(saw);
+                }
+        cube.begin_frame();
+        std::size_t blocks = 0;
+        cube.for_each_block_state([&](const CctCube::BlockState& b) {
+            ++blocks;
+            CAPTURE(b.face);
+            CAPTURE(b.column0);
+            CAPTURE(b.row0);
+            // The block's texels: 2 x 2, clipped to the face, starting at even texels.
+            CHECK(b.column0 % 2 == 0);
+            CHECK(b.row0 % 2 == 0);
+            CHECK(b.column1 == std::min(n, b.column0 + 2));
+            CHECK(b.row1 == std::min(n, b.row0 + 2));
+            const auto found = expected.find({b.face, b.row0 / 2, b.column0 / 2});
+            REQUIRE(found != expected.end());
+            const Expected& e = found->second;
+            CHECK(b.valid_texels == e.valid);
+            CHECK(b.unrecorded_texels == e.unrecorded);
+            const raycache::PathRecord r = b.record();
+            CHECK(r.objects == e.paths.objects);
+            CHECK(r.lit == e.paths.lit);
+            CHECK(r.unbounded == e.paths.unbounded);
+            CHECK(r.has_vertices() == e.paths.has_vertices());
+            if (e.paths.has_vertices()) {
+                CHECK(r.vertex_lo == e.paths.vertex_lo);
+                CHECK(r.vertex_hi == e.paths.vertex_hi);
+            }
+            CHECK(r.has_escapes() == e.paths.has_escapes());
+            if (e.paths.has_escapes()) {
+                CHECK(r.escape_lo == e.paths.escape_lo);
+                CHECK(r.escape_hi == e.paths.escape_hi);
+            }
+        });
+        CHECK(blocks == expected.size());
+    }
+}
+
+// A union of unions in the tiles' key form is the union of the records (PathRecord::merge), including its
+// rule that escapes from nowhere make a union unbounded, and the empty union changes nothing.
+TEST_CASE("path unions merged in key form decode to the merged records") {
+    raycache::PathRecord a = raycache::PathRecord::empty(), b = raycache::PathRecord::empty();
+    a.hit(3, glm::vec3(-1.0f, 2.0f, 0.5f));
+    a.hit(4, glm::vec3(1.0f, -2.0f, 0.0f));
+    a.lit = true;
+    a.escaped(glm::vec3(0.0f, 0.0f, -3.0f));
+    b.hit(9, glm::vec3(5.0f, 0.0f, -3.0f));
+    b.escaped(glm::vec3(0.0f, 2.0f, 0.0f));
+    b.chained = true;
+    // Stored in two blocks of one tile (texels (0, 0) and (2, 0) of +X), read back per block.
+    CctCube cube(16);
+    REQUIRE(cube.store_at(TexelAddress{0, 0, 0}, grey, a));
+    REQUIRE(cube.store_at(TexelAddress{0, 2, 0}, grey, b));
+    cube.begin_frame();
+    std::vector<CctCube::PathKeys> keys;
+    cube.for_each_block_keys_of_tile(0, [&](const CctCube::BlockPlace&, const CctCube::PathKeys& k) { keys.push_back(k); });
+    REQUIRE(keys.size() == 2u);
+    CctCube::PathKeys u = CctCube::PathKeys::empty();
+    u.merge(keys[0]);
+    u.merge(keys[1]);
+    const raycache::PathRecord r = u.record();
+    CHECK(r.objects == (raycache::object_bits(3) | raycache::object_bits(4) | raycache::object_bits(9)));
+    CHECK(r.vertex_lo == glm::vec3(-1.0f, -2.0f, -3.0f));
+    CHECK(r.vertex_hi == glm::vec3(5.0f, 2.0f, 0.5f));
+    CHECK(r.escape_lo == glm::vec3(0.0f, 0.0f, -1.0f));
+    CHECK(r.escape_hi == glm::vec3(0.0f, 1.0f, 0.0f));
+    CHECK(r.lit);
+    CHECK(r.chained);
+    CHECK_FALSE(r.unbounded);
+    // Escapes with no hit point (from nowhere) make the union unbounded, as PathRecord::merge does.
+    raycache::PathRecord nowhere = raycache::PathRecord::empty();
+    nowhere.escaped(glm::vec3(1.0f, 0.0f, 0.0f));
+    CctCube other(16);
+    REQUIRE(other.store_at(TexelAddress{0, 0, 0}, grey, nowhere));
+    other.begin_frame();
+    other.for_each_block_keys_of_tile(0, [&](const CctCube::BlockPlace&, const CctCube::PathKeys& k) { u.merge(k); });
+    CHECK(u.record().unbounded);
+    CHECK(u.record().vertex_lo == glm::vec3(-1.0f, -2.0f, -3.0f)); // the boxes still hold
+    // The empty union is the identity.
+    CctCube::PathKeys e = CctCube::PathKeys::empty();
+    CHECK_FALSE(e.record().has_vertices());
+    CHECK_FALSE(e.record().has_escapes());
+    e.merge(keys[0]);
+    CHECK(e.record().vertex_lo == glm::vec3(-1.0f, -2.0f, 0.0f));
+    CHECK(e.record().vertex_hi == glm::vec3(1.0f, 2.0f, 0.5f));
 }
 
 TEST_CASE("lookups and loads of texels in tiles never stored miss without allocating") {

@@ -408,19 +408,66 @@ public:
         r.unbounded = (flags & path_unbounded) != 0;
     }
 
-    // One record block (record_edge x record_edge texels) of an allocated tile, for invalidation
-    // (raycache/invalidation.hpp): its texels and the union of the path records stored into them.
-    struct BlockState {
+    // Where one record block (record_edge x record_edge texels) of an allocated tile lies, and how many of
+    // its texels hold values: what the passes over a block's texels need (invalidate_in_block() and others).
+    struct BlockPlace {
         std::size_t tile;                // the tile's index
         int block;                       // the block within the tile
         int face, column0, row0, column1, row1; // texels [column0, column1) x [row0, row1) of the face
+        int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
+        int valid_texels;                // texels of the block holding a value (recorded or not)
+    };
+
+    // A union of path records as a tile keeps it: the boxes' floats as ordered keys, so that a union of
+    // unions is integer minima and maxima, with no float converted (invalidation merges a tile's blocks so
+    // and decodes, with record(), only the unions it tests).
+    struct PathKeys {
+        std::uint64_t objects;                      // Bloom mask of the objects hit
+        std::uint32_t vertex_min[3], vertex_max[3]; // ordered floats; empty while min > max
+        std::uint32_t escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
+        std::uint32_t flags;                        // path_lit | path_chained | path_unbounded
+        std::uint64_t cached_reads;                 // direction cells of nested cached answers
+
+        // The union of no paths.
+        static PathKeys empty() noexcept {
+            return PathKeys{0, {~0u, ~0u, ~0u}, {0u, 0u, 0u}, {~0u, ~0u, ~0u}, {0u, 0u, 0u}, 0u, 0};
+        }
+        // PathRecord::merge() in key form. Its rule for escapes from nowhere needs no test here: a tile's
+        // union holding such a path is unbounded already (merge_path()), and so is every union of it.
+        void merge(const PathKeys& o) noexcept {
+            objects |= o.objects;
+            for (int k = 0; k < 3; ++k) {
+                vertex_min[k] = std::min(vertex_min[k], o.vertex_min[k]);
+                vertex_max[k] = std::max(vertex_max[k], o.vertex_max[k]);
+                escape_min[k] = std::min(escape_min[k], o.escape_min[k]);
+                escape_max[k] = std::max(escape_max[k], o.escape_max[k]);
+            }
+            flags |= o.flags;
+            cached_reads |= o.cached_reads;
+        }
+        // The union as one PathRecord (empty boxes as PathRecord keeps them).
+        PathRecord record() const noexcept {
+            PathRecord r = PathRecord::empty();
+            r.objects = objects;
+            r.cached_reads = cached_reads;
+            set_path_flags(r, flags);
+            glm::vec3 lo, hi;
+            read_box(vertex_min, vertex_max, lo, hi);
+            if (lo.x <= hi.x) r.vertex_lo = lo, r.vertex_hi = hi;
+            read_box(escape_min, escape_max, lo, hi);
+            if (lo.x <= hi.x) r.escape_lo = lo, r.escape_hi = hi;
+            return r;
+        }
+    };
+
+    // One record block of an allocated tile with the union of the path records stored into its texels, for
+    // invalidation (raycache/invalidation.hpp) and cache files.
+    struct BlockState : BlockPlace {
         std::uint64_t objects;           // Bloom mask of the objects the recorded paths hit
         glm::vec3 vertex_lo, vertex_hi;  // box of their hit points; empty while lo.x > hi.x
         glm::vec3 escape_lo, escape_hi;  // box of their escaped bounces' unit directions; empty while lo.x > hi.x
         std::uint32_t path_flags;        // path_lit | path_chained | path_unbounded
         std::uint64_t cached_reads;      // direction cells their nested cached answers read (PathRecord::cached_reads)
-        int unrecorded_texels;           // texels of the block holding a value whose store brought no path record
-        int valid_texels;                // texels of the block holding a value (recorded or not)
 
         bool lit() const noexcept { return (path_flags & path_lit) != 0; }             // a path cast shadow rays
         bool chained() const noexcept { return (path_flags & path_chained) != 0; }     // bounced between hit points
@@ -458,47 +505,77 @@ public:
     // threads may read different tiles at once.
     template <class F>
     void for_each_block_state_of_tile(std::size_t i, F&& f) const {
+        for_each_block_keys_of_tile(i, [&](const BlockPlace& place, const PathKeys& keys) {
+            BlockState t{};
+            static_cast<BlockPlace&>(t) = place;
+            t.objects = keys.objects;
+            t.path_flags = keys.flags;
+            t.cached_reads = keys.cached_reads;
+            read_box(keys.vertex_min, keys.vertex_max, t.vertex_lo, t.vertex_hi);
+            read_box(keys.escape_min, keys.escape_max, t.escape_lo, t.escape_hi);
+            f(static_cast<const BlockState&>(t));
+        });
+    }
+
+    // f(const BlockPlace&, const PathKeys&) for every record block of tile `i` holding a value, in block
+    // order, with its union of paths as the tile keeps it (for_each_block_state_of_tile() without decoding
+    // the boxes: invalidation merges blocks before it tests them). Between frames only; threads may read
+    // different tiles at once.
+    template <class F>
+    void for_each_block_keys_of_tile(std::size_t i, F&& f) const {
         const Tile* tile = allocated_tile(i);
         if (!tile) return;
         const TexelAddress first = first_texel_of_tile(i);
         const bool any_unrecorded = has_unrecorded(*tile);
-        BlockState t{};
+        // The recorded texels of each row of the tile (bit c: column c), read once for its blocks; rows and
+        // columns off the face (a face smaller than a tile) hold none, and their blocks are left out.
+        static_assert(tile_edge < 64 && 64 % tile_edge == 0, "a tile row lies within one bit word");
+        const int rows_on_face = std::min(tile_edge, face_size_ - first.row);
+        const int columns_on_face = std::min(tile_edge, face_size_ - first.column);
+        const std::uint64_t on_face = (std::uint64_t{1} << columns_on_face) - 1u;
+        std::uint64_t row_bits[tile_edge];
+        for (int r = 0; r < tile_edge; ++r)
+            row_bits[r] = r < rows_on_face ? (recorded_word(*tile, r * tile_edge / 64) >> (r * tile_edge % 64)) & on_face : 0u;
+        constexpr int per_side = tile_edge / record_edge;
+        BlockPlace t{};
         t.tile = i;
         t.face = first.face;
-        for (int b = 0; b < record_blocks; ++b) {
-            t.block = b;
-            t.column0 = first.column + b % (tile_edge / record_edge) * record_edge;
-            t.row0 = first.row + b / (tile_edge / record_edge) * record_edge;
-            t.column1 = std::min(face_size_, t.column0 + record_edge);
-            t.row1 = std::min(face_size_, t.row0 + record_edge);
-            if (t.column0 >= t.column1 || t.row0 >= t.row1) continue; // off the face
-            t.unrecorded_texels = 0;
-            if (any_unrecorded)
-                for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
-                    if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !recorded(*tile, slot))
-                        ++t.unrecorded_texels;
-                });
-            // The recorded texels hold values; a row of the block is a run of bits within one word.
-            t.valid_texels = t.unrecorded_texels;
-            const std::uint64_t row_mask = (std::uint64_t{1} << (t.column1 - t.column0)) - 1u;
-            for (int row = t.row0; row < t.row1; ++row) {
-                const int slot = slot_of(TexelAddress{t.face, t.column0, row});
-                const std::uint64_t bits = (recorded_word(*tile, slot / 64) >> (slot % 64)) & row_mask;
-                // Two bits count as v - (v >> 1) (0, 1, 1, 2): 6% of a CCT move's instructions below bit_count().
-                if constexpr (record_edge == 2) t.valid_texels += static_cast<int>(bits - (bits >> 1));
-                else t.valid_texels += bit_count(bits);
+        for (int br = 0; br < per_side && br * record_edge < rows_on_face; ++br) {
+            // 2 x 2 blocks: the recorded texels of the row's eight blocks counted at once, in 4-bit fields
+            // (a pair of bits counts as v - (v >> 1)): even blocks' in `even`, odd blocks' in `odd`.
+            std::uint64_t even = 0, odd = 0;
+            if constexpr (record_edge == 2) {
+                const std::uint64_t a = row_bits[2 * br], b = row_bits[2 * br + 1];
+                const std::uint64_t pa = a - ((a >> 1) & 0x5555u), pb = b - ((b >> 1) & 0x5555u);
+                even = (pa & 0x3333u) + (pb & 0x3333u);
+                odd = ((pa >> 2) & 0x3333u) + ((pb >> 2) & 0x3333u);
             }
-            // A block holding no value answers for no path and has nothing to empty: it is passed over
-            // (most blocks of a sparse tile after a cold frame are such).
-            if (t.valid_texels == 0) continue;
-            static const PathUnion none; // every block's of a cube without records
-            const PathUnion& r = tile->records ? tile->records[b] : none;
-            t.objects = r.objects.load(std::memory_order_relaxed);
-            t.path_flags = r.flags.load(std::memory_order_relaxed);
-            t.cached_reads = r.cached_reads.load(std::memory_order_relaxed);
-            read_box(r.vertex_min, r.vertex_max, t.vertex_lo, t.vertex_hi);
-            read_box(r.escape_min, r.escape_max, t.escape_lo, t.escape_hi);
-            f(static_cast<const BlockState&>(t));
+            for (int bc = 0; bc < per_side && bc * record_edge < columns_on_face; ++bc) {
+                const int b = br * per_side + bc;
+                t.block = b;
+                t.column0 = first.column + bc * record_edge;
+                t.row0 = first.row + br * record_edge;
+                t.column1 = std::min(face_size_, t.column0 + record_edge);
+                t.row1 = std::min(face_size_, t.row0 + record_edge);
+                t.unrecorded_texels = 0;
+                if (any_unrecorded)
+                    for_each_texel_of_block(t, [&](const TexelAddress&, int slot) {
+                        if (Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed)) && !recorded(*tile, slot))
+                            ++t.unrecorded_texels;
+                    });
+                // The recorded texels hold values.
+                t.valid_texels = t.unrecorded_texels;
+                if constexpr (record_edge == 2) {
+                    t.valid_texels += static_cast<int>((((bc & 1) ? odd : even) >> (4 * (bc >> 1))) & 0xFu);
+                } else {
+                    for (int row = t.row0 - first.row; row < t.row1 - first.row; ++row)
+                        t.valid_texels += bit_count((row_bits[row] >> (bc * record_edge)) & ((std::uint64_t{1} << record_edge) - 1u));
+                }
+                // A block holding no value answers for no path and has nothing to empty: it is passed over
+                // (most blocks of a sparse tile after a cold frame are such).
+                if (t.valid_texels == 0) continue;
+                f(static_cast<const BlockPlace&>(t), tile->records ? tile->records[b].keys() : PathKeys::empty());
+            }
         }
     }
 
@@ -559,7 +636,7 @@ public:
     // f(TexelAddress, bool recorded) for each texel of block `b` (from for_each_block_state()) holding a
     // value; `recorded`: its store brought a path record. Between frames only.
     template <class F>
-    void for_each_value_of_block(const BlockState& b, F&& f) const {
+    void for_each_value_of_block(const BlockPlace& b, F&& f) const {
         const Tile* tile = allocated_tile(b.tile);
         if (!tile) return;
         for_each_texel_of_block(b, [&](const TexelAddress& t, int slot) {
@@ -572,7 +649,7 @@ public:
     // A block left with no value forgets its path record too (no texel answers for those paths any more),
     // so its next stores start a fresh union. Returns how many were emptied. Between frames only.
     template <class Drop>
-    std::size_t invalidate_in_block(const BlockState& b, Drop&& drop) {
+    std::size_t invalidate_in_block(const BlockPlace& b, Drop&& drop) {
         assert_between_frames();
         Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile) return 0;
@@ -596,7 +673,7 @@ public:
     // block's record: for texels copied from another cube whose records are known (carry_path_records, a
     // cache file's records), also when they were copied in this frame by stores without a record.
     // Nothing in a cube without path records. Between frames.
-    void record_texels_of_block(const BlockState& b, const PathRecord& path) noexcept {
+    void record_texels_of_block(const BlockPlace& b, const PathRecord& path) noexcept {
         assert_between_frames();
         Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
         if (!tile || !tile->records) return; // a cube without records: its texels stay unrecorded
@@ -882,6 +959,20 @@ private:
         std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
         std::atomic<std::uint32_t> flags{0};                     // path_lit | path_chained | path_unbounded
         std::atomic<std::uint64_t> cached_reads{0};              // direction cells of nested cached answers
+        // The union as it stands, in key form.
+        PathKeys keys() const noexcept {
+            PathKeys k;
+            k.objects = objects.load(std::memory_order_relaxed);
+            for (int a = 0; a < 3; ++a) {
+                k.vertex_min[a] = vertex_min[a].load(std::memory_order_relaxed);
+                k.vertex_max[a] = vertex_max[a].load(std::memory_order_relaxed);
+                k.escape_min[a] = escape_min[a].load(std::memory_order_relaxed);
+                k.escape_max[a] = escape_max[a].load(std::memory_order_relaxed);
+            }
+            k.flags = flags.load(std::memory_order_relaxed);
+            k.cached_reads = cached_reads.load(std::memory_order_relaxed);
+            return k;
+        }
     };
 
     struct Tile {
@@ -1319,7 +1410,7 @@ private:
     }
     // f(TexelAddress, slot within its tile) for every texel of record block `b`.
     template <class F>
-    void for_each_texel_of_block(const BlockState& b, F&& f) const {
+    void for_each_texel_of_block(const BlockPlace& b, F&& f) const {
         for (int row = b.row0; row < b.row1; ++row)
             for (int column = b.column0; column < b.column1; ++column) {
                 const TexelAddress t{b.face, column, row};
@@ -1351,18 +1442,7 @@ private:
         return tile.records ? record_of(tile.records[tile_union_slot]) : PathRecord::empty();
     }
     // A union as one PathRecord (empty boxes as PathRecord keeps them).
-    static PathRecord record_of(const PathUnion& u) noexcept {
-        PathRecord r = PathRecord::empty();
-        r.objects = u.objects.load(std::memory_order_relaxed);
-        r.cached_reads = u.cached_reads.load(std::memory_order_relaxed);
-        set_path_flags(r, u.flags.load(std::memory_order_relaxed));
-        glm::vec3 lo, hi;
-        read_box(u.vertex_min, u.vertex_max, lo, hi);
-        if (lo.x <= hi.x) r.vertex_lo = lo, r.vertex_hi = hi;
-        read_box(u.escape_min, u.escape_max, lo, hi);
-        if (lo.x <= hi.x) r.escape_lo = lo, r.escape_hi = hi;
-        return r;
-    }
+    static PathRecord record_of(const PathUnion& u) noexcept { return u.keys().record(); }
     // Whether a texel of the tile holds a value stored without a record. Recorded bits are set only on
     // texels holding a value (and cleared when one is emptied), so a tile whose count of values equals its
     // recorded bits has none.
@@ -1398,16 +1478,14 @@ private:
     }
     // The box [lo, hi] that widen() built in [min, max]; lo = 1, hi = -1 (empty) when nothing was added
     // (widen() sets all three axes at once, so one axis tells).
-    static void read_box(const std::atomic<std::uint32_t> (&min)[3], const std::atomic<std::uint32_t> (&max)[3], glm::vec3& lo,
-                         glm::vec3& hi) noexcept {
-        if (min[0].load(std::memory_order_relaxed) > max[0].load(std::memory_order_relaxed)) {
+    static void read_box(const std::uint32_t (&min)[3], const std::uint32_t (&max)[3], glm::vec3& lo, glm::vec3& hi) noexcept {
+        if (min[0] > max[0]) {
             lo = glm::vec3(1.0f), hi = glm::vec3(-1.0f);
             return;
         }
         // By member, not by glm's operator[] (a switch per component, on invalidation's hot path).
-        auto value = [](const std::atomic<std::uint32_t>& v) { return unordered(v.load(std::memory_order_relaxed)); };
-        lo = glm::vec3(value(min[0]), value(min[1]), value(min[2]));
-        hi = glm::vec3(value(max[0]), value(max[1]), value(max[2]));
+        lo = glm::vec3(unordered(min[0]), unordered(min[1]), unordered(min[2]));
+        hi = glm::vec3(unordered(max[0]), unordered(max[1]), unordered(max[2]));
     }
 
     // Writes `word` into texel t under the frame rule; with `from`, first widens the tile's pending box and

@@ -230,6 +230,7 @@ inline constexpr unsigned every_path_test = (1u << 7) - 1u;
 // block's) can have met a change: 0 when none. With `first_only`, it stops at the first that does.
 inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, unsigned tests = every_path_test, bool first_only = false) {
     unsigned met = 0;
+    if (tests == 0) return met;
     // Records that `test` met; true when the caller has its answer.
     auto meets = [&](unsigned test) {
         met |= test;
@@ -397,7 +398,8 @@ public:
     }
 
 private:
-    using Block = typename CacheCube<Texel>::BlockState;
+    using Block = typename CacheCube<Texel>::BlockPlace;
+    using PathKeys = typename CacheCube<Texel>::PathKeys;
     // Runs of this many allocated tiles, each reading its own tiles' records.
     static constexpr std::size_t tiles_per_run = 16;
     // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
@@ -417,7 +419,7 @@ private:
         return static_cast<std::size_t>(b / per_side / group_edge * groups_per_side + b % per_side / group_edge);
     }
     struct Group {
-        PathRecord paths = PathRecord::empty(); // unbounded when a block's paths escaped from nowhere (PathRecord::merge)
+        PathKeys paths = PathKeys::empty(); // unbounded when a block's paths escaped from nowhere (its union is: merge_path)
         bool any = false;
     };
     struct Reached { // a recorded texel's reach, from its block's shell walk
@@ -428,7 +430,7 @@ private:
     // records to initialise).
     struct Scratch {
         std::array<Block, CacheCube<Texel>::record_blocks> blocks;      // those holding a value
-        std::array<PathRecord, CacheCube<Texel>::record_blocks> records; // blocks[i]'s, converted once
+        std::array<PathKeys, CacheCube<Texel>::record_blocks> paths;    // blocks[i]'s union, as the tile keeps it
         std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
     };
 
@@ -467,18 +469,21 @@ private:
         const unsigned tile_paths_meet = paths_met ? *paths_met : paths_meeting(summary->paths, changes);
         if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
+        // Their unions stay in key form: merged into the groups as integers, and decoded only for the blocks
+        // of groups whose paths meet a change (most groups, even of tiles whose union met one).
         auto& blocks = scratch.blocks;
-        auto& records = scratch.records;
+        auto& paths = scratch.paths;
         std::size_t count = 0;
-        cube.for_each_block_state_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
+        cube.for_each_block_keys_of_tile(index, [&](const Block& b, const PathKeys& k) {
+            blocks[count] = b;
+            paths[count++] = k;
+        });
         c.blocks += count;
         const std::size_t dropped_before = c.dropped;
         std::array<Group, group_count> groups{};
         for (std::size_t i = 0; i < count; ++i) {
-            const Block& t = blocks[i];
-            Group& g = groups[group_of(t.block)];
-            records[i] = t.record();
-            g.paths.merge(records[i]);
+            Group& g = groups[group_of(blocks[i].block)];
+            g.paths.merge(paths[i]);
             g.any = true;
         }
         std::array<unsigned, group_count> group_paths_meet{}; // the tests that met (paths_meeting)
@@ -486,7 +491,7 @@ private:
         for (std::size_t k = 0; k < group_count; ++k) {
             const Group& g = groups[k];
             if (!g.any) continue;
-            group_paths_meet[k] = paths_meeting(g.paths, changes, tile_paths_meet);
+            group_paths_meet[k] = tile_paths_meet ? paths_meeting(g.paths.record(), changes, tile_paths_meet) : 0u;
             // The group's square of texels, clipped to the face as its blocks are.
             constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
@@ -499,7 +504,7 @@ private:
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k] && paths_meeting(records[i], changes, group_paths_meet[k], true)) {
+            if (group_paths_meet[k] && paths_meeting(paths[i].record(), changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
@@ -557,10 +562,10 @@ private:
             note_changed_cells(c, t, d);
         }
         if (c.dropped != dropped_before) { // emptied blocks' paths leave the tile's union
-            PathRecord kept = PathRecord::empty();
+            PathKeys kept = PathKeys::empty();
             for (std::size_t i = 0; i < count; ++i)
-                if (keeps_recorded[i]) kept.merge(records[i]);
-            cube.retighten_tile_union(index, kept);
+                if (keeps_recorded[i]) kept.merge(paths[i]);
+            cube.retighten_tile_union(index, kept.record());
         }
     }
 
