@@ -622,11 +622,11 @@ private:
             return trace(path...);
         };
         ReliefResult found;
-        const glm::vec3 colour = through_cube(id, origin, direction, noting, &found);
+        const Entry* answering = nullptr;
+        const glm::vec3 colour = through_cube(id, origin, direction, noting, &found, &answering);
         if (traced) return colour;
-        const int index = find(id);
-        if (index < 0 || !shared::raycache_is_direction(direction)) return colour; // (answered by no cube: traced)
-        const Entry& e = entries_[static_cast<std::size_t>(index)];
+        if (!answering || !shared::raycache_is_direction(direction)) return colour; // (answered by no cube: traced)
+        const Entry& e = *answering;
         // The enclosing path read this cube: it carries the cube's key, which the transitive step names the
         // cube by when it changes. A hit's key can differ from it: a cube attached to an instance alone is
         // named by the instance, hits through the instance by (instance, geometry).
@@ -683,13 +683,15 @@ private:
     }
 
     // leaving_ray() through the cube: looked up, and on a miss traced and stored.
-    // `found`, when given, receives a CDCT search's outcome (untouched when no search ran).
+    // `found`, when given, receives a CDCT search's outcome (untouched when no search ran); `entry`, when
+    // given, the object's cube (null when it has none), so that noting_reads() need not find it again.
     template <class Trace>
     glm::vec3 through_cube(ObjectId id, const glm::vec3& origin, const glm::vec3& direction, Trace&& trace,
-                           ReliefResult* found = nullptr) {
+                           ReliefResult* found = nullptr, const Entry** entry = nullptr) {
         const int index = find(id);
         if (index < 0) return trace_alone(trace);
         Entry& e = entries_[static_cast<std::size_t>(index)];
+        if (entry) *entry = &e;
         // A ray from outside what the last exact invalidation checked: traced alone, a miss (OriginReach).
         const bool answerable = e.origins->admits(origin - e.bounds.centre);
         // A resting cube (raycache/resting.hpp) looks up its probe directions alone; it keeps its face size
