@@ -23,6 +23,7 @@
 #include "raycache/path_record.hpp"
 
 #include "analytic_world.hpp"
+#include "test_random.hpp"
 
 namespace {
 
@@ -263,6 +264,100 @@ TEST_CASE("shadow rays end at the light: a sphere moving beyond the lit hit poin
     CHECK(raycache::detail::paths_meeting(lit, moving_around({-5.0f, 0.0f, 0.0f})) == 0u);
     CHECK(raycache::detail::paths_meeting(lit, moving_around({10.0f, 0.0f, 0.0f})) == raycache::detail::path_test_shadow);
     CHECK(raycache::detail::paths_meeting(lit, moving_around({10.0f, 3.0f, 0.0f})) == 0u);
+}
+
+TEST_CASE("shadow rays from a flat spread of hit points stay between the floor and the light: a sphere under the floor is not met") {
+    // Lit hit points on the floor y = 0, x and z in [-10, 10], the light at (0, 20, 0): every shadow ray runs
+    // from y = 0 (less the tracer's surface offset, 1e-3 x 14.2) up to y = 20, over x and z in [-10, 10]. The
+    // ball around the hit points (radius 14.1) holds points down to y = -14.1, so its hull with the light
+    // reaches under the floor; the shadow rays do not. Object 9 moves by 0.5 along X, radius 1, around
+    // (0, -3, 0): under the floor, 2 below the lowest a shadow ray goes. Around (0, 5, 0) it lies on them.
+    REQUIRE((raycache::object_bits(7) & raycache::object_bits(9)) != raycache::object_bits(9)); // no Bloom alias
+    PathRecord floor;
+    floor.hit(7, glm::vec3(-10.0f, 0.0f, -10.0f));
+    floor.hit(7, glm::vec3(10.0f, 0.0f, 10.0f));
+    floor.lit = true;
+    auto moving_around = [](glm::vec3 centre) {
+        raycache::SceneChanges changes;
+        changes.moved.push_back({9, {centre, 1.0f}, {centre + glm::vec3(0.5f, 0.0f, 0.0f), 1.0f}});
+        changes.lights.push_back(glm::vec3(0.0f, 20.0f, 0.0f));
+        return changes;
+    };
+    using namespace raycache::detail;
+    CHECK(paths_meeting(floor, moving_around({0.0f, -3.0f, 0.0f})) == 0u);
+    CHECK(paths_meeting(floor, moving_around({0.0f, 5.0f, 0.0f})) == path_test_shadow);
+    // Just under the floor, within the surface offset of it (0.0142): met.
+    CHECK(paths_meeting(floor, moving_around({0.0f, -1.01f, 0.0f})) == path_test_shadow);
+    // Beside the floor's box, beyond x = 10 and below the light's height, yet inside the ball's hull: not met.
+    CHECK(paths_meeting(floor, moving_around({12.0f, 1.0f, 0.0f})) == 0u);
+}
+
+TEST_CASE("bounces between hit points leave from points offset from them: a sphere within the offset of their box is met") {
+    // A chained path between hit points (0, 0, 0) and (10, 0, 0): the tracer may start a bounce up to
+    // 1e-3 x 10 = 0.01 off a hit point, so the bounce from (10, 0.009, 0) back to (0, 0, 0) passes (5, 0.0045,
+    // 0), 0.9995 from (5, 1.004, 0): a sphere of radius 1 there, 0.004 off the box, meets it. At (5, 1.05, 0)
+    // it is 0.05 off, beyond any offset, and is not met.
+    REQUIRE((raycache::object_bits(7) & raycache::object_bits(9)) != raycache::object_bits(9)); // no Bloom alias
+    PathRecord chain;
+    chain.hit(7, glm::vec3(0.0f));
+    chain.hit(7, glm::vec3(10.0f, 0.0f, 0.0f));
+    chain.chained = true;
+    auto moving_around = [](glm::vec3 centre) {
+        raycache::SceneChanges changes;
+        changes.moved.push_back({9, {centre, 1.0f}, {centre + glm::vec3(0.0f, 0.0f, 0.5f), 1.0f}});
+        return changes;
+    };
+    using namespace raycache::detail;
+    CHECK(paths_meeting(chain, moving_around({5.0f, 1.004f, 0.0f})) == path_test_between);
+    CHECK(paths_meeting(chain, moving_around({5.0f, 1.05f, 0.0f})) == 0u);
+}
+
+TEST_CASE("the shadow test never misses a sampled shadow ray that meets a moved sphere") {
+    // Random lit unions (a box of hit points, flat along an axis in a third of the cases), lights, and moved
+    // spheres placed about a random shadow ray, on it or near it. Shadow rays leave points of the box moved
+    // by up to the surface offset the tracer may add (1e-3 x max(1, |point|)) and end at the light; whenever
+    // a sampled one meets a sphere, the shadow test must report it.
+    Lcg random{31};
+    auto uniform = [&](float lo, float hi) { return lo + (hi - lo) * random.uniform(); };
+    auto in_box = [&](glm::vec3 lo, glm::vec3 size) { return lo + glm::vec3(random.uniform(), random.uniform(), random.uniform()) * size; };
+    int segments_met = 0, unions_met = 0;
+    constexpr int trials = 400;
+    for (int trial = 0; trial < trials; ++trial) {
+        const glm::vec3 lo(uniform(-40.0f, 40.0f), uniform(-40.0f, 40.0f), uniform(-40.0f, 40.0f));
+        glm::vec3 size(uniform(0.0f, 15.0f), uniform(0.0f, 15.0f), uniform(0.0f, 15.0f));
+        if (trial % 3 == 0) size[trial % 2] = 0.0f;
+        PathRecord u;
+        u.hit(7, lo);
+        u.hit(7, lo + size);
+        u.lit = true;
+        const glm::vec3 light(uniform(-30.0f, 30.0f), uniform(-30.0f, 30.0f), uniform(-30.0f, 30.0f));
+        // About a point of a shadow ray, within a few radii of it.
+        const float r0 = uniform(0.1f, 3.0f), r1 = uniform(0.1f, 3.0f);
+        const glm::vec3 on = glm::mix(in_box(lo, size), light, random.uniform());
+        const glm::vec3 c = on + 2.0f * r0 * glm::vec3(random.signed_uniform(), random.signed_uniform(), random.signed_uniform());
+        raycache::SceneChanges changes;
+        changes.moved.push_back({9, {c, r0}, {c + glm::vec3(uniform(-2.0f, 2.0f), 0.0f, 0.0f), r1}});
+        changes.lights.push_back(light);
+        const bool said = raycache::detail::paths_meeting(u, changes, raycache::detail::path_test_shadow) != 0u;
+        unions_met += said;
+        for (int k = 0; k < 400; ++k) {
+            glm::vec3 p = in_box(lo, size);
+            if (k % 4 == 0) p = glm::vec3(k & 8 ? lo.x + size.x : lo.x, k & 16 ? lo.y + size.y : lo.y, k & 32 ? lo.z + size.z : lo.z);
+            p += 1e-3f * std::max(1.0f, glm::length(p)) * 0.57f * glm::vec3(random.signed_uniform(), random.signed_uniform(), random.signed_uniform());
+            for (const raycache::BoundingSphere& s : {changes.moved[0].before, changes.moved[0].after}) {
+                const glm::vec3 d = light - p;
+                const float t = glm::dot(d, d) > 0.0f ? glm::clamp(glm::dot(s.centre - p, d) / glm::dot(d, d), 0.0f, 1.0f) : 0.0f;
+                const glm::vec3 x = p + t * d - s.centre;
+                if (glm::dot(x, x) <= s.radius * s.radius) {
+                    ++segments_met;
+                    REQUIRE(said);
+                }
+            }
+        }
+    }
+    MESSAGE(unions_met << " of " << trials << " unions met; " << segments_met << " sampled shadow rays met a sphere");
+    CHECK(segments_met > 1000);
+    CHECK(unions_met < trials * 9 / 10); // and the test does reject
 }
 
 TEST_CASE("the path tests report every test that met, repeat only the tests asked for, and can stop at the first") {

@@ -262,29 +262,40 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
     // The ball around the hit points, once per union; hit points so far out that it overflows bound nothing.
     const glm::vec3 centre = 0.5f * (t.vertex_lo + t.vertex_hi);
     const float radius = 0.5f * glm::length(t.vertex_hi - t.vertex_lo) * 1.0001f + 1e-5f;
-    const float farthest = std::max(glm::length(t.vertex_lo), glm::length(t.vertex_hi));
+    // The farthest a point of the box lies from the origin: its corner of largest magnitudes (the corners
+    // lo and hi alone can be nearer than another).
+    const float farthest = glm::length(glm::max(glm::abs(t.vertex_lo), glm::abs(t.vertex_hi)));
     if (!(shared::raycache_is_finite3(centre) && std::isfinite(radius) && std::isfinite(farthest))) {
         meets(tests & (path_test_between | path_test_shadow | path_test_escape));
         return met;
     }
     // Rays after the first hit leave the hit points offset by the tracer's surface epsilon (PathRecord::escaped):
     // from this ball around them.
-    const float rays_from = radius + 1e-3f * std::max(1.0f, farthest);
+    const float surface_offset = 1e-3f * std::max(1.0f, farthest);
+    const float rays_from = radius + surface_offset;
+    const glm::vec3 offset(surface_offset * 1.001f); // the same around the box of hit points, widened for rounding
     auto each_moved_sphere = [&](auto&& f) {
         for (const SceneChanges::Move& m : changes.moved)
             if (f(m.before) || f(m.after)) return true;
         return false;
     };
+    // Bounces between hit points: segments from a point offset from one to another, within the grown box.
     if ((tests & path_test_between) && t.chained &&
-        each_moved_sphere([&](const BoundingSphere& s) { return shared::raycache_box_meets_sphere(t.vertex_lo, t.vertex_hi, s.centre, s.radius); }) &&
+        each_moved_sphere([&](const BoundingSphere& s) {
+            return shared::raycache_box_meets_sphere(t.vertex_lo - offset, t.vertex_hi + offset, s.centre, s.radius);
+        }) &&
         meets(path_test_between))
         return met;
     // Shadow rays end at the light: they lie in the hull of the light and the ball they leave from (not in the
-    // whole cone from the light, which goes on past the hit points).
+    // whole cone from the light, which goes on past the hit points), and in the box around the light and the
+    // hit points' box grown by the surface offset, which is the tighter of the two beside a flat spread of hit
+    // points (a floor's ball reaches far under it).
     if ((tests & path_test_shadow) && t.lit)
         for (const glm::vec3& light : changes.lights) {
             if (each_moved_sphere([&](const BoundingSphere& s) {
-                    return shared::raycache_ball_hull_meets_sphere(light, 0.0f, centre, rays_from, s.centre, s.radius);
+                    return shared::raycache_box_meets_sphere(glm::min(light, t.vertex_lo - offset), glm::max(light, t.vertex_hi + offset), s.centre,
+                                                             s.radius) &&
+                           shared::raycache_ball_hull_meets_sphere(light, 0.0f, centre, rays_from, s.centre, s.radius);
                 })) {
                 if (meets(path_test_shadow)) return met;
                 break;
