@@ -287,15 +287,11 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         meets(path_test_between))
         return met;
     // Shadow rays end at the light: they lie in the hull of the light and the ball they leave from (not in the
-    // whole cone from the light, which goes on past the hit points), and in the box around the light and the
-    // hit points' box grown by the surface offset, which is the tighter of the two beside a flat spread of hit
-    // points (a floor's ball reaches far under it).
+    // whole cone from the light, which goes on past the hit points).
     if ((tests & path_test_shadow) && t.lit)
         for (const glm::vec3& light : changes.lights) {
             if (each_moved_sphere([&](const BoundingSphere& s) {
-                    return shared::raycache_box_meets_sphere(glm::min(light, t.vertex_lo - offset), glm::max(light, t.vertex_hi + offset), s.centre,
-                                                             s.radius) &&
-                           shared::raycache_ball_hull_meets_sphere(light, 0.0f, centre, rays_from, s.centre, s.radius);
+                    return shared::raycache_ball_hull_meets_sphere(light, 0.0f, centre, rays_from, s.centre, s.radius);
                 })) {
                 if (meets(path_test_shadow)) return met;
                 break;
