@@ -350,6 +350,19 @@ TEST_CASE("cache options given with a mode that keeps no cubes are named in a no
     CHECK(parse({"--face-size", "64", "--cache", "off"}).notes.size() == 1); // in any order
 }
 
+TEST_CASE("a tracer that ignores --threads says so when it is given, instead of fitting it to the cores") {
+    rcx::CommandLine command_line("tracer");
+    command_line.ignore_threads("the Vulkan driver decides");
+    const std::vector<const char*> given{"tracer", "--threads", "4096"};
+    const rcx::Options o = command_line.parse(static_cast<int>(given.size()), given.data());
+    REQUIRE(o.notes.size() == 1);
+    CHECK(o.notes[0] == "--threads has no effect: the Vulkan driver decides");
+    rcx::CommandLine quiet("tracer");
+    quiet.ignore_threads("the Vulkan driver decides");
+    const std::vector<const char*> none{"tracer", "--cache", "cct"};
+    CHECK(quiet.parse(static_cast<int>(none.size()), none.data()).notes.empty());
+}
+
 TEST_CASE("--threads beyond the cores the machine has runs on those cores, with a note") {
     const unsigned cores = std::thread::hardware_concurrency();
     if (cores == 0 || cores >= 4096) return; // nothing to compare with

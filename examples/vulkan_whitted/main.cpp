@@ -393,6 +393,7 @@ int main(int argc, char** argv) {
                           "(registers, memory, instructions; where the device has\n"
                           "VK_KHR_pipeline_executable_properties), for the cached and the\n"
                           "uncached pipeline");
+    command_line.ignore_threads("the Vulkan tracer's work is spread by the Vulkan driver");
     command_line.add_note("Vulkan tracer: --threads is ignored; the options marked (Embree tracer), --prefill,\n"
                           "--no-pyramid, --invalidate and caches on dynamic-N are refused; the CDCT relief search is\n"
                           "the linear walk. Shaders: RAYCACHE_VULKAN_WHITTED_SHADERS=<folder> overrides where the .spv\n"

@@ -285,6 +285,8 @@ void CommandLine::add_option(const std::string& names, const std::string& value,
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
 }
 
+void CommandLine::ignore_threads(const std::string& why) { threads_ignored_ = why; }
+
 void CommandLine::add_note(const std::string& paragraph) {
     if (!paragraph.empty()) notes_ += paragraph + "\n\n";
     app_->footer(notes_ + "Options take their value as '--name value' or '--name=value'. Exit status: 0 done, 2 bad input\n"
@@ -319,9 +321,12 @@ Options CommandLine::parse(int argc, const char* const argv[]) {
             if (option->get_group() == cache_section && option->count() > 0 && long_name(*option) != "--cache")
                 o.notes.push_back(long_name(*option) + " has no effect with --cache " + to_string(o.cache));
     // A thread arena wider than the cores gets no more workers (TBB says so in a warning of its own): the
-    // run takes the cores, and its frames are the same with any number of threads.
+    // run takes the cores, and its frames are the same with any number of threads. A tracer that chooses
+    // no threads says so instead.
     const unsigned cores = std::thread::hardware_concurrency();
-    if (cores > 0 && o.threads > static_cast<int>(cores)) {
+    if (!threads_ignored_.empty()) {
+        if (app_->get_option("--threads")->count() > 0) o.notes.push_back("--threads has no effect: " + threads_ignored_);
+    } else if (cores > 0 && o.threads > static_cast<int>(cores)) {
         o.notes.push_back("--threads " + std::to_string(o.threads) + ": this machine has " + std::to_string(cores) +
                           " hardware threads; running " + std::to_string(cores));
         o.threads = static_cast<int>(cores);

@@ -35,6 +35,9 @@ public:
     void add_flag(const std::string& names, bool& target, const std::string& description);
     // A paragraph for the end of --help, before the closing lines on value syntax and exit status.
     void add_note(const std::string& paragraph);
+    // For a tracer whose threads are not its own to choose: --threads still parses, and parse() notes
+    // "--threads has no effect: <why>" when it is given, instead of fitting it to the machine's cores.
+    void ignore_threads(const std::string& why);
 
     // Parses argv[1..argc-1]: each option is applied in command-line order, so a repeated option's last
     // value wins. Throws UsageError naming the option (or argument) at fault. Call once.
@@ -48,6 +51,7 @@ private:
     bool no_pyramid_ = false; // --no-pyramid, a flag that clears Options::pyramid
     std::string section_;
     std::string notes_;
+    std::string threads_ignored_; // why --threads has no effect (ignore_threads()); empty: it has
 };
 
 // "[value]": how --help shows a default. Floats in their shortest form (0.1, not 0.100000).
