@@ -546,9 +546,10 @@ public:
             std::uint64_t even = 0, odd = 0;
             if constexpr (record_edge == 2) {
                 const std::uint64_t a = row_bits[2 * br], b = row_bits[2 * br + 1];
-                const std::uint64_t pa = a - ((a >> 1) & 0x5555u), pb = b - ((b >> 1) & 0x5555u);
-                even = (pa & 0x3333u) + (pb & 0x3333u);
-                odd = ((pa >> 2) & 0x3333u) + ((pb >> 2) & 0x3333u);
+                constexpr std::uint64_t pairs = 0x5555555555555555ull, fields = 0x3333333333333333ull; // any tile edge below 64
+                const std::uint64_t pa = a - ((a >> 1) & pairs), pb = b - ((b >> 1) & pairs);
+                even = (pa & fields) + (pb & fields);
+                odd = ((pa >> 2) & fields) + ((pb >> 2) & fields);
             }
             for (int bc = 0; bc < per_side && bc * record_edge < columns_on_face; ++bc) {
                 const int b = br * per_side + bc;
@@ -624,13 +625,11 @@ public:
     // Makes tile `i`'s union `kept` after invalidation emptied some of its texels: the caller, which has
     // just read the tile's blocks, passes the union of those still holding a recorded texel (a union
     // missing any of their paths would let invalidation keep texels a move changed). Between frames only.
-    void retighten_tile_union(std::size_t i, const PathRecord& kept) noexcept {
+    void retighten_tile_union(std::size_t i, const PathKeys& kept) noexcept {
         assert_between_frames();
-        Tile* tile = i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
+        Tile* tile = allocated_tile(i);
         if (!tile || !tile->records) return;
-        PathUnion& u = tile->records[tile_union_slot];
-        u.clear();
-        merge_path(u, kept);
+        tile->records[tile_union_slot].store(kept);
     }
 
     // f(TexelAddress, bool recorded) for each texel of block `b` (from for_each_block_state()) holding a
@@ -651,7 +650,7 @@ public:
     template <class Drop>
     std::size_t invalidate_in_block(const BlockPlace& b, Drop&& drop) {
         assert_between_frames();
-        Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
+        Tile* tile = allocated_tile(b.tile);
         if (!tile) return 0;
         // invalidate() texel by texel, with the bits and counts updated once for the block (between frames
         // no other thread touches the cube, so the words need no read-modify-write of their own).
@@ -675,7 +674,7 @@ public:
     // Nothing in a cube without path records. Between frames.
     void record_texels_of_block(const BlockPlace& b, const PathRecord& path) noexcept {
         assert_between_frames();
-        Tile* tile = b.tile < tile_count() ? state_->tiles[b.tile].load(std::memory_order_acquire) : nullptr;
+        Tile* tile = allocated_tile(b.tile);
         if (!tile || !tile->records) return; // a cube without records: its texels stay unrecorded
         for_each_texel_of_block(b, [&](const TexelAddress&, int slot) {
             if (!Texel::is_valid(tile->texels[slot].load(std::memory_order_relaxed))) return;
@@ -959,6 +958,18 @@ private:
         std::atomic<std::uint32_t> escape_min[3], escape_max[3]; // escaped bounces' directions, the same way
         std::atomic<std::uint32_t> flags{0};                     // path_lit | path_chained | path_unbounded
         std::atomic<std::uint64_t> cached_reads{0};              // direction cells of nested cached answers
+        // Replaces the union by `k` (between frames: no store is merging into it).
+        void store(const PathKeys& k) noexcept {
+            objects.store(k.objects, std::memory_order_relaxed);
+            for (int a = 0; a < 3; ++a) {
+                vertex_min[a].store(k.vertex_min[a], std::memory_order_relaxed);
+                vertex_max[a].store(k.vertex_max[a], std::memory_order_relaxed);
+                escape_min[a].store(k.escape_min[a], std::memory_order_relaxed);
+                escape_max[a].store(k.escape_max[a], std::memory_order_relaxed);
+            }
+            flags.store(k.flags, std::memory_order_relaxed);
+            cached_reads.store(k.cached_reads, std::memory_order_relaxed);
+        }
         // The union as it stands, in key form.
         PathKeys keys() const noexcept {
             PathKeys k;
@@ -1437,6 +1448,7 @@ private:
     const Tile* allocated_tile(std::size_t i) const noexcept {
         return i < tile_count() ? state_->tiles[i].load(std::memory_order_acquire) : nullptr;
     }
+    Tile* allocated_tile(std::size_t i) noexcept { return const_cast<Tile*>(std::as_const(*this).allocated_tile(i)); }
     // The union of a tile's paths (empty in a cube without records).
     static PathRecord paths_of(const Tile& tile) noexcept {
         return tile.records ? record_of(tile.records[tile_union_slot]) : PathRecord::empty();

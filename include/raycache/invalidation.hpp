@@ -572,7 +572,7 @@ private:
             PathKeys kept = PathKeys::empty();
             for (std::size_t i = 0; i < count; ++i)
                 if (keeps_recorded[i]) kept.merge(paths[i]);
-            cube.retighten_tile_union(index, kept.record());
+            cube.retighten_tile_union(index, kept);
         }
     }
 
