@@ -246,7 +246,7 @@ TEST_CASE("a scene cache without path records charges smaller tiles, and its exa
         CHECK(moved.dropped_unrecorded == (records ? 0u : 1u));
     }
     CHECK(bytes[true] - bytes[false] == raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false));
-    CHECK(raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false) == 4680u); // 64 records of 72 bytes and their union
+    CHECK(raycache::CctCube::tile_bytes(true) - raycache::CctCube::tile_bytes(false) == 5832u); // 64 block records of 72 bytes, 16 group unions and the tile's
 }
 
 TEST_CASE("by default a scene cache keeps path records from its first exact move on, which empties its cubes once") {
@@ -317,8 +317,8 @@ TEST_CASE("by default a cache loads a file's path records when it holds any, and
 TEST_CASE("a moved light is a first move too, afterwards unsized adaptive cubes start where tiles with records fit the budget") {
     // As the adapter's budget test derives by hand, with t = tile + table entry: a budget of 1100 t lets one
     // cube start at 181 texels (6 x 12^2 = 864 t), not 256 (1536 t). With 1288-byte t (no records) that is
-    // 181; once records are kept (5968-byte t), the same bytes hold 237 of them: 91 (6 x 6^2 = 216 t) and
-    // not 128 (384 t).
+    // 181; once records are kept (7120-byte t), the same bytes hold 198 of them: 64 (6 x 4^2 = 96 t) and
+    // not 91 (216 t).
     World w;
     const std::size_t alone = raycache::CctCube::tile_bytes(false) + sizeof(void*);
     SceneCacheSettings s;
@@ -330,7 +330,7 @@ TEST_CASE("a moved light is a first move too, afterwards unsized adaptive cubes 
     light.light_moved = true;
     light.lights = {glm::vec3(0.0f, 10.0f, 0.0f)};
     caches.scene_changed(light, Invalidation::exact);
-    CHECK(caches.face_size({w.mirror}) == 91);
+    CHECK(caches.face_size({w.mirror}) == 64);
     // The cube keeps records now: a far move keeps what it stores.
     caches.leaving_ray({w.mirror}, glm::vec3(0.0f, 1.01f, 0.0f), glm::vec3(0, 1, 0),
                        [&](PathRecord&) { return TracedRay{glm::vec3(0.5f), infinity}; });

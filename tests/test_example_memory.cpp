@@ -45,13 +45,13 @@ TEST_CASE("cpu_cubes counts the tiles, tile tables and depth pyramids of full cu
 }
 
 TEST_CASE("a run that needs more memory than is available is refused, naming the need and what is available") {
-    // behind-32 (33 cached objects) with 4096-texel CDCT faces: per cube 6 x 256^2 tiles of 6984 bytes plus an
+    // behind-32 (33 cached objects) with 4096-texel CDCT faces: per cube 6 x 256^2 tiles of 8136 bytes plus an
     // 8-byte table entry each, and a depth pyramid of 6 x 4 x (2048^2 + 1024^2 + ... + 1) bytes:
-    // 33 x (393,216 x 6992 + 134,217,720 = 2,883,583,992) bytes + 3 MiB of images = 88.6 GiB.
+    // 33 x (393,216 x 8144 + 134,217,720 = 3,336,568,824) bytes + 3 MiB of images = 102.5 GiB.
     const std::vector<rcx::MemoryNeed> needs{rcx::cpu_cubes(rcx::CacheMode::cdct, 33, 4096, true),
                                              rcx::MemoryNeed{"frame images", 3u << 20}};
     const rcx::AvailableMemory sixteen{16ull << 30, "MemAvailable in /proc/meminfo"};
-    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("needs about 88.6 GiB"), std::runtime_error);
+    CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("needs about 102.5 GiB"), std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen), doctest::Contains("33 cdct cubes of 6 x 4096 x 4096 texels"),
                          std::runtime_error);
     CHECK_THROWS_WITH_AS(rcx::check_memory(needs, sixteen),

@@ -224,6 +224,34 @@ TEST_CASE("a tile that no change can reach is passed over without reading its bl
     CHECK(cube.valid_texels() == 512);
 }
 
+TEST_CASE("a 4 x 4 group a move emptied forgets its paths, and a group that lost nothing keeps its union") {
+    // Tile 0 of face +X: the first group (columns 0-3, rows 0-3) saw object 5, the second (columns 4-7) object
+    // 6. Object 5 moves where no ray of +X reaches: the first group's 16 texels go by path, and its union,
+    // rebuilt from what its blocks kept, is empty; the second's still names 6 alone, and so does the tile's.
+    // Refilled with paths that saw 6, the first group names 6 and not 5.
+    REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
+    CctCube cube(32);
+    const PathRecord saw_5 = saw(5), saw_6 = saw(6);
+    auto fill_group = [&](int first_column, const PathRecord& path) {
+        for (int row = 0; row < 4; ++row)
+            for (int column = first_column; column < first_column + 4; ++column)
+                REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
+        cube.begin_frame();
+    };
+    fill_group(0, saw_5);
+    fill_group(4, saw_6);
+    CHECK(cube.group_keys(0, 0).objects == raycache::object_bits(5));
+    const raycache::InvalidationCounts moved = raycache::invalidate_changes(cube, {box, -1.0f}, far_along_minus_x(5));
+    CHECK(moved.dropped == 16);
+    CHECK(cube.group_keys(0, 0).objects == 0u);
+    CHECK_FALSE(cube.group_keys(0, 0).record().has_vertices());
+    CHECK(cube.group_keys(0, 1).objects == raycache::object_bits(6));
+    CHECK(cube.tile_paths(0)->objects == raycache::object_bits(6));
+    fill_group(0, saw_6);
+    CHECK(cube.group_keys(0, 0).objects == raycache::object_bits(6));
+    CHECK(cube.valid_texels() == 32);
+}
+
 TEST_CASE("merging a path whose escapes have no hit point before them with one that has hit points leaves it unbounded") {
     // A path that hit object 7 at (5, 0, 0) and stopped, and one that escaped along +X with no hit recorded
     // before it. Merged either way round, the escape would seem to leave (5, 0, 0), from where nothing

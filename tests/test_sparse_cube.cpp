@@ -36,24 +36,24 @@ const glm::vec3 grey(0.5f);
 // frames, and the path records: for each of the sixty-four 2 x 2 record
 // blocks a 64-bit Bloom mask of objects, the hit-point box and the escape-direction box (6 + 6 four-byte
 // values) and the path flags (4 bytes), padded to 64, and the 64-bit mask of the direction cells its
-// nested cached answers read: 72 bytes; then one more such record for the tile's union of them; the whole
-// padded to a multiple of 64.
+// nested cached answers read: 72 bytes; then sixteen more such records for the unions of its 4 x 4 groups
+// of texels and one for the tile's union; the whole padded to a multiple of 64.
 constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
 constexpr std::size_t written_line = round_up(4 * 8 + 4 * 8, 64);
 constexpr std::size_t lookup_line = round_up(4 * 8 + 6 * 4 + 4 + 1, 64);
 // The records live after the tile, in its allocation; the tile itself ends with the pointer to them.
-constexpr std::size_t records = (64 + 1) * (round_up(8 + 6 * 4 + 6 * 4 + 4, 8) + 8); // and the tile's union
+constexpr std::size_t records = (64 + 16 + 1) * (round_up(8 + 6 * 4 + 6 * 4 + 4, 8) + 8); // 2 x 2 blocks, 4 x 4 groups, the tile
 constexpr std::size_t store_part_alone = round_up(6 * 4 + 4 + 4 + 4, 8) + 4 * 8 + 4 * 8 + sizeof(void*);
 constexpr std::size_t cct_tile_alone = round_up(16 * 16 * 4 + written_line + lookup_line + store_part_alone, 64);
 constexpr std::size_t cdct_tile_alone = round_up(16 * 16 * 8 + written_line + lookup_line + store_part_alone, 64);
 constexpr std::size_t cct_tile = cct_tile_alone + records;
 constexpr std::size_t cdct_tile = cdct_tile_alone + records;
-static_assert(cct_tile == 5960 && cdct_tile == 6984, "the sizes the test's name gives");
+static_assert(cct_tile == 7112 && cdct_tile == 8136, "the sizes the test's name gives");
 static_assert(cct_tile_alone == 1280 && cdct_tile_alone == 2304, "the sizes without records the test's name gives");
 
 } // namespace
 
-TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 2 x 2 block and their union, on cache lines by writer: 5960 bytes for the CCT, 6984 for the CDCT") {
+TEST_CASE("a tile is 16 x 16 texels, their written and doubtful bits, an origin box, a nearest distance and a path record per 2 x 2 block, per 4 x 4 group and for the tile, on cache lines by writer: 7112 bytes for the CCT, 8136 for the CDCT") {
     CHECK(CctCube::tile_bytes() == cct_tile);
     CHECK(CdctCube::tile_bytes() == cdct_tile);
 }
@@ -175,6 +175,69 @@ TEST_CASE("record blocks report their texels holding values and the union of the
             }
         });
         CHECK(blocks == expected.size());
+    }
+}
+
+// Each 4 x 4 group of a tile keeps the union of every path stored into its texels, as built by hand from
+// the stores, on the faces of the test above (a face smaller than a tile, tiles clipped at odd sizes);
+// groups and tiles holding no recorded store keep the empty union.
+TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into its texels") {
+    for (const int n : {5, 16, 21, 37}) {
+        CAPTURE(n);
+        CctCube cube(n);
+        Lcg random{static_cast<std::uint64_t>(100 + n)};
+        const int tiles_per_edge = (n + 15) / 16;
+        // Keyed (tile index: face, tile row, tile column in the cube's order; group: 4 x 4 squares in rows).
+        std::map<std::pair<std::size_t, int>, raycache::PathRecord> expected;
+        for (int face = 0; face < 6; ++face)
+            for (int row = 0; row < n; ++row)
+                for (int column = 0; column < n; ++column) {
+                    const std::uint32_t pick = random.next() % 10;
+                    if (pick >= 3) continue;
+                    const TexelAddress a{face, column, row};
+                    if (pick == 0) { // without a record: adds nothing to any union
+                        REQUIRE(cube.store_at(a, grey));
+                        continue;
+                    }
+                    raycache::PathRecord saw;
+                    saw.hit(static_cast<std::uint64_t>(7 + face * 3 + row % 5),
+                            glm::vec3(static_cast<float>(column) * 0.5f, static_cast<float>(row) - 3.0f, -static_cast<float>(face)));
+                    if (column % 3 == 1) saw.escaped(glm::vec3(1.0f, static_cast<float>(row % 4) - 1.5f, -static_cast<float>(column % 5)));
+                    saw.lit = row % 2 == 0;
+                    REQUIRE(cube.store_at(a, grey, saw));
+                    const std::size_t tile = static_cast<std::size_t>((face * tiles_per_edge + row / 16) * tiles_per_edge + column / 16);
+                    const int group = (row % 16) / 4 * 4 + (column % 16) / 4;
+                    auto [it, fresh] = expected.try_emplace({tile, group}, raycache::PathRecord::empty());
+                    it->second.merge(saw);
+                }
+        cube.begin_frame();
+        std::size_t groups_with_paths = 0;
+        for (std::size_t tile = 0; tile < static_cast<std::size_t>(6 * tiles_per_edge * tiles_per_edge); ++tile)
+            for (int group = 0; group < CctCube::record_groups; ++group) {
+                CAPTURE(tile);
+                CAPTURE(group);
+                const raycache::PathRecord r = cube.group_keys(tile, group).record();
+                const auto found = expected.find({tile, group});
+                if (found == expected.end()) {
+                    CHECK(r.objects == 0u);
+                    CHECK_FALSE(r.has_vertices());
+                    CHECK_FALSE(r.has_escapes());
+                    continue;
+                }
+                ++groups_with_paths;
+                const raycache::PathRecord& e = found->second;
+                CHECK(r.objects == e.objects);
+                CHECK(r.lit == e.lit);
+                CHECK(r.has_vertices());
+                CHECK(r.vertex_lo == e.vertex_lo);
+                CHECK(r.vertex_hi == e.vertex_hi);
+                CHECK(r.has_escapes() == e.has_escapes());
+                if (e.has_escapes()) {
+                    CHECK(r.escape_lo == e.escape_lo);
+                    CHECK(r.escape_hi == e.escape_hi);
+                }
+            }
+        CHECK(groups_with_paths == expected.size());
     }
 }
 
@@ -311,10 +374,10 @@ TEST_CASE("a budget that holds one tile refuses the second tile's stores, the fr
 
 TEST_CASE("cubes sharing a budget draw on it together") {
     const std::size_t fixed = CdctCube::fixed_bytes(16); // one tile a face: a table of 6 x 8 bytes, bitmaps, counters
-    auto budget = std::make_shared<MemoryBudget>(2 * fixed + 28000);
+    auto budget = std::make_shared<MemoryBudget>(2 * fixed + 33000);
     CdctCube a(16, budget), b(16, budget);
     CHECK(budget->used() == 2u * fixed);
-    // 28000 bytes left: four CDCT tiles (27936), not five (34920).
+    // 33000 bytes left: four CDCT tiles (32544), not five (40680).
     int stored = 0;
     for (int face = 0; face < 6; ++face) {
         stored += a.store_at(TexelAddress{face, 1, 1}, raycache::DepthSample{grey, 1.0f});

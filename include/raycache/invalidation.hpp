@@ -409,26 +409,17 @@ private:
     using PathKeys = typename CacheCube<Texel>::PathKeys;
     // Runs of this many allocated tiles, each reading its own tiles' records.
     static constexpr std::size_t tiles_per_run = 16;
-    // Tile by tile (blocks come one tile after another), then by groups of 2 x 2 record blocks (squares of
-    // 4 x 4 texels), then by block, then by texel: the union of a group's paths and the group's cone are
-    // tested first, and most groups miss both, so their blocks need no test of their own. A group's union
-    // holds every path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes
-    // have no hit points to start from makes its group's union unbounded (PathRecord::merge). A group
-    // repeats only the path tests its tile's union met, and a block only those its group's met (PathTest).
+    // Tile by tile (blocks come one tile after another), then by the tile's groups of 2 x 2 record blocks
+    // (squares of 4 x 4 texels), then by block, then by texel: the union of a group's paths, which its tile
+    // keeps (CacheCube::group_keys), and the group's cone are tested first, and most groups miss both, so
+    // their blocks need no test of their own and their unions are not read. A group's union holds every
+    // path of its blocks, so clearing a group clears its blocks soundly; a block whose escapes have no hit
+    // points to start from makes its group's union unbounded (merge_path). A group repeats only the path
+    // tests its tile's union met, and a block only those its group's met (PathTest).
     static constexpr int edge = CacheCube<Texel>::tile_edge;
-    static constexpr int per_side = edge / CacheCube<Texel>::record_edge;
-    static constexpr int group_edge = per_side >= 2 ? 2 : 1; // record blocks along a group's side
-    static constexpr int groups_per_side = per_side / group_edge;
-    static constexpr std::size_t group_count = groups_per_side * groups_per_side;
-    static_assert(per_side % group_edge == 0, "groups tile a tile");
-    static std::size_t group_of(int block) { // (unsigned: divisions by the powers of two are shifts)
-        const auto b = static_cast<unsigned>(block);
-        return static_cast<std::size_t>(b / per_side / group_edge * groups_per_side + b % per_side / group_edge);
-    }
-    struct Group {
-        PathKeys paths = PathKeys::empty(); // unbounded when a block's paths escaped from nowhere (its union is: merge_path)
-        bool any = false;
-    };
+    static constexpr int groups_per_side = CacheCube<Texel>::record_groups_per_side;
+    static constexpr std::size_t group_count = CacheCube<Texel>::record_groups;
+    static std::size_t group_of(int block) { return static_cast<std::size_t>(CacheCube<Texel>::group_of_block(block)); }
     struct Reached { // a recorded texel's reach, from its block's shell walk
         TexelAddress address;
         TexelReach reach;
@@ -476,46 +467,43 @@ private:
         const unsigned tile_paths_meet = paths_met ? *paths_met : paths_meeting(summary->paths, changes);
         if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
         // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
-        // Their unions stay in key form: merged into the groups as integers, and decoded only for the blocks
-        // of groups whose paths meet a change (most groups, even of tiles whose union met one).
+        // Their unions are read (in key form) only for the blocks of groups whose paths meet a change, and
+        // for the blocks that keep texels of a group that lost some.
         auto& blocks = scratch.blocks;
         auto& paths = scratch.paths;
         std::size_t count = 0;
-        cube.for_each_block_keys_of_tile(index, [&](const Block& b, const PathKeys& k) {
-            blocks[count] = b;
-            paths[count++] = k;
-        });
+        cube.for_each_block_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
         c.blocks += count;
         const std::size_t dropped_before = c.dropped;
-        std::array<Group, group_count> groups{};
-        for (std::size_t i = 0; i < count; ++i) {
-            Group& g = groups[group_of(blocks[i].block)];
-            g.paths.merge(paths[i]);
-            g.any = true;
-        }
+        std::array<bool, group_count> group_any{};
+        for (std::size_t i = 0; i < count; ++i) group_any[group_of(blocks[i].block)] = true;
         std::array<unsigned, group_count> group_paths_meet{}; // the tests that met (paths_meeting)
         std::array<bool, group_count> group_cone_meets{};
         for (std::size_t k = 0; k < group_count; ++k) {
-            const Group& g = groups[k];
-            if (!g.any) continue;
-            group_paths_meet[k] = tile_paths_meet ? paths_meeting(g.paths.record(), changes, tile_paths_meet) : 0u;
+            if (!group_any[k]) continue;
+            group_paths_meet[k] =
+                tile_paths_meet ? paths_meeting(cube.group_keys(index, static_cast<int>(k)).record(), changes, tile_paths_meet) : 0u;
             // The group's square of texels, clipped to the face as its blocks are.
-            constexpr int texels = group_edge * CacheCube<Texel>::record_edge;
+            constexpr int texels = CacheCube<Texel>::record_group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
             group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, [&] {
                 return shared::raycache_region_cone(face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
             }, changes.moved);
         }
-        // The blocks left holding a recorded texel: their union becomes the tile's once it lost texels.
+        // The blocks left holding a recorded texel: their union becomes their group's once it lost texels.
         std::array<bool, CacheCube<Texel>::record_blocks> keeps_recorded{};
+        std::array<bool, CacheCube<Texel>::record_blocks> paths_read{}; // paths[i] holds blocks[i]'s union
+        std::array<bool, group_count> group_lost{};
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
+            if (group_paths_meet[k]) paths[i] = cube.block_keys(t), paths_read[i] = true;
             if (group_paths_meet[k] && paths_meeting(paths[i].record(), changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
                 c.dropped_by_path += d;
+                group_lost[k] = group_lost[k] || d > 0;
                 note_changed_cells(c, t, d);
                 continue;
             }
@@ -566,13 +554,25 @@ private:
                 return meets;
             });
             c.dropped += d;
+            group_lost[k] = group_lost[k] || d > 0;
             note_changed_cells(c, t, d);
         }
-        if (c.dropped != dropped_before) { // emptied blocks' paths leave the tile's union
-            PathKeys kept = PathKeys::empty();
-            for (std::size_t i = 0; i < count; ++i)
-                if (keeps_recorded[i]) kept.merge(paths[i]);
-            cube.retighten_tile_union(index, kept);
+        // Emptied blocks' paths leave their group's union, and the tile's (a group holding no value keeps
+        // none; one that lost nothing keeps its own, a superset of its blocks').
+        if (c.dropped != dropped_before) {
+            std::array<PathKeys, group_count> kept;
+            kept.fill(PathKeys::empty());
+            for (std::size_t i = 0; i < count; ++i) {
+                const std::size_t k = group_of(blocks[i].block);
+                if (group_lost[k] && keeps_recorded[i]) kept[k].merge(paths_read[i] ? paths[i] : cube.block_keys(blocks[i]));
+            }
+            PathKeys tile_kept = PathKeys::empty();
+            for (std::size_t k = 0; k < group_count; ++k) {
+                if (group_lost[k] || !group_any[k]) cube.retighten_group_union(index, static_cast<int>(k), kept[k]);
+                else kept[k] = cube.group_keys(index, static_cast<int>(k));
+                tile_kept.merge(kept[k]);
+            }
+            cube.retighten_tile_union(index, tile_kept);
         }
     }
 
