@@ -181,7 +181,7 @@ TEST_CASE("record blocks report their texels holding values and the union of the
 // Each 4 x 4 group of a tile keeps the union of every path stored into its texels, as built by hand from
 // the stores, on the faces of the test above (a face smaller than a tile, tiles clipped at odd sizes);
 // groups and tiles holding no recorded store keep the empty union.
-TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into its texels") {
+TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into its texels, and a tile names its groups holding them") {
     for (const int n : {5, 16, 21, 37}) {
         CAPTURE(n);
         CctCube cube(n);
@@ -212,9 +212,23 @@ TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into i
                 }
         cube.begin_frame();
         std::size_t groups_with_paths = 0;
-        for (std::size_t tile = 0; tile < static_cast<std::size_t>(6 * tiles_per_edge * tiles_per_edge); ++tile)
+        for (std::size_t tile = 0; tile < static_cast<std::size_t>(6 * tiles_per_edge * tiles_per_edge); ++tile) {
+            // Which groups hold a recorded store, as the stores put them; and the blocks of a choice of groups
+            // are those of all the tile's blocks that lie in them.
+            std::uint32_t recorded_groups = 0;
+            for (int group = 0; group < CctCube::record_groups; ++group)
+                if (expected.count({tile, group})) recorded_groups |= 1u << group;
+            CAPTURE(tile);
+            CHECK(cube.groups_with_records(tile) == recorded_groups);
+            for (const std::uint32_t chosen : {0u, 0x8421u, 0x00F0u, recorded_groups, CctCube::all_record_groups}) {
+                std::vector<int> all, some;
+                cube.for_each_block_of_tile(tile, [&](const CctCube::BlockPlace& b) {
+                    if ((chosen >> CctCube::group_of_block(b.block)) & 1u) all.push_back(b.block);
+                });
+                cube.for_each_block_of_tile(tile, [&](const CctCube::BlockPlace& b) { some.push_back(b.block); }, chosen);
+                CHECK(some == all);
+            }
             for (int group = 0; group < CctCube::record_groups; ++group) {
-                CAPTURE(tile);
                 CAPTURE(group);
                 const raycache::PathRecord r = cube.group_keys(tile, group).record();
                 const auto found = expected.find({tile, group});
@@ -237,6 +251,7 @@ TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into i
                     CHECK(r.escape_hi == e.escape_hi);
                 }
             }
+        }
         CHECK(groups_with_paths == expected.size());
     }
 }

@@ -544,11 +544,32 @@ public:
         });
     }
 
+    // Bit g for each group g (group_of_block()) of tile `i` with a texel holding a value stored with a path
+    // record; 0 when the tile is not allocated. Between frames only.
+    static constexpr std::uint32_t all_record_groups = record_groups >= 32 ? ~0u : (1u << record_groups) - 1u;
+    std::uint32_t groups_with_records(std::size_t i) const noexcept {
+        const Tile* tile = allocated_tile(i);
+        if (!tile) return 0;
+        constexpr int group_texels = record_group_edge * record_edge; // texels along a group's side
+        constexpr std::uint64_t group_columns = (std::uint64_t{1} << group_texels) - 1u;
+        std::uint32_t groups = 0;
+        for (int gr = 0; gr < record_groups_per_side; ++gr) {
+            std::uint64_t rows = 0; // the group row's recorded bits, its rows' masks or'ed
+            for (int r = gr * group_texels; r < (gr + 1) * group_texels; ++r)
+                rows |= recorded_word(*tile, r * tile_edge / 64) >> (r * tile_edge % 64);
+            for (int gc = 0; gc < record_groups_per_side; ++gc)
+                if ((rows >> (gc * group_texels)) & group_columns) groups |= 1u << (gr * record_groups_per_side + gc);
+        }
+        return groups;
+    }
+
     // for_each_block_keys_of_tile() without the unions: f(const BlockPlace&) for every record block of tile
-    // `i` holding a value, in block order (invalidation reads the unions of only the blocks it tests:
-    // block_keys()). Between frames only; threads may read different tiles at once.
+    // `i` holding a value, in block order, in the groups that `groups` names (bit g: group g; invalidation
+    // reads the blocks of only the groups it tests, and their unions only when it tests them: block_keys()).
+    // Between frames only; threads may read different tiles at once.
     template <class F>
-    void for_each_block_of_tile(std::size_t i, F&& f) const {
+    void for_each_block_of_tile(std::size_t i, F&& f, std::uint32_t groups = all_record_groups) const {
+        static_assert(record_groups <= 32, "a group mask holds every group of a tile");
         const Tile* tile = allocated_tile(i);
         if (!tile) return;
         const TexelAddress first = first_texel_of_tile(i);
@@ -579,6 +600,7 @@ public:
             }
             for (int bc = 0; bc < per_side && bc * record_edge < columns_on_face; ++bc) {
                 const int b = br * per_side + bc;
+                if (!((groups >> group_of_block(b)) & 1u)) continue;
                 t.block = b;
                 t.column0 = first.column + bc * record_edge;
                 t.row0 = first.row + br * record_edge;

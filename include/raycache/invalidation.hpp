@@ -466,21 +466,28 @@ private:
         // superset of its blocks') misses too keeps everything: its blocks are not read (most tiles).
         const unsigned tile_paths_meet = paths_met ? *paths_met : paths_meeting(summary->paths, changes);
         if (!tile_cone_meets && !summary->any_unrecorded && tile_paths_meet == 0) return;
-        // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel).
-        // Their unions are read (in key form) only for the blocks of groups whose paths meet a change, and
-        // for the blocks that keep texels of a group that lost some.
+        // The blocks holding a value (the others have nothing to empty, and their paths answer for no texel),
+        // of the groups that hold one: with every value recorded, the groups are found from the recorded
+        // bits and only the blocks of the groups that meet a test are read; else every block is (values
+        // stored without a record go at any move, wherever they lie). Their unions are read (in key form)
+        // only for the blocks of groups whose paths meet a change, and for the blocks that keep texels of
+        // a group that lost some.
         auto& blocks = scratch.blocks;
         auto& paths = scratch.paths;
         std::size_t count = 0;
-        cube.for_each_block_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
-        c.blocks += count;
+        std::uint32_t group_any = 0;
+        if (summary->any_unrecorded) {
+            cube.for_each_block_of_tile(index, [&](const Block& b) { blocks[count++] = b; });
+            for (std::size_t i = 0; i < count; ++i) group_any |= 1u << group_of(blocks[i].block);
+        } else {
+            group_any = cube.groups_with_records(index);
+        }
         const std::size_t dropped_before = c.dropped;
-        std::array<bool, group_count> group_any{};
-        for (std::size_t i = 0; i < count; ++i) group_any[group_of(blocks[i].block)] = true;
         std::array<unsigned, group_count> group_paths_meet{}; // the tests that met (paths_meeting)
         std::array<bool, group_count> group_cone_meets{};
+        std::uint32_t groups_met = 0;
         for (std::size_t k = 0; k < group_count; ++k) {
-            if (!group_any[k]) continue;
+            if (!((group_any >> k) & 1u)) continue;
             group_paths_meet[k] =
                 tile_paths_meet ? paths_meeting(cube.group_keys(index, static_cast<int>(k)).record(), changes, tile_paths_meet) : 0u;
             // The group's square of texels, clipped to the face as its blocks are.
@@ -489,7 +496,10 @@ private:
             group_cone_meets[k] = tile_cone_meets && any_sphere_in_cone(ball, [&] {
                 return shared::raycache_region_cone(face, gc0, gr0, std::min(n, gc0 + texels), std::min(n, gr0 + texels), n);
             }, changes.moved);
+            if (group_paths_meet[k] || group_cone_meets[k]) groups_met |= 1u << k;
         }
+        if (!summary->any_unrecorded) cube.for_each_block_of_tile(index, [&](const Block& b) { blocks[count++] = b; }, groups_met);
+        c.blocks += count;
         // The blocks left holding a recorded texel: their union becomes their group's once it lost texels.
         std::array<bool, CacheCube<Texel>::record_blocks> keeps_recorded{};
         std::array<bool, CacheCube<Texel>::record_blocks> paths_read{}; // paths[i] holds blocks[i]'s union
@@ -568,7 +578,7 @@ private:
             }
             PathKeys tile_kept = PathKeys::empty();
             for (std::size_t k = 0; k < group_count; ++k) {
-                if (group_lost[k] || !group_any[k]) cube.retighten_group_union(index, static_cast<int>(k), kept[k]);
+                if (group_lost[k] || !((group_any >> k) & 1u)) cube.retighten_group_union(index, static_cast<int>(k), kept[k]);
                 else kept[k] = cube.group_keys(index, static_cast<int>(k));
                 tile_kept.merge(kept[k]);
             }
