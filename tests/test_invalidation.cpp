@@ -84,6 +84,15 @@ PathRecord saw(std::uint64_t key) {
     return path;
 }
 
+// Stores colour 0.25 with `path` into the square of face +X at columns [first_column, first_column + edge)
+// and rows [0, edge), then ends the frame.
+void fill_square(CctCube& cube, int first_column, int edge, const PathRecord& path) {
+    for (int row = 0; row < edge; ++row)
+        for (int column = first_column; column < first_column + edge; ++column)
+            REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
+    cube.begin_frame();
+}
+
 // Object `key` moving far out along -X (a ball of radius 0.5 around (-20, 0, 0), then (-20, 0.5, 0)),
 // where no ray of face +X can reach it: only path records can drop a texel of that face for it.
 raycache::SceneChanges far_along_minus_x(std::uint64_t key) {
@@ -205,12 +214,7 @@ TEST_CASE("a tile that no change can reach is passed over without reading its bl
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(32);
     const PathRecord saw_5 = saw(5), saw_6 = saw(6);
-    auto fill_tile = [&](int first_column, const PathRecord& path) {
-        for (int row = 0; row < 16; ++row)
-            for (int column = first_column; column < first_column + 16; ++column)
-                REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
-        cube.begin_frame();
-    };
+    auto fill_tile = [&](int first_column, const PathRecord& path) { fill_square(cube, first_column, 16, path); };
     fill_tile(0, saw_5);
     fill_tile(16, saw_6);
     const raycache::SceneChanges changes = far_along_minus_x(5);
@@ -232,12 +236,7 @@ TEST_CASE("a 4 x 4 group a move emptied forgets its paths, and a group that lost
     REQUIRE((raycache::object_bits(6) & raycache::object_bits(5)) != raycache::object_bits(5));
     CctCube cube(32);
     const PathRecord saw_5 = saw(5), saw_6 = saw(6);
-    auto fill_group = [&](int first_column, const PathRecord& path) {
-        for (int row = 0; row < 4; ++row)
-            for (int column = first_column; column < first_column + 4; ++column)
-                REQUIRE(cube.store_at({RAYCACHE_FACE_POSITIVE_X, column, row}, glm::vec3(0.25f), path));
-        cube.begin_frame();
-    };
+    auto fill_group = [&](int first_column, const PathRecord& path) { fill_square(cube, first_column, 4, path); };
     fill_group(0, saw_5);
     fill_group(4, saw_6);
     CHECK(cube.group_keys(0, 0).objects == raycache::object_bits(5));

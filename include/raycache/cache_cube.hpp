@@ -121,9 +121,9 @@ public:
     // fixed part, fixed_bytes(): tile table, tile bitmaps and counters, is charged whatever the limit; a
     // SceneCache makes no cube whose fixed part the budget has no room for). May be null: no limit.
     // path_records: whether its tiles keep what their stores' paths saw (raycache/invalidation.hpp), a
-    // record per 2 x 2 block, per 4 x 4 group and per tile (tile_bytes()); without, stores with a record count as stores without one,
-    // so exact invalidation empties their texels at any change: for static scenes, in 82% (CCT) or 72%
-    // (CDCT) less memory.
+    // record per 2 x 2 block, per 4 x 4 group and per tile (tile_bytes()); without, stores with a record
+    // count as stores without one, so exact invalidation empties their texels at any change: for static
+    // scenes, in 82% (CCT) or 72% (CDCT) less memory.
     // Throws std::invalid_argument unless 1 <= face_size <= 4096.
     explicit CacheCube(int face_size, std::shared_ptr<MemoryBudget> budget = nullptr, bool path_records = true)
         : face_size_(checked_face_size(face_size)),
@@ -176,7 +176,7 @@ public:
     std::size_t allocated_bytes() const noexcept { return allocated_tiles() * bytes_per_tile(); }
     std::size_t allocated_tiles() const noexcept { return state_->allocated_tiles.load(std::memory_order_relaxed); }
     // Bytes of one tile: 16 x 16 words, their bits, its origin boxes and, with path_records, a path record
-    // per 2 x 2 block and their union (in the same allocation).
+    // per 2 x 2 block, the unions of its 4 x 4 groups and the tile's union (in the same allocation).
     static constexpr std::size_t tile_bytes(bool path_records = true) noexcept {
         return sizeof(Tile) + (path_records ? sizeof(PathUnion) * (tile_union_slot + 1) : 0);
     }

@@ -501,13 +501,13 @@ private:
         if (!summary->any_unrecorded) cube.for_each_block_of_tile(index, [&](const Block& b) { blocks[count++] = b; }, groups_met);
         c.blocks += count;
         // The blocks left holding a recorded texel: their union becomes their group's once it lost texels.
+        // paths[i] holds blocks[i]'s union when its group's paths met a test (read there, and only there).
         std::array<bool, CacheCube<Texel>::record_blocks> keeps_recorded{};
-        std::array<bool, CacheCube<Texel>::record_blocks> paths_read{}; // paths[i] holds blocks[i]'s union
         std::array<bool, group_count> group_lost{};
         for (std::size_t i = 0; i < count; ++i) {
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
-            if (group_paths_meet[k]) paths[i] = cube.block_keys(t), paths_read[i] = true;
+            if (group_paths_meet[k]) paths[i] = cube.block_keys(t);
             if (group_paths_meet[k] && paths_meeting(paths[i].record(), changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
@@ -574,7 +574,7 @@ private:
             kept.fill(PathKeys::empty());
             for (std::size_t i = 0; i < count; ++i) {
                 const std::size_t k = group_of(blocks[i].block);
-                if (group_lost[k] && keeps_recorded[i]) kept[k].merge(paths_read[i] ? paths[i] : cube.block_keys(blocks[i]));
+                if (group_lost[k] && keeps_recorded[i]) kept[k].merge(group_paths_meet[k] ? paths[i] : cube.block_keys(blocks[i]));
             }
             PathKeys tile_kept = PathKeys::empty();
             for (std::size_t k = 0; k < group_count; ++k) {
