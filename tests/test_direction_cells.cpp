@@ -144,3 +144,55 @@ TEST_CASE("a path record knows nothing of its cached reads until told to track t
     u.merge(fresh); // a path that did not track them may have read anywhere
     CHECK(u.cached_reads == every_direction_cell);
 }
+
+TEST_CASE("the cells of texels clear of the face's edges, hand-worked: a span's edge on a cell edge names both cells") {
+    // Texel i's edge lies at 3 i / n in cells. Grown by a texel, columns [c0, c1) span the texel edges
+    // c0 - 1 to c1 + 1.
+    // n = 30, columns and rows [12, 14) and [14, 16) of +Y: spans 11..15 and 13..17, at 1.1..1.5 and 1.3..1.7:
+    // the middle cell alone.
+    CHECK(direction_cells_of_texels(2, 12, 14, 14, 16, 30) == direction_cell_bit(2, 1, 1));
+    // n = 12, columns [5, 7), rows [4, 6) of -Z: spans 4..8 (1 and 2 exactly: all three columns) and 3..7
+    // (0.75..1.75: rows 0 and 1).
+    std::uint64_t expected = 0;
+    for (int row = 0; row <= 1; ++row)
+        for (int column = 0; column <= 2; ++column) expected |= direction_cell_bit(5, column, row);
+    CHECK(direction_cells_of_texels(5, 5, 4, 7, 6, 12) == expected);
+    // n = 12, column [6, 7) and row [5, 6) of -X: spans 5..8 (1.25..2: columns 1 and 2) and 4..7 (1..1.75:
+    // rows 0 and 1).
+    CHECK(direction_cells_of_texels(1, 6, 5, 7, 6, 12) ==
+          (direction_cell_bit(1, 1, 0) | direction_cell_bit(1, 2, 0) | direction_cell_bit(1, 1, 1) | direction_cell_bit(1, 2, 1)));
+}
+
+TEST_CASE("the cells of texels clear of the face's edges are those of their grown rectangle's box, on every face size") {
+    // The box of the grown rectangle in the plane |m| = 1 (direction_cells_of_box, checked by brute force
+    // above) names the same cells: only its own face's, from the same coordinates. Every face size, every
+    // interior block of 1 or 2 texels a side along a row and a column, and random wider ranges.
+    Lcg rng{11};
+    auto coordinate = [](int texel, int n) { return 2.0f * static_cast<float>(texel) / static_cast<float>(n) - 1.0f; };
+    auto by_box = [&](int face, int c0, int r0, int c1, int r1, int n) {
+        const glm::vec3 a = raycache::shared::raycache_face_point(face, 1.0f, coordinate(c0 - 1, n), coordinate(r0 - 1, n));
+        const glm::vec3 b = raycache::shared::raycache_face_point(face, 1.0f, coordinate(c1 + 1, n), coordinate(r1 + 1, n));
+        return direction_cells_of_box(glm::min(a, b), glm::max(a, b));
+    };
+    long checked = 0;
+    for (int n = 1; n <= 4096; n += (n < 320 ? 1 : 97)) {
+        CAPTURE(n);
+        for (int width = 1; width <= 2; ++width)
+            for (int c0 = 0; c0 + width <= n; ++c0) {
+                const int face = c0 % RAYCACHE_FACE_COUNT;
+                const int r0 = static_cast<int>(rng.uniform() * static_cast<float>(n - width + 1)) % (n - width + 1);
+                const std::uint64_t cells = direction_cells_of_texels(face, c0, r0, c0 + width, r0 + width, n);
+                REQUIRE(cells == by_box(face, c0, r0, c0 + width, r0 + width, n));
+                REQUIRE(direction_cells_of_texels(face, r0, c0, r0 + width, c0 + width, n) == by_box(face, r0, c0, r0 + width, c0 + width, n));
+                ++checked;
+            }
+        for (int trial = 0; trial < 64 && n > 1; ++trial) {
+            const int face = trial % RAYCACHE_FACE_COUNT;
+            const int c0 = static_cast<int>(rng.uniform() * static_cast<float>(n)) % n, r0 = static_cast<int>(rng.uniform() * static_cast<float>(n)) % n;
+            const int c1 = c0 + 1 + static_cast<int>(rng.uniform() * static_cast<float>(n - c0)) % (n - c0);
+            const int r1 = r0 + 1 + static_cast<int>(rng.uniform() * static_cast<float>(n - r0)) % (n - r0);
+            REQUIRE(direction_cells_of_texels(face, c0, r0, c1, r1, n) == by_box(face, c0, r0, c1, r1, n));
+        }
+    }
+    CHECK(checked > 100000);
+}

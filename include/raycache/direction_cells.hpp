@@ -63,6 +63,20 @@ inline std::uint64_t face_cells(int face, float u_lo, float u_hi, float v_lo, fl
     return cells;
 }
 
+// The cells of `face` that the texel edges [lo, hi] x [row_lo, row_hi] (columns, then rows, in texels of a
+// face of `n`) span, for spans clear of the face's edges: face_cells() of their face coordinates, from
+// integers. Texel edge i lies at 3 i / n in cells; one exactly on a cell edge names both cells, as
+// face_cells()'s margin makes it, and every other texel edge lies at least 1 / n of a cell from a cell
+// edge, far wider than that margin for any face size up to 4096.
+inline std::uint64_t interior_face_cells(int face, int lo, int hi, int row_lo, int row_hi, int n) noexcept {
+    auto first = [n](int edge) { return 3 * edge <= n ? 0 : (3 * edge <= 2 * n ? 1 : 2); };
+    auto last = [n](int edge) { return 3 * edge < n ? 0 : (3 * edge < 2 * n ? 1 : 2); };
+    const unsigned columns = (2u << last(hi)) - (1u << first(lo)); // bits first..last
+    std::uint64_t cells = 0;
+    for (int row = first(row_lo); row <= last(row_hi); ++row) cells |= std::uint64_t{columns} << (row * direction_cells_per_side);
+    return cells << (face * direction_cells_per_face);
+}
+
 // [a, b] / [m_lo, m_hi] for 0 < m_lo <= m_hi: the range of x / m over the two intervals.
 inline void divide_interval(float a, float b, float m_lo, float m_hi, float& lo, float& hi) noexcept {
     lo = std::min(a / m_lo, a / m_hi);
@@ -114,7 +128,8 @@ inline std::uint64_t direction_cells_of_texels(int face, int column0, int row0, 
     // Within the face, clear of its edges (most blocks): no other face's directions, and the face's own
     // cells are those of the coordinates' spans, as direction_cells_of_box finds them at |m| = 1.
     constexpr float inside = 1.0f - 1e-3f;
-    if (s0 > -inside && s1 < inside && t0 > -inside && t1 < inside) return detail::face_cells(face, s0, s1, t0, t1);
+    if (s0 > -inside && s1 < inside && t0 > -inside && t1 < inside)
+        return detail::interior_face_cells(face, column0 - 1, column1 + 1, row0 - 1, row1 + 1, face_size);
     // The rectangle lies in the plane |m| = 1 of the face's axis, so the box of its corners is the rectangle.
     const glm::vec3 a = shared::raycache_face_point(face, 1.0f, s0, t0), b = shared::raycache_face_point(face, 1.0f, s1, t1);
     return direction_cells_of_box(glm::min(a, b), glm::max(a, b));
