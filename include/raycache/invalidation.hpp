@@ -245,7 +245,7 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         const std::uint64_t bits = object_bits(key);
         return (t.objects & bits) == bits;
     };
-    if (tests & path_test_changed)
+    if ((tests & path_test_changed) && t.cached_reads != 0) // (paths that read no cube: most of a transitive pass's)
         for (const SceneChanges::Changed& c : changes.changed)
             if ((t.cached_reads & c.cells) != 0 && tagged(c.key)) {
                 if (meets(path_test_changed)) return met;
