@@ -794,16 +794,14 @@ public:
                     if (transitive ? !moved[i] : !changed[i]) todo.push_back(i);
                 // Every cube's runs of tiles in one parallel_for: a cube of many tiles (a mirror that fills
                 // the view) shares its tiles among the threads while the small cubes' runs fill the gaps,
-                // with no wait between cubes. The cubes' budgets are settled here, in entry order (the tiles a
-                // refused frame wanted take the budget's bytes in that order); the passes are then made, and
-                // finished (a CDCT pyramid each), in parallel.
-                for (std::size_t i : todo) with_cube(entries_[i], [](auto& cube) { cube.settle_budget(); });
-                std::vector<std::unique_ptr<InvalidationPass>> passes(todo.size());
-                const std::function<void(std::size_t)> make = [&](std::size_t k) { passes[k] = invalidation_pass(entries_[todo[k]], c); };
-                parallel_for(todo.size(), make);
+                // with no wait between cubes. The passes are made here, in entry order (each settles its
+                // cube's budget), and finished in parallel (a CDCT pyramid each).
+                std::vector<std::unique_ptr<InvalidationPass>> passes;
                 std::vector<std::pair<std::size_t, std::size_t>> runs; // (pass, run)
-                for (std::size_t k = 0; k < todo.size(); ++k)
-                    for (std::size_t r = 0; r < passes[k]->runs(); ++r) runs.emplace_back(k, r);
+                for (std::size_t k = 0; k < todo.size(); ++k) {
+                    passes.push_back(invalidation_pass(entries_[todo[k]], c));
+                    for (std::size_t r = 0; r < passes.back()->runs(); ++r) runs.emplace_back(k, r);
+                }
                 const std::function<void(std::size_t)> run = [&](std::size_t j) { passes[runs[j].first]->run(runs[j].second); };
                 parallel_for(runs.size(), run);
                 counts.assign(todo.size(), InvalidationCounts{});
