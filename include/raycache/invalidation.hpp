@@ -226,6 +226,17 @@ enum PathTest : unsigned {
 };
 inline constexpr unsigned every_path_test = (1u << 7) - 1u;
 
+// Whether paths that hit the objects of Bloom mask `objects` and read cached answers in the direction cells
+// `cached_reads` read a cube of `changes.changed` where it changed (path_test_changed).
+inline bool paths_read_changed(std::uint64_t objects, std::uint64_t cached_reads, const SceneChanges& changes) noexcept {
+    if (cached_reads == 0) return false; // (paths that read no cube: most of a transitive pass's)
+    for (const SceneChanges::Changed& c : changes.changed) {
+        const std::uint64_t bits = object_bits(c.key);
+        if ((cached_reads & c.cells) != 0 && (objects & bits) == bits) return true;
+    }
+    return false;
+}
+
 // Which of `tests` find that the rest of the paths whose union is `t` (a tile's, a group of blocks', a
 // block's) can have met a change: 0 when none. With `first_only`, it stops at the first that does.
 inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, unsigned tests = every_path_test, bool first_only = false) {
@@ -245,12 +256,7 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
         const std::uint64_t bits = object_bits(key);
         return (t.objects & bits) == bits;
     };
-    if ((tests & path_test_changed) && t.cached_reads != 0) // (paths that read no cube: most of a transitive pass's)
-        for (const SceneChanges::Changed& c : changes.changed)
-            if ((t.cached_reads & c.cells) != 0 && tagged(c.key)) {
-                if (meets(path_test_changed)) return met;
-                break;
-            }
+    if ((tests & path_test_changed) && paths_read_changed(t.objects, t.cached_reads, changes) && meets(path_test_changed)) return met;
     if (changes.moved.empty()) return met;
     if (tests & path_test_moved)
         for (const SceneChanges::Move& m : changes.moved)
@@ -432,6 +438,14 @@ private:
         std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
     };
 
+    // paths_meeting() of a union in the form the tile keeps it. Only the changed cubes' test (a transitive
+    // pass's) needs no decoding: it reads the objects and cells as they are.
+    static unsigned paths_meeting_keys(const PathKeys& keys, const SceneChanges& changes, unsigned tests, bool first_only) {
+        if (tests == 0) return 0u;
+        if (tests == path_test_changed) return paths_read_changed(keys.objects, keys.cached_reads, changes) ? path_test_changed : 0u;
+        return paths_meeting(keys.record(), changes, tests, first_only);
+    }
+
     // Adds the cells of block `t` to what the pass changed when it emptied `dropped` of its texels (the whole
     // block's cells: a block is 2 x 2 texels, and the cells are far coarser).
     void note_changed_cells(InvalidationCounts& c, const Block& t, std::size_t dropped) const noexcept {
@@ -488,8 +502,7 @@ private:
         std::uint32_t groups_met = 0;
         for (std::size_t k = 0; k < group_count; ++k) {
             if (!((group_any >> k) & 1u)) continue;
-            group_paths_meet[k] =
-                tile_paths_meet ? paths_meeting(cube.group_keys(index, static_cast<int>(k)).record(), changes, tile_paths_meet) : 0u;
+            group_paths_meet[k] = paths_meeting_keys(cube.group_keys(index, static_cast<int>(k)), changes, tile_paths_meet, false);
             // The group's square of texels, clipped to the face as its blocks are.
             constexpr int texels = CacheCube<Texel>::record_group_edge * CacheCube<Texel>::record_edge;
             const int gc0 = c0 + static_cast<int>(k % groups_per_side) * texels, gr0 = r0 + static_cast<int>(k / groups_per_side) * texels;
@@ -508,7 +521,7 @@ private:
             const Block& t = blocks[i];
             const std::size_t k = group_of(t.block);
             if (group_paths_meet[k]) paths[i] = cube.block_keys(t);
-            if (group_paths_meet[k] && paths_meeting(paths[i].record(), changes, group_paths_meet[k], true)) {
+            if (group_paths_meet[k] && paths_meeting_keys(paths[i], changes, group_paths_meet[k], true)) {
                 ++c.blocks_by_path;
                 const std::size_t d = cube.invalidate_in_block(t, [](const TexelAddress&, bool) { return true; });
                 c.dropped += d;
