@@ -230,10 +230,8 @@ inline constexpr unsigned every_path_test = (1u << 7) - 1u;
 // `cached_reads` read a cube of `changes.changed` where it changed (path_test_changed).
 inline bool paths_read_changed(std::uint64_t objects, std::uint64_t cached_reads, const SceneChanges& changes) noexcept {
     if (cached_reads == 0) return false; // (paths that read no cube: most of a transitive pass's)
-    for (const SceneChanges::Changed& c : changes.changed) {
-        const std::uint64_t bits = object_bits(c.key);
-        if ((cached_reads & c.cells) != 0 && (objects & bits) == bits) return true;
-    }
+    for (const SceneChanges::Changed& c : changes.changed)
+        if ((cached_reads & c.cells) != 0 && may_hold(objects, c.key)) return true;
     return false;
 }
 
@@ -252,15 +250,11 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
     // Escapes from points not recorded, or a bounce that escaped with no bound known: no bound.
     if ((tests & path_test_unbound) && (t.escapes_from_nowhere() || t.unbounded) && meets(path_test_unbound)) return met;
     if ((tests & path_test_light) && changes.light_moved && has_vertices && meets(path_test_light)) return met;
-    auto tagged = [&](std::uint64_t key) {
-        const std::uint64_t bits = object_bits(key);
-        return (t.objects & bits) == bits;
-    };
     if ((tests & path_test_changed) && paths_read_changed(t.objects, t.cached_reads, changes) && meets(path_test_changed)) return met;
     if (changes.moved.empty()) return met;
     if (tests & path_test_moved)
         for (const SceneChanges::Move& m : changes.moved)
-            if (tagged(m.key)) {
+            if (may_hold(t.objects, m.key)) {
                 if (meets(path_test_moved)) return met;
                 break;
             }

@@ -33,6 +33,12 @@ inline std::uint64_t object_bits(std::uint64_t key) noexcept {
     return (std::uint64_t{1} << (key & 63u)) | (std::uint64_t{1} << ((key >> 6) & 63u));
 }
 
+// Whether the Bloom mask `objects` may hold object `key` (both its bits set; false only when it surely does not).
+inline bool may_hold(std::uint64_t objects, std::uint64_t key) noexcept {
+    const std::uint64_t bits = object_bits(key);
+    return (objects & bits) == bits;
+}
+
 // What one traced path saw after leaving the cached object.
 struct PathRecord {
     // Bloom mask (object_bits) of every object a ray of the path hit, the first hit included.
