@@ -1477,13 +1477,15 @@ private:
         std::size_t doubtful_gone = 0;
         for (int w = 0; w < bit_words; ++w) {
             if (!gone[w]) continue;
-            doubtful_gone += static_cast<std::size_t>(bit_count(tile.doubtful_bits[w].fetch_and(~gone[w], std::memory_order_relaxed) & gone[w]));
-            tile.recorded_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
-            tile.held_bits[w].fetch_and(~gone[w], std::memory_order_relaxed);
+            const std::uint64_t doubtful = tile.doubtful_bits[w].load(std::memory_order_relaxed);
+            doubtful_gone += static_cast<std::size_t>(bit_count(doubtful & gone[w]));
+            tile.doubtful_bits[w].store(doubtful & ~gone[w], std::memory_order_relaxed);
+            tile.recorded_bits[w].store(tile.recorded_bits[w].load(std::memory_order_relaxed) & ~gone[w], std::memory_order_relaxed);
+            tile.held_bits[w].store(tile.held_bits[w].load(std::memory_order_relaxed) & ~gone[w], std::memory_order_relaxed);
         }
         if (values) {
             state_->valid_texels.fetch_sub(static_cast<std::int64_t>(values), std::memory_order_relaxed);
-            tile.valid.fetch_sub(static_cast<std::uint32_t>(values), std::memory_order_relaxed);
+            tile.valid.store(tile.valid.load(std::memory_order_relaxed) - static_cast<std::uint32_t>(values), std::memory_order_relaxed);
         }
         if (doubtful_gone) state_->doubtful_texels.fetch_sub(doubtful_gone, std::memory_order_relaxed);
     }
