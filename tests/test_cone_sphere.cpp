@@ -93,6 +93,46 @@ TEST_CASE("a whole face's cone reaches its corners, 54.74 degrees, and holds eve
     }
 }
 
+TEST_CASE("a region's cone: its axis through the region's centre, its spread to its farthest corner (in doubles)") {
+    // Independent of the library's arithmetic: the face's corners turned into 3D by the face table (as
+    // doubles) and normalised, the axis through the region's centre point, the angle to each corner; the
+    // cone must hold the farthest corner and be no wider than it by more than the slack and float rounding.
+    std::mt19937 rng(5);
+    for (int n : {1, 2, 3, 16, 37, 256, 4096}) {
+        for (int trial = 0; trial < 300; ++trial) {
+            const int f = trial % 6;
+            const int c0 = static_cast<int>(rng() % static_cast<unsigned>(n)), r0 = static_cast<int>(rng() % static_cast<unsigned>(n));
+            const int span = trial % 3 == 0 ? n : 1 + static_cast<int>(rng() % 16u);
+            const int c1 = std::min(n, c0 + span), r1 = std::min(n, r0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(span)));
+            auto point = [&](double s, double t) {
+                const glm::vec3 p = raycache::shared::raycache_face_point(f, 1.0f, static_cast<float>(s), static_cast<float>(t));
+                const glm::dvec3 d(p);
+                return d / glm::length(d);
+            };
+            auto coordinate = [n](int texel) { return 2.0 * texel / n - 1.0; };
+            const double s0 = coordinate(c0), s1 = coordinate(c1), t0 = coordinate(r0), t1 = coordinate(r1);
+            const glm::dvec3 axis = point(0.5 * (s0 + s1), 0.5 * (t0 + t1));
+            double farthest = 0.0;
+            for (const glm::dvec2 corner : {glm::dvec2(s0, t0), glm::dvec2(s1, t0), glm::dvec2(s0, t1), glm::dvec2(s1, t1)})
+                farthest = std::max(farthest, std::acos(std::min(1.0, glm::dot(axis, point(corner.x, corner.y)))));
+            const raycache_direction_cone cone = raycache::shared::raycache_region_cone(f, c0, r0, c1, r1, n);
+            CAPTURE(n);
+            CAPTURE(f);
+            CAPTURE(c0);
+            CAPTURE(r0);
+            CAPTURE(c1);
+            CAPTURE(r1);
+            REQUIRE(glm::length(glm::dvec3(cone.axis) - axis) < 1e-6);
+            // Both the cosine and the sine hold the farthest corner widened by most of the 1e-4 rad slack (a
+            // cone test reads both); neither is wider than the slack, the sine's rounding up and 2 ulps of 1 allow.
+            REQUIRE(cone.cos_spread <= std::cos(farthest + 0.5e-4));
+            REQUIRE(cone.sin_spread >= std::sin(std::min(farthest + 0.5e-4, 1.5707963)));
+            CHECK(cone.cos_spread >= std::cos(farthest + 1.01e-4) - 2e-6);
+            CHECK(cone.sin_spread <= std::sin(farthest + 1.01e-4) + 1e-6);
+        }
+    }
+}
+
 TEST_CASE("one texel's cone: holds every direction the texel choice gives it, and is at most 15% wider than its corners' cone") {
     // Hand-derived: the centre texel of a 2 x 2 face is a quarter of it, [0, 1] x [0, 1] on +Z; its centre
     // point (0.5, 0.5, 1) is 0.707 from its corners in the face plane, and no point of it is nearer the

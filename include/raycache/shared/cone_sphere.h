@@ -73,10 +73,37 @@ RAYCACHE_FN raycache_direction_cone raycache_widened_cone(vec3 axis, float sprea
     return cone;
 }
 
+/* The cone around unit `axis` of half-angle a, given as cos a and sin a (both computed to float precision:
+ * narrow cones' sines come from cross products, which keep their digits where cosines near 1 lose them),
+ * widened by RAYCACHE_CONE_SLACK and capped at 90 degrees: cos(a + e) = cos a - e sin a and sin(a + e) =
+ * sin a + e cos a (cos e = 1 in float for e = 1e-4), the cosine lowered by 2 ulps of 1 for its rounding. */
+RAYCACHE_FN raycache_direction_cone raycache_widened_cone_of(vec3 axis, float spread_cos, float spread_sin) {
+    float c = clamp(spread_cos, 0.0f, 1.0f);
+    float s = clamp(spread_sin, 0.0f, 1.0f);
+    raycache_direction_cone cone;
+    cone.axis = axis;
+    cone.cos_spread = max(0.0f, c - s * float(RAYCACHE_CONE_SLACK) - 1.2e-7f);
+    cone.sin_spread = min(1.0f, s + c * float(RAYCACHE_CONE_SLACK));
+    return cone;
+}
+
 /* The cone of every direction through texels [column0, column1) x [row0, row1) of `face` on faces of
  * face_size texels (a texel, a 16 x 16 tile, a whole face): its axis through the region's centre, its spread
  * to the farthest corner. The region is the central projection of a rectangle, so it is the geodesic hull of
- * its corners, and a cap of at most 90 degrees that holds the corners holds all of it. */
+ * its corners, and a cap of at most 90 degrees that holds the corners holds all of it.
+ * Worked in the face's own coordinates (s, t, 1), which raycache_face_point turns by a signed permutation,
+ * so angles are the same there. Every corner lies within 90 degrees of the axis (s sm + t tm + 1 > 0 for a
+ * corner (s, t) and the centre (sm, tm) of a region of one face: s sm, t tm >= -1/8), so the farthest
+ * corner is the one of largest sine, |(s, t, 1) x (sm, tm, 1)| / (|(s, t, 1)| |(sm, tm, 1)|), compared
+ * squared without a square root per corner; the sine from the cross product keeps a narrow region's
+ * spread, which its cosine (1 - ~1e-7 on faces of thousands of texels) would round away. */
+RAYCACHE_FN float raycache_region_corner_cross2(float s, float t, float sm, float tm) {
+    float x = t - tm;
+    float y = sm - s;
+    float z = s * tm - t * sm;
+    return x * x + y * y + z * z;
+}
+RAYCACHE_FN float raycache_region_corner_norm2(float s, float t) { return s * s + t * t + 1.0f; }
 RAYCACHE_FN raycache_direction_cone raycache_region_cone(int face, int column0, int row0, int column1, int row1,
                                                          int face_size) {
     float n = float(face_size);
@@ -84,13 +111,25 @@ RAYCACHE_FN raycache_direction_cone raycache_region_cone(int face, int column0, 
     float s1 = 2.0f * (float(column1) / n) - 1.0f;
     float t0 = 2.0f * (float(row0) / n) - 1.0f;
     float t1 = 2.0f * (float(row1) / n) - 1.0f;
-    vec3 axis = normalize(raycache_face_point(face, 1.0f, 0.5f * (s0 + s1), 0.5f * (t0 + t1)));
-    float c = 1.0f;
-    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s0, t0))));
-    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s1, t0))));
-    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s0, t1))));
-    c = min(c, dot(axis, normalize(raycache_face_point(face, 1.0f, s1, t1))));
-    return raycache_widened_cone(axis, c);
+    float sm = 0.5f * (s0 + s1);
+    float tm = 0.5f * (t0 + t1);
+    float inverse_length = 1.0f / sqrt(raycache_region_corner_norm2(sm, tm));
+    /* The corner of largest cross^2 / norm^2: compared as cross_a norm_b > cross_b norm_a (norms positive). */
+    float best_cross2 = raycache_region_corner_cross2(s0, t0, sm, tm);
+    float best_norm2 = raycache_region_corner_norm2(s0, t0);
+    float x = raycache_region_corner_cross2(s1, t0, sm, tm);
+    float q = raycache_region_corner_norm2(s1, t0);
+    if (x * best_norm2 > best_cross2 * q) { best_cross2 = x; best_norm2 = q; }
+    x = raycache_region_corner_cross2(s0, t1, sm, tm);
+    q = raycache_region_corner_norm2(s0, t1);
+    if (x * best_norm2 > best_cross2 * q) { best_cross2 = x; best_norm2 = q; }
+    x = raycache_region_corner_cross2(s1, t1, sm, tm);
+    q = raycache_region_corner_norm2(s1, t1);
+    if (x * best_norm2 > best_cross2 * q) { best_cross2 = x; best_norm2 = q; }
+    /* Rounded up by a few ulps: the sine bounds the cone from outside. */
+    float sine = min(1.0f, sqrt(best_cross2 / best_norm2) * inverse_length * 1.000001f);
+    float cosine = sqrt(max(0.0f, 1.0f - sine * sine));
+    return raycache_widened_cone_of(raycache_face_point(face, inverse_length, sm * inverse_length, tm * inverse_length), cosine, sine);
 }
 
 /* The cone of every direction through texel (column, row) of `face`, as raycache_region_cone of that one
