@@ -166,7 +166,7 @@ RAYCACHE_FN raycache_direction_cone raycache_cone_toward_ball(vec3 apex, vec3 ce
         return cone;
     }
     float s = radius / d;
-    return raycache_widened_cone(v / d, sqrt(max(0.0f, 1.0f - s * s)));
+    return raycache_widened_cone_of(v / d, sqrt(max(0.0f, 1.0f - s * s)), s); /* the sine as it is: narrow cones keep it */
 }
 
 /* The cosine of the angle between unit `axis` and the direction of `corner`; -1 for a corner at (0, 0, 0). */
