@@ -647,6 +647,36 @@ public:
         s.has_origins = origins_of(*tile, s.origin_lo, s.origin_hi);
         return s;
     }
+    // Asks the processor to start loading what tile_summary(i) reads (the tile's bits, origin box, counts
+    // and union of paths), so that a pass over many tiles waits on several at once rather than on each in
+    // turn. A hint: it changes nothing the cube holds. Between frames.
+    void prefetch_tile_summary(std::size_t i) const noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        const Tile* tile = allocated_tile(i);
+        if (!tile) return;
+        __builtin_prefetch(&tile->written_bits[0]);
+        __builtin_prefetch(&tile->doubtful_bits[0]);
+        __builtin_prefetch(&tile->pending_min[0]);
+        __builtin_prefetch(&tile->recorded_bits[0]);
+        // The records follow the tile in its allocation (new_tile()); their pointer shares the line above.
+        __builtin_prefetch(&tile->records);
+#else
+        (void)i;
+#endif
+    }
+    // Starts loading tile i's union of paths and its groups' unions (tile_summary()'s and group_keys()'), once
+    // prefetch_tile_summary(i) brought the tile's own lines. A hint, as that.
+    void prefetch_tile_records(std::size_t i) const noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        const Tile* tile = allocated_tile(i);
+        if (!tile || !tile->records) return;
+        const char* first = reinterpret_cast<const char*>(&tile->records[first_group_slot]);
+        const char* last = reinterpret_cast<const char*>(&tile->records[tile_union_slot + 1]);
+        for (const char* p = first; p < last; p += 64) __builtin_prefetch(p);
+#else
+        (void)i;
+#endif
+    }
     // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
     // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.
     std::optional<PathRecord> tile_paths(std::size_t i) const {

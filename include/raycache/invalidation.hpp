@@ -385,7 +385,12 @@ public:
             throw std::out_of_range("RayCache: InvalidationPass::run(" + std::to_string(r) + "): the pass has " +
                                     std::to_string(runs_.size()) + " runs");
         Scratch scratch;
-        for (std::size_t i = r * tiles_per_run; i < std::min(tiles_.size(), (r + 1) * tiles_per_run); ++i) tile(tiles_[i], runs_[r], scratch);
+        const std::size_t end = std::min(tiles_.size(), (r + 1) * tiles_per_run);
+        for (std::size_t i = r * tiles_per_run; i < end; ++i) {
+            if (i + 2 < end) cube_.prefetch_tile_summary(tiles_[i + 2]);
+            if (i + 1 < end) cube_.prefetch_tile_records(tiles_[i + 1]);
+            tile(tiles_[i], runs_[r], scratch);
+        }
     }
 
     InvalidationCounts finish() override {
