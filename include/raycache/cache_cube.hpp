@@ -658,8 +658,7 @@ public:
         __builtin_prefetch(&tile->doubtful_bits[0]);
         __builtin_prefetch(&tile->pending_min[0]);
         __builtin_prefetch(&tile->recorded_bits[0]);
-        // The records follow the tile in its allocation (new_tile()); their pointer shares the line above.
-        __builtin_prefetch(&tile->records);
+        __builtin_prefetch(&tile->records); // the line of the pointer to the records (prefetch_tile_records())
 #else
         (void)i;
 #endif
@@ -1502,7 +1501,9 @@ private:
     }
 
     // After texels of `tile` were emptied (their words already invalid): drops their doubtful and recorded
-    // bits (`gone`) and takes `values` (those of them that held one) off the counts. Between frames.
+    // bits (`gone`) and takes `values` (those of them that held one) off the counts. Between frames, by one
+    // thread at a time for a tile (its bits and count are loaded and stored, not read-modified-written; the
+    // cube's counts are, since passes empty a cube's tiles on several threads).
     void forget_emptied(Tile& tile, const std::uint64_t (&gone)[bit_words], std::size_t values) noexcept {
         std::size_t doubtful_gone = 0;
         for (int w = 0; w < bit_words; ++w) {
