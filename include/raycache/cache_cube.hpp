@@ -651,30 +651,22 @@ public:
     // and union of paths), so that a pass over many tiles waits on several at once rather than on each in
     // turn. A hint: it changes nothing the cube holds. Between frames.
     void prefetch_tile_summary(std::size_t i) const noexcept {
-#if defined(__GNUC__) || defined(__clang__)
         const Tile* tile = allocated_tile(i);
         if (!tile) return;
-        __builtin_prefetch(&tile->written_bits[0]);
-        __builtin_prefetch(&tile->doubtful_bits[0]);
-        __builtin_prefetch(&tile->pending_min[0]);
-        __builtin_prefetch(&tile->recorded_bits[0]);
-        __builtin_prefetch(&tile->records); // the line of the pointer to the records (prefetch_tile_records())
-#else
-        (void)i;
-#endif
+        prefetch_line(&tile->written_bits[0]);
+        prefetch_line(&tile->doubtful_bits[0]);
+        prefetch_line(&tile->pending_min[0]);
+        prefetch_line(&tile->recorded_bits[0]);
+        prefetch_line(&tile->records); // the line of the pointer to the records (prefetch_tile_records())
     }
     // Starts loading tile i's union of paths and its groups' unions (tile_summary()'s and group_keys()'), once
     // prefetch_tile_summary(i) brought the tile's own lines. A hint, as that.
     void prefetch_tile_records(std::size_t i) const noexcept {
-#if defined(__GNUC__) || defined(__clang__)
         const Tile* tile = allocated_tile(i);
         if (!tile || !tile->records) return;
         const char* first = reinterpret_cast<const char*>(&tile->records[first_group_slot]);
         const char* last = reinterpret_cast<const char*>(&tile->records[tile_union_slot + 1]);
-        for (const char* p = first; p < last; p += 64) __builtin_prefetch(p);
-#else
-        (void)i;
-#endif
+        for (const char* p = first; p < last; p += 64) prefetch_line(p);
     }
     // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
     // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.
@@ -1498,6 +1490,16 @@ private:
     bool refuse() noexcept {
         state_->counters.add(refused_stores);
         return false;
+    }
+
+    // Asks the processor to start loading the cache line holding `p` (nothing where the compiler has no
+    // such hint).
+    static void prefetch_line(const void* p) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        __builtin_prefetch(p);
+#else
+        (void)p;
+#endif
     }
 
     // After texels of `tile` were emptied (their words already invalid): drops their doubtful and recorded
