@@ -29,6 +29,13 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
+def micro_machine(path):
+    """The processor raycache_micro_bench ran on (its JSON's context), or None for files written before it said."""
+    with open(path) as f:
+        context = json.load(f).get("context", {})
+    return context.get("machine")
+
+
 def micro(path):
     """Google Benchmark's JSON: name -> run (medians when repetitions were aggregated)."""
     with open(path) as f:
@@ -244,7 +251,9 @@ def targets(results):
         m = micro(mpath)
         if "rtc_intersect1" in m and "cct_lookup" in m:
             ratio = float(m["rtc_intersect1"]["real_time"]) / float(m["cct_lookup"]["real_time"])
-            lines.append(("One CCT lookup at least 20x cheaper than one rtcIntersect1 (behind-32)", f"{ratio:.1f}x", ratio >= 20))
+            where = micro_machine(mpath)
+            lines.append(("One CCT lookup at least 20x cheaper than one rtcIntersect1 (behind-32)",
+                          f"{ratio:.1f}x" + (f" (micro-benchmarks, {where})" if where else ""), ratio >= 20))
     return lines
 
 
@@ -261,6 +270,9 @@ def micro_table(results):
         kept = f"{100 * float(r['kept']):.1f}%" if r.get("kept") is not None else "-"
         ns = float(r["real_time"]) * to_ns[r.get("time_unit", "ns")]
         out.append(f"| {name} | {ns:.1f} | {extra[0]} | {extra[1]} | {kept} |")
+    where = micro_machine(mpath)
+    if where:
+        out += ["", f"Machine: {where}."]
     return "\n".join(out) + "\n"
 
 

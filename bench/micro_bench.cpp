@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include "bench_common.hpp"
 #include "bench_embree.hpp"
 #include "rcx/scene_hash.hpp"
 #include "tracer.hpp"
@@ -249,4 +250,13 @@ BENCHMARK_CAPTURE(exact_invalidation, behind_32_cdct, 1)->Arg(1)->Arg(0)->Unit(b
 
 } // namespace
 
-BENCHMARK_MAIN();
+// BENCHMARK_MAIN(), with the processor's name in the JSON's context: Google Benchmark records cores and caches
+// but not the model, and docs/RESULTS.md names the machine of every table.
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::AddCustomContext("machine", rcx::bench::machine_name());
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
