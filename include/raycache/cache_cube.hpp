@@ -316,7 +316,7 @@ public:
     // Count one lookup made of peek() calls: a hit, or a miss and why (why_missed() names the state of a
     // texel whose read found nothing). Thread-safe, wait-free.
     void record_hit() noexcept { state_->counters.add(hits); }
-    void record_miss(MissReason why) noexcept { state_->counters.add(first_miss + static_cast<std::size_t>(why)); }
+    RAYCACHE_HOT_FN void record_miss(MissReason why) noexcept { state_->counters.add(first_miss + static_cast<std::size_t>(why)); }
     // Count what a ray that filled a texel reported it cost (TracedRay::work; 0: not reported, not counted):
     // cached_trace's helpers call it after a store that wrote. Thread-safe, wait-free.
     void record_filled_work(std::uint32_t work) noexcept {
