@@ -1068,7 +1068,7 @@ private:
             cached_reads.store(k.cached_reads, std::memory_order_relaxed);
         }
         // The union as it stands, in key form.
-        PathKeys keys() const noexcept {
+        RAYCACHE_HOT_FN PathKeys keys() const noexcept {
             PathKeys k;
             k.objects = objects.load(std::memory_order_relaxed);
             for (int a = 0; a < 3; ++a) {
