@@ -1238,7 +1238,7 @@ private:
         return static_cast<int>(static_cast<unsigned>(t.row) % tile_edge * tile_edge + static_cast<unsigned>(t.column) % tile_edge);
     }
 
-    Tile* tile_of(const TexelAddress& t) const noexcept {
+    RAYCACHE_HOT_FN Tile* tile_of(const TexelAddress& t) const noexcept {
         Tile* tile = state_->tiles[tile_index(t)].load(std::memory_order_acquire);
         return tile == claimed() ? nullptr : tile;
     }
