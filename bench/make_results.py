@@ -29,19 +29,15 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
-def micro_machine(path):
-    """The processor raycache_micro_bench ran on (its JSON's context), or None for files written before it said."""
-    with open(path) as f:
-        context = json.load(f).get("context", {})
-    return context.get("machine")
-
-
 def micro(path):
-    """Google Benchmark's JSON: name -> run (medians when repetitions were aggregated)."""
+    """Google Benchmark's JSON, read once: (name -> run, medians when repetitions were aggregated; the
+    processor it ran on, from its context, or None for files written before the benchmark said)."""
     with open(path) as f:
-        runs = json.load(f)["benchmarks"]
+        data = json.load(f)
+    runs = data["benchmarks"]
     medians = {r["run_name"]: r for r in runs if r.get("aggregate_name") == "median"}
-    return medians or {r["name"]: r for r in runs if r.get("run_type", "iteration") == "iteration"}
+    by_name = medians or {r["name"]: r for r in runs if r.get("run_type", "iteration") == "iteration"}
+    return by_name, data.get("context", {}).get("machine")
 
 
 def speedup_plot(ax, fig, title, path, xlabel="N reflective spheres behind the camera"):
@@ -248,10 +244,9 @@ def targets(results):
         lines.append(("Update rate at 512: at most 1% outdated after 8 frames", f"{v:.1f}%", v <= 1.0))
     mpath = os.path.join(results, "micro.json")
     if os.path.exists(mpath):
-        m = micro(mpath)
+        m, where = micro(mpath)
         if "rtc_intersect1" in m and "cct_lookup" in m:
             ratio = float(m["rtc_intersect1"]["real_time"]) / float(m["cct_lookup"]["real_time"])
-            where = micro_machine(mpath)
             lines.append(("One CCT lookup at least 20x cheaper than one rtcIntersect1 (behind-32)",
                           f"{ratio:.1f}x" + (f" (micro-benchmarks, {where})" if where else ""), ratio >= 20))
     return lines
@@ -261,7 +256,7 @@ def micro_table(results):
     mpath = os.path.join(results, "micro.json")
     if not os.path.exists(mpath):
         return "(micro-benchmarks not run)\n"
-    m = micro(mpath)
+    m, where = micro(mpath)
     out = ["| benchmark | ns per operation | texels per search | hit rate | texels kept |", "|---|---|---|---|---|"]
     to_ns = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
     for name, r in m.items():
@@ -270,7 +265,6 @@ def micro_table(results):
         kept = f"{100 * float(r['kept']):.1f}%" if r.get("kept") is not None else "-"
         ns = float(r["real_time"]) * to_ns[r.get("time_unit", "ns")]
         out.append(f"| {name} | {ns:.1f} | {extra[0]} | {extra[1]} | {kept} |")
-    where = micro_machine(mpath)
     if where:
         out += ["", f"Machine: {where}."]
     return "\n".join(out) + "\n"
