@@ -256,6 +256,65 @@ TEST_CASE("each 4 x 4 group of a tile keeps the union of the paths stored into i
     }
 }
 
+// The blocks a tile's walk visits, for a choice of its groups, are the blocks holding a value in those
+// groups, in block order, with their texels and counts as the stores put them: computed here from the
+// stores alone, with every store recorded (the walk then reads the recorded bits alone) and with some not,
+// on faces smaller than a tile and clipped at odd sizes, 5% to 60% of the texels stored.
+TEST_CASE("a tile's walk over its blocks visits exactly the blocks holding a value in the groups chosen, in block order") {
+    for (const bool some_unrecorded : {false, true})
+        for (const int n : {5, 16, 21, 37})
+            for (const std::uint32_t percent : {5u, 60u}) {
+                CAPTURE(some_unrecorded);
+                CAPTURE(n);
+                CAPTURE(percent);
+                CctCube cube(n);
+                Lcg random{static_cast<std::uint64_t>(300 + n + percent)};
+                const int tiles_per_edge = (n + 15) / 16;
+                struct Block {
+                    int column0, row0, column1, row1, valid = 0, unrecorded = 0;
+                };
+                std::map<std::pair<std::size_t, int>, Block> expected; // (tile, block)
+                for (int face = 0; face < 6; ++face)
+                    for (int row = 0; row < n; ++row)
+                        for (int column = 0; column < n; ++column) {
+                            if (random.next() % 100 >= percent) continue;
+                            const TexelAddress a{face, column, row};
+                            const bool recorded = !some_unrecorded || random.next() % 4 != 0;
+                            if (recorded) {
+                                raycache::PathRecord saw;
+                                saw.hit(7, glm::vec3(static_cast<float>(column), static_cast<float>(row), 1.0f));
+                                REQUIRE(cube.store_at(a, grey, saw));
+                            } else {
+                                REQUIRE(cube.store_at(a, grey));
+                            }
+                            const std::size_t tile = static_cast<std::size_t>((face * tiles_per_edge + row / 16) * tiles_per_edge + column / 16);
+                            const int block = (row % 16) / 2 * 8 + (column % 16) / 2;
+                            const int c0 = column / 2 * 2, r0 = row / 2 * 2;
+                            auto [it, fresh] = expected.try_emplace({tile, block}, Block{c0, r0, std::min(n, c0 + 2), std::min(n, r0 + 2)});
+                            ++it->second.valid;
+                            it->second.unrecorded += recorded ? 0 : 1;
+                        }
+                cube.begin_frame();
+                for (std::size_t tile = 0; tile < static_cast<std::size_t>(6 * tiles_per_edge * tiles_per_edge); ++tile)
+                    for (const std::uint32_t chosen : {0u, 1u, 0x8421u, 0x00F0u, 0x5A5Au, 0xF000u, CctCube::all_record_groups}) {
+                        CAPTURE(tile);
+                        CAPTURE(chosen);
+                        std::vector<std::tuple<int, int, int, int, int, int, int>> seen, wanted;
+                        cube.for_each_block_of_tile(tile, [&](const CctCube::BlockPlace& b) {
+                            CHECK(b.tile == tile);
+                            CHECK(b.face == static_cast<int>(tile) / (tiles_per_edge * tiles_per_edge));
+                            seen.emplace_back(b.block, b.column0, b.row0, b.column1, b.row1, b.valid_texels, b.unrecorded_texels);
+                        }, chosen);
+                        for (const auto& [key, e] : expected) {
+                            if (key.first != tile) continue;
+                            const int group = key.second / 16 * 4 + key.second % 8 / 2;
+                            if ((chosen >> group) & 1u) wanted.emplace_back(key.second, e.column0, e.row0, e.column1, e.row1, e.valid, e.unrecorded);
+                        }
+                        CHECK(seen == wanted);
+                    }
+            }
+}
+
 // A union of unions in the tiles' key form is the union of the records (PathRecord::merge), including its
 // rule that escapes from nowhere make a union unbounded, and the empty union changes nothing.
 TEST_CASE("path unions merged in key form decode to the merged records") {
