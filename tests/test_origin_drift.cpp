@@ -3,6 +3,10 @@
 // hand from the face table: (1, 0, 0) is +X's centre, texel (32, 32) of a 64-texel face, tile (2, 2).
 #include <doctest/doctest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <iterator>
 #include <limits>
 #include <optional>
 
@@ -139,4 +143,46 @@ TEST_CASE("texel_of, lookup_at and store_at act as lookup and store by direction
     CHECK(cube.statistics().hits == 3u);
     CHECK_FALSE(cube.lookup_at(*t, glm::vec3(0.06f, 0.0f, 0.0f), tolerance));
     CHECK(cube.statistics().misses == 1u);
+}
+
+// Origin boxes and path unions keep floats as ordered keys (raycache/shared/origin_rule.h): keys by hand from
+// the IEEE bits (a non-negative float gains the top bit, a negative one is inverted; -0 counts as +0), their
+// order that of the floats, and every key decoded back to its float, over every exponent's extremes and
+// a stride through all 2^32 bit patterns (NaNs aside).
+TEST_CASE("ordered keys of floats: by hand, in the floats' order, and decoded back bit for bit") {
+    using raycache::shared::raycache_key_float;
+    using raycache::shared::raycache_ordered_key;
+    const float inf = std::numeric_limits<float>::infinity();
+    CHECK(raycache_ordered_key(1.0f) == 0xBF800000u);  // 0x3F800000 with the top bit
+    CHECK(raycache_ordered_key(-1.0f) == 0x407FFFFFu); // ~0xBF800000
+    CHECK(raycache_ordered_key(0.0f) == 0x80000000u);
+    CHECK(raycache_ordered_key(-0.0f) == 0x80000000u);
+    CHECK(raycache_ordered_key(inf) == 0xFF800000u);
+    CHECK(raycache_ordered_key(-inf) == 0x007FFFFFu);
+    CHECK(raycache_key_float(0xBF800000u) == 1.0f);
+    CHECK(raycache_key_float(0x407FFFFFu) == -1.0f);
+    CHECK(raycache_key_float(0xFF800000u) == inf);
+    CHECK(raycache_key_float(0x007FFFFFu) == -inf);
+    CHECK(raycache_key_float(0x80000000u) == 0.0f);
+    std::uint64_t checked = 0;
+    for (std::uint64_t step = 0; step < (std::uint64_t{1} << 32); step += 65521u) {
+        for (const std::uint32_t bits : {static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(step) | 0x7F7FFFFFu,
+                                         static_cast<std::uint32_t>(step) & 0x80800000u}) {
+            float f;
+            std::memcpy(&f, &bits, sizeof f);
+            if (std::isnan(f)) continue;
+            const std::uint32_t key = raycache_ordered_key(f);
+            const float back = raycache_key_float(key);
+            std::uint32_t back_bits;
+            std::memcpy(&back_bits, &back, sizeof back);
+            CHECK(back_bits == (bits == 0x80000000u ? 0u : bits)); // -0 comes back as +0
+            const bool negative = (bits & 0x80000000u) != 0u && bits != 0x80000000u;
+            CHECK(key == (negative ? ~bits : ((bits & 0x7FFFFFFFu) | 0x80000000u)));
+            ++checked;
+        }
+    }
+    CHECK(checked > 150000u);
+    // Order: keys compare as their floats do.
+    const float ordered[] = {-inf, -3.0e38f, -1.0f, -1.0e-38f, -1.0e-45f, 0.0f, 1.0e-45f, 1.0e-38f, 1.0f, 3.0e38f, inf};
+    for (std::size_t i = 0; i + 1 < std::size(ordered); ++i) CHECK(raycache_ordered_key(ordered[i]) < raycache_ordered_key(ordered[i + 1]));
 }

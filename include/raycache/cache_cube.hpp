@@ -110,6 +110,10 @@ public:
     // can reach without reading its groups.
     static constexpr int tile_union_slot = record_blocks + record_groups;
     // The group of record block `block` of a tile (unsigned: the divisions by powers of two are shifts).
+    // Bit k of the index spread to nibble k (0xF << 4 k), for the four bits of a row of groups.
+    static constexpr std::uint64_t nibbles_of_bits[16] = {
+        0x0000, 0x000F, 0x00F0, 0x00FF, 0x0F00, 0x0F0F, 0x0FF0, 0x0FFF,
+        0xF000, 0xF00F, 0xF0F0, 0xF0FF, 0xFF00, 0xFF0F, 0xFFF0, 0xFFFF};
     static constexpr int group_of_block(int block) noexcept {
         constexpr unsigned per_side = tile_edge / record_edge;
         const auto b = static_cast<unsigned>(block);
@@ -503,7 +507,7 @@ public:
     // block order. Between frames only.
     template <class F>
     void for_each_block_state(F&& f) const {
-        for (std::size_t i = 0; i < tile_count(); ++i) for_each_block_state_of_tile(i, f);
+        for (std::size_t i = 0, count = tile_count(); i < count; ++i) for_each_block_state_of_tile(i, f);
     }
 
     // The indices of the allocated tiles, ascending (for spreading for_each_block_state_of_tile() over
@@ -511,7 +515,7 @@ public:
     std::vector<std::size_t> allocated_tile_indices() const {
         std::vector<std::size_t> indices;
         indices.reserve(allocated_tiles());
-        for (std::size_t i = 0; i < tile_count(); ++i)
+        for (std::size_t i = 0, count = tile_count(); i < count; ++i)
             if (state_->tiles[i].load(std::memory_order_acquire)) indices.push_back(i);
         return indices;
     }
@@ -605,10 +609,10 @@ public:
                 if (!any_unrecorded) {
                     const std::uint64_t any = row_bits[2 * br] | row_bits[2 * br + 1];
                     std::uint64_t visit = (any | (any >> 1)) & 0x5555555555555555ull;
-                    std::uint64_t named = 0; // nibble gc: the row's blocks of group (br / 2, gc)
-                    for (int gc = 0; gc < record_groups_per_side; ++gc)
-                        if ((groups >> ((br / 2) * record_groups_per_side + gc)) & 1u) named |= std::uint64_t{0xF} << (4 * gc);
-                    for (visit &= named; visit != 0; visit &= visit - 1u) {
+                    // Nibble gc: the row's blocks of group (br / 2, gc), when `groups` names it.
+                    static_assert(record_groups_per_side == 4, "a group row's bits index the table");
+                    visit &= nibbles_of_bits[(groups >> ((br / 2) * record_groups_per_side)) & 0xFu];
+                    for (; visit != 0; visit &= visit - 1u) {
                         const int bc = count_trailing_zeros(visit) / 2;
                         t.block = br * per_side + bc;
                         t.column0 = first.column + bc * record_edge;
@@ -1255,7 +1259,11 @@ private:
         return face_size;
     }
 
-    std::size_t tile_count() const noexcept { return tile_count(face_size_); }
+    // From the edge's count kept at construction: loops over the tiles and allocated_tile() ask it often.
+    std::size_t tile_count() const noexcept {
+        const std::size_t per_edge = static_cast<std::size_t>(tiles_per_edge_);
+        return RAYCACHE_FACE_COUNT * per_edge * per_edge;
+    }
     static std::size_t tile_count(int face_size) noexcept { return shared::raycache_origin_tile_count(face_size); }
     std::size_t table_bytes() const noexcept { return tile_count() * sizeof(std::atomic<Tile*>); }
 
@@ -1343,7 +1351,7 @@ private:
     }
 
     void free_tiles() noexcept {
-        for (std::size_t i = 0; i < tile_count(); ++i) {
+        for (std::size_t i = 0, count = tile_count(); i < count; ++i) {
             Tile* tile = state_->tiles[i].exchange(nullptr, std::memory_order_relaxed);
             if (!tile) continue;
             delete_tile(tile);
@@ -1465,7 +1473,7 @@ private:
     // makes pending origin boxes and nearest distances visible.
     void end_frame_tiles(bool any_written) noexcept {
         state_->fresh.clear(); // the frame's tiles are kept
-        for (std::size_t i = 0; i < tile_count(); ++i) {
+        for (std::size_t i = 0, count = tile_count(); i < count; ++i) {
             Tile* tile = state_->tiles[i].load(std::memory_order_relaxed);
             if (!tile) continue;
             if (any_written) {

@@ -46,9 +46,10 @@ RAYCACHE_FN uint raycache_ordered_key(float f) {
     if (bits == 0x80000000u) bits = 0u;
     return (bits & 0x80000000u) != 0u ? ~bits : (bits | 0x80000000u);
 }
-/* The float of an ordered key. */
+/* The float of an ordered key: a key with its top bit set loses it, any other is inverted (by one xor,
+ * without a select: invalidation decodes thousands of keys a move). */
 RAYCACHE_FN float raycache_key_float(uint key) {
-    return uintBitsToFloat((key & 0x80000000u) != 0u ? (key & 0x7FFFFFFFu) : ~key);
+    return uintBitsToFloat(key ^ (((key >> 31u) - 1u) | 0x80000000u));
 }
 
 /* The drift a tile allows whose nearest hit lies at `nearest`: min(drift, parallax x nearest); drift alone
