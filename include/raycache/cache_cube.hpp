@@ -109,11 +109,11 @@ public:
     // Then the union of the whole tile's paths, so that invalidation can pass over a tile that no change
     // can reach without reading its groups.
     static constexpr int tile_union_slot = record_blocks + record_groups;
-    // The group of record block `block` of a tile (unsigned: the divisions by powers of two are shifts).
     // Bit k of the index spread to nibble k (0xF << 4 k), for the four bits of a row of groups.
     static constexpr std::uint64_t nibbles_of_bits[16] = {
         0x0000, 0x000F, 0x00F0, 0x00FF, 0x0F00, 0x0F0F, 0x0FF0, 0x0FFF,
         0xF000, 0xF00F, 0xF0F0, 0xF0FF, 0xFF00, 0xFF0F, 0xFFF0, 0xFFFF};
+    // The group of record block `block` of a tile (unsigned: the divisions by powers of two are shifts).
     static constexpr int group_of_block(int block) noexcept {
         constexpr unsigned per_side = tile_edge / record_edge;
         const auto b = static_cast<unsigned>(block);
