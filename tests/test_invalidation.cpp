@@ -7,6 +7,7 @@
 // independently, from angles) and whose 4 x 4 block's paths miss the moved sphere must be kept.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "raycache/cube_face.hpp"
 #include "raycache/invalidation.hpp"
 #include "raycache/path_record.hpp"
+#include "raycache/shared/origin_rule.h"
 
 #include "analytic_world.hpp"
 #include "test_random.hpp"
@@ -405,6 +407,93 @@ TEST_CASE("a changed cached object meets a path only where the path's cached ans
     // Both listed: the one the path read where it changed meets.
     other.changed.push_back({4, raycache::direction_cell_bit(4, 1, 1)});
     CHECK(paths_meeting(tracked, other) == path_test_changed);
+}
+
+TEST_CASE("a union in key form meets the changes its record meets, and changes that move nothing without decoding") {
+    // paths_meeting_keys() answers from the keys a tile keeps (CacheCube::PathKeys). Hand cases for changes
+    // that move nothing (a transitive pass's: cached object 4's cube lost texels everywhere), where only
+    // the unbound and changed tests can meet; then random unions, boxes empty, ordered, inverted or holding
+    // NaN keys, against paths_meeting() of the records they decode to, for every set of tests, first only
+    // or not, with and without moves and a moved light.
+    using namespace raycache::detail;
+    using Keys = CctCube::PathKeys;
+    const auto key = [](float f) { return raycache::shared::raycache_ordered_key(f); };
+    const std::uint32_t nan_key = key(std::numeric_limits<float>::quiet_NaN());
+    auto box = [&](std::uint32_t (&min)[3], std::uint32_t (&max)[3], float lo, float hi) {
+        for (int k = 0; k < 3; ++k) min[k] = key(lo), max[k] = key(hi);
+    };
+    raycache::SceneChanges mirror;
+    mirror.changed.push_back({4});
+
+    const Keys empty = Keys::empty();
+    CHECK(paths_meeting_keys(empty, mirror, every_path_test, false) == 0u);
+    Keys escapes_only = Keys::empty(); // escapes with no hit point before them: no bound on where they went
+    box(escapes_only.escape_min, escapes_only.escape_max, -0.5f, 0.5f);
+    CHECK(paths_meeting_keys(escapes_only, mirror, every_path_test, false) == path_test_unbound);
+    Keys flagged = Keys::empty();
+    flagged.flags = 4u; // path_unbounded
+    CHECK(paths_meeting_keys(flagged, mirror, every_path_test, false) == path_test_unbound);
+    CHECK(paths_meeting_keys(flagged, mirror, every_path_test & ~path_test_unbound, false) == 0u);
+    Keys saw_mirror = Keys::empty(); // hit object 4 and escaped: bounded, and read 4's cube everywhere
+    box(saw_mirror.vertex_min, saw_mirror.vertex_max, 1.0f, 2.0f);
+    box(saw_mirror.escape_min, saw_mirror.escape_max, -0.5f, 0.5f);
+    saw_mirror.objects = raycache::object_bits(4);
+    saw_mirror.cached_reads = raycache::every_direction_cell;
+    CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, false) == path_test_changed);
+    saw_mirror.cached_reads = 0; // read no cube: whatever it hit, no cube's change reaches it
+    CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, false) == 0u);
+    saw_mirror.cached_reads = raycache::every_direction_cell;
+    saw_mirror.flags = 4u; // both tests meet; the first in order alone when the caller stops there
+    CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, false) == (path_test_unbound | path_test_changed));
+    CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, true) == path_test_unbound);
+    // Keys in order whose upper x decodes to NaN hold no hit point as the record decodes them, so these
+    // escapes have none before them.
+    Keys nan_vertices = escapes_only;
+    box(nan_vertices.vertex_min, nan_vertices.vertex_max, 0.0f, 1.0f);
+    nan_vertices.vertex_max[0] = nan_key;
+    REQUIRE(nan_vertices.vertex_min[0] <= nan_vertices.vertex_max[0]);
+    CHECK_FALSE(nan_vertices.has_vertices());
+    CHECK(paths_meeting_keys(nan_vertices, mirror, every_path_test, false) == path_test_unbound);
+
+    Lcg rng{20261204};
+    auto random_box = [&](std::uint32_t (&min)[3], std::uint32_t (&max)[3]) {
+        const std::uint32_t kind = rng.next() % 5;
+        for (int k = 0; k < 3; ++k) {
+            float a = 20.0f * rng.signed_uniform(), b = 20.0f * rng.signed_uniform();
+            if (kind == 0) min[k] = ~0u, max[k] = 0u;                          // empty
+            else if (kind == 1) min[k] = key(std::min(a, b)), max[k] = key(std::max(a, b)); // a box
+            else if (kind == 2) min[k] = key(std::max(a, b)), max[k] = key(std::min(a, b)); // inverted
+            else if (kind == 3) min[k] = rng.next(), max[k] = rng.next();       // any bits
+            else min[k] = key(std::min(a, b)), max[k] = (rng.next() & 1u) ? nan_key : key(std::max(a, b));
+        }
+    };
+    int compared = 0, differing = 0;
+    for (int u = 0; u < 3000; ++u) {
+        Keys k = Keys::empty();
+        k.objects = (static_cast<std::uint64_t>(rng.next()) << 32) | rng.next();
+        if (rng.next() % 4 == 0) k.objects = raycache::object_bits(rng.next() % 16);
+        k.cached_reads = rng.next() % 3 == 0 ? 0 : (rng.next() % 2 ? raycache::every_direction_cell : (static_cast<std::uint64_t>(rng.next()) << 22) ^ rng.next());
+        k.flags = rng.next() % 8;
+        random_box(k.vertex_min, k.vertex_max);
+        random_box(k.escape_min, k.escape_max);
+        raycache::SceneChanges c;
+        for (std::uint32_t n = rng.next() % 4; n > 0; --n)
+            c.changed.push_back({rng.next() % 16, rng.next() % 2 ? raycache::every_direction_cell : (static_cast<std::uint64_t>(rng.next()) << 22) ^ rng.next()});
+        if (rng.next() % 2) {
+            const glm::vec3 at(10.0f * rng.signed_uniform(), 10.0f * rng.signed_uniform(), 10.0f * rng.signed_uniform());
+            c.moved.push_back({rng.next() % 16, {at, 2.0f * rng.uniform()}, {at + glm::vec3(1.0f, 0.0f, 0.0f), 2.0f * rng.uniform()}});
+            c.lights.push_back(glm::vec3(0.0f, 30.0f, 0.0f));
+        }
+        c.light_moved = rng.next() % 8 == 0;
+        const raycache::PathRecord record = k.record();
+        for (unsigned tests = 0; tests <= every_path_test; ++tests)
+            for (bool first_only : {false, true}) {
+                ++compared;
+                differing += paths_meeting_keys(k, c, tests, first_only) != paths_meeting(record, c, tests, first_only);
+            }
+    }
+    CHECK(compared == 3000 * 128 * 2);
+    CHECK(differing == 0);
 }
 
 TEST_CASE("a pass reports the direction cells of the texels it emptied, each grown by a texel") {

@@ -660,10 +660,26 @@ TEST_CASE("a tile's paths are the union of its blocks' records, none for a tile 
     CHECK_FALSE(second->has_vertices());
     CHECK(second->cached_reads == 0);
     CHECK_FALSE(cube.tile_paths(2)); // never stored into
+    // The same union in the form the tile keeps it: its boxes, flags, objects and cells as above.
+    const std::optional<CctCube::PathKeys> keys = cube.tile_keys(0);
+    REQUIRE(keys);
+    CHECK(keys->objects == first->objects);
+    CHECK(keys->has_vertices());
+    CHECK(keys->has_escapes());
+    CHECK_FALSE(keys->unbounded());
+    CHECK(keys->record().vertex_hi == glm::vec3(2, 5, 0));
+    CHECK(keys->record().escape_lo == glm::vec3(0, 1, 0));
+    REQUIRE(cube.tile_keys(1));
+    CHECK_FALSE(cube.tile_keys(1)->has_vertices());
+    CHECK_FALSE(cube.tile_keys(1)->has_escapes());
+    CHECK_FALSE(cube.tile_keys(2));
     CctCube none(32, nullptr, false);
     REQUIRE(none.store_at(TexelAddress{0, 0, 0}, grey, three));
     none.begin_frame();
     const std::optional<raycache::PathRecord> bare = none.tile_paths(0);
     REQUIRE(bare);
     CHECK(bare->objects == 0); // a cube without records keeps no union
+    REQUIRE(none.tile_keys(0));
+    CHECK(none.tile_keys(0)->objects == 0);
+    CHECK_FALSE(none.tile_keys(0)->has_vertices());
 }

@@ -466,6 +466,11 @@ public:
             flags |= o.flags;
             cached_reads |= o.cached_reads;
         }
+        // Whether record() holds hit points, or escapes: its box's x extent as record() decodes it (keys in
+        // order, then the floats, which a NaN key fails), so that a test of emptiness needs no decoding.
+        bool has_vertices() const noexcept { return holds_box(vertex_min, vertex_max); }
+        bool has_escapes() const noexcept { return holds_box(escape_min, escape_max); }
+        bool unbounded() const noexcept { return (flags & path_unbounded) != 0; } // record().unbounded
         // The union as one PathRecord (empty boxes as PathRecord keeps them).
         PathRecord record() const noexcept {
             PathRecord r = PathRecord::empty();
@@ -478,6 +483,11 @@ public:
             read_box(escape_min, escape_max, lo, hi);
             if (lo.x <= hi.x) r.escape_lo = lo, r.escape_hi = hi;
             return r;
+        }
+
+    private:
+        static bool holds_box(const std::uint32_t (&min)[3], const std::uint32_t (&max)[3]) noexcept {
+            return !(min[0] > max[0]) && unordered(min[0]) <= unordered(max[0]);
         }
     };
 
@@ -697,6 +707,23 @@ public:
         const char* first = reinterpret_cast<const char*>(&tile->records[first_group_slot]);
         const char* last = reinterpret_cast<const char*>(&tile->records[tile_union_slot + 1]);
         for (const char* p = first; p < last; p += 64) prefetch_line(p);
+    }
+    // Starts loading tile i's union of paths alone (tile_keys()'), once prefetch_tile_summary(i) brought the
+    // line of the pointer to its records: all that a pass testing the union first reads of most tiles (a
+    // transitive pass's). A hint, as that.
+    void prefetch_tile_union(std::size_t i) const noexcept {
+        const Tile* tile = allocated_tile(i);
+        if (!tile || !tile->records) return;
+        const char* first = reinterpret_cast<const char*>(&tile->records[tile_union_slot]);
+        prefetch_line(first);
+        prefetch_line(first + sizeof(PathUnion) - 1); // a union can straddle two lines
+    }
+    // tile_paths() in the form the tile keeps it (PathKeys::record() gives tile_paths()): std::nullopt when
+    // the tile is not allocated, the empty union in a cube without records. Between frames only.
+    std::optional<PathKeys> tile_keys(std::size_t i) const noexcept {
+        const Tile* tile = allocated_tile(i);
+        if (!tile) return std::nullopt;
+        return tile->records ? tile->records[tile_union_slot].keys() : PathKeys::empty();
     }
     // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
     // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.

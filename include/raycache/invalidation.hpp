@@ -312,6 +312,23 @@ inline unsigned paths_meeting(const PathRecord& t, const SceneChanges& changes, 
     return met;
 }
 
+// paths_meeting() of a union in the form a tile keeps it (CacheCube::PathKeys): the same answer. Changes that
+// move nothing (a transitive pass's) reach only the unbound test, which asks whether the boxes are empty, and
+// the changed cubes' test, which reads the objects and cells as they are: neither needs the boxes decoded.
+template <class Keys>
+unsigned paths_meeting_keys(const Keys& keys, const SceneChanges& changes, unsigned tests, bool first_only) {
+    if (tests == 0) return 0u;
+    if (tests == path_test_changed) return paths_read_changed(keys.objects, keys.cached_reads, changes) ? path_test_changed : 0u;
+    if (!changes.moved.empty() || changes.light_moved) return paths_meeting(keys.record(), changes, tests, first_only);
+    unsigned met = 0;
+    if ((tests & path_test_unbound) && ((keys.has_escapes() && !keys.has_vertices()) || keys.unbounded())) {
+        met |= path_test_unbound;
+        if (first_only) return met;
+    }
+    if ((tests & path_test_changed) && paths_read_changed(keys.objects, keys.cached_reads, changes)) met |= path_test_changed;
+    return met;
+}
+
 // Whether the rest of the paths whose union is `t` can have met a change (paths_meeting(), stopping at the
 // first test that meets).
 inline bool paths_meet(const PathRecord& t, const SceneChanges& changes) { return paths_meeting(t, changes, every_path_test, true) != 0; }
@@ -388,7 +405,8 @@ public:
         const std::size_t end = std::min(tiles_.size(), (r + 1) * tiles_per_run);
         for (std::size_t i = r * tiles_per_run; i < end; ++i) {
             if (i + 2 < end) cube_.prefetch_tile_summary(tiles_[i + 2]);
-            if (i + 1 < end) cube_.prefetch_tile_records(tiles_[i + 1]);
+            // A pass that moves nothing reads most tiles' unions alone (tile()).
+            if (i + 1 < end) geometric_ ? cube_.prefetch_tile_records(tiles_[i + 1]) : cube_.prefetch_tile_union(tiles_[i + 1]);
             tile(tiles_[i], runs_[r], scratch);
         }
     }
@@ -437,14 +455,6 @@ private:
         std::array<Reached, CacheCube<Texel>::record_edge * CacheCube<Texel>::record_edge> reaches;
     };
 
-    // paths_meeting() of a union in the form the tile keeps it. Only the changed cubes' test (a transitive
-    // pass's) needs no decoding: it reads the objects and cells as they are.
-    static unsigned paths_meeting_keys(const PathKeys& keys, const SceneChanges& changes, unsigned tests, bool first_only) {
-        if (tests == 0) return 0u;
-        if (tests == path_test_changed) return paths_read_changed(keys.objects, keys.cached_reads, changes) ? path_test_changed : 0u;
-        return paths_meeting(keys.record(), changes, tests, first_only);
-    }
-
     // Adds the cells of block `t` to what the pass changed when it emptied `dropped` of its texels (the whole
     // block's cells: a block is 2 x 2 texels, and the cells are far coarser).
     void note_changed_cells(InvalidationCounts& c, const Block& t, std::size_t dropped) const noexcept {
@@ -461,9 +471,9 @@ private:
         // meets no change is left before the rest of its summary is read (most tiles of a transitive pass).
         std::optional<unsigned> paths_met;
         if (!geometric_) {
-            const std::optional<PathRecord> paths = cube.tile_paths(index);
+            const std::optional<PathKeys> paths = cube.tile_keys(index);
             if (!paths) return;
-            paths_met = paths_meeting(*paths, changes);
+            paths_met = paths_meeting_keys(*paths, changes, every_path_test, false);
             if (*paths_met == 0) return;
         }
         const std::optional<typename CacheCube<Texel>::TileSummary> summary = cube.tile_summary(index);
