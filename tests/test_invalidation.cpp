@@ -431,7 +431,7 @@ TEST_CASE("a union in key form meets the changes its record meets, and changes t
     box(escapes_only.escape_min, escapes_only.escape_max, -0.5f, 0.5f);
     CHECK(paths_meeting_keys(escapes_only, mirror, every_path_test, false) == path_test_unbound);
     Keys flagged = Keys::empty();
-    flagged.flags = 4u; // path_unbounded
+    flagged.flags = CctCube::path_unbounded;
     CHECK(paths_meeting_keys(flagged, mirror, every_path_test, false) == path_test_unbound);
     CHECK(paths_meeting_keys(flagged, mirror, every_path_test & ~path_test_unbound, false) == 0u);
     Keys saw_mirror = Keys::empty(); // hit object 4 and escaped: bounded, and read 4's cube everywhere
@@ -443,7 +443,7 @@ TEST_CASE("a union in key form meets the changes its record meets, and changes t
     saw_mirror.cached_reads = 0; // read no cube: whatever it hit, no cube's change reaches it
     CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, false) == 0u);
     saw_mirror.cached_reads = raycache::every_direction_cell;
-    saw_mirror.flags = 4u; // both tests meet; the first in order alone when the caller stops there
+    saw_mirror.flags = CctCube::path_unbounded; // both tests meet; the first in order alone when the caller stops there
     CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, false) == (path_test_unbound | path_test_changed));
     CHECK(paths_meeting_keys(saw_mirror, mirror, every_path_test, true) == path_test_unbound);
     // Keys in order whose upper x decodes to NaN hold no hit point as the record decodes them, so these

@@ -728,9 +728,9 @@ public:
     // The union of the paths of tile `i` alone (tile_summary()'s `paths`, without the rest of the summary):
     // empty in a cube without records; std::nullopt when the tile is not allocated. Between frames only.
     std::optional<PathRecord> tile_paths(std::size_t i) const {
-        const Tile* tile = allocated_tile(i);
-        if (!tile) return std::nullopt;
-        return paths_of(*tile);
+        const std::optional<PathKeys> keys = tile_keys(i);
+        if (!keys) return std::nullopt;
+        return keys->record();
     }
     // What the value texel `t` answers with saw, as far as the cube knows, for a cached answer nested in
     // another traced path (SceneCache::leaving_ray's `enclosing`): the union of the paths stored into its
